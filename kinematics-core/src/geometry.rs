@@ -1,0 +1,521 @@
+//! Where the servos and rod joints are, and the constants derived from them once.
+//!
+//! All lengths are in millimetres and angles in radians. The base frame has its origin at the
+//! centre of the servo shafts' plane with z up; the platform frame has its origin at the
+//! centre of the platform joints' plane. Each leg `i` has:
+//! - `b_i`: the centre of servo `i`'s shaft (base frame), the point the arm turns about;
+//! - `p_i`: the rod's joint on the platform (platform frame);
+//! - `beta_i`: the angle of the arm's plane of rotation from the base x axis, chosen so that
+//!   the arm tip at arm angle `alpha` is `b_i + a (cos(alpha) cos(beta_i),
+//!   cos(alpha) sin(beta_i), sin(alpha))` (seed 001, eq. 4-6). Mirrored servos of a pair
+//!   simply have their `beta` half a turn apart; their opposite sense of rotation is a property
+//!   of the servo, see [`crate::servo::Direction`].
+//!
+//! All legs share the arm (horn) length `a` and the rod length `s`.
+//!
+//! From these, [`Geometry::new`] derives the home height `h0` (eq. 10) and each leg's home arm
+//! angle `alpha0` (eq. 12), and caches the per-leg constants the IK needs on every pose.
+
+use core::f32::consts::PI;
+use core::fmt;
+
+use crate::ik;
+use crate::math::Libm;
+use crate::pose::Pose;
+use crate::{Vec3, LEGS};
+
+/// Largest disagreement between the legs' home heights (eq. 10) that a geometry may have, mm.
+/// Below it, `h0` is their mean and each leg's `alpha0` is computed exactly for that height;
+/// above it, the build numbers are almost certainly mistyped.
+pub const HOME_HEIGHT_TOLERANCE_MM: f32 = 0.1;
+
+/// One leg's build coordinates.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Leg {
+    /// Servo shaft centre `b_i`, base frame, mm.
+    pub base_mm: Vec3,
+    /// Rod joint on the platform `p_i`, platform frame, mm.
+    pub platform_mm: Vec3,
+    /// Arm-plane angle `beta_i` from the base x axis, rad.
+    pub beta_rad: f32,
+}
+
+/// Per-leg constants computed once per geometry for the IK hot path.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub(crate) struct LegConstants {
+    pub cos_beta: f32,
+    pub sin_beta: f32,
+    /// Home arm angle alpha0, rad.
+    pub alpha0_rad: f32,
+}
+
+/// A validated platform geometry with its derived constants.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Geometry {
+    legs: [Leg; LEGS],
+    arm_mm: f32,
+    rod_mm: f32,
+    home_height_mm: f32,
+    /// `s^2 - a^2`, mm^2 (the constant in `L` of eq. 9).
+    pub(crate) rod_sq_minus_arm_sq: f32,
+    /// `2a`, mm (the factor in `M` and `N` of eq. 9).
+    pub(crate) two_arm_mm: f32,
+    pub(crate) constants: [LegConstants; LEGS],
+}
+
+/// Which length of a geometry a [`GeometryError`] is about.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Length {
+    /// The servo arm (horn) length `a`.
+    Arm,
+    /// The rod length `s`.
+    Rod,
+    /// The base joint circle radius.
+    BaseRadius,
+    /// The platform joint circle radius.
+    PlatformRadius,
+}
+
+impl fmt::Display for Length {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Length::Arm => "arm length a",
+            Length::Rod => "rod length s",
+            Length::BaseRadius => "base radius",
+            Length::PlatformRadius => "platform radius",
+        })
+    }
+}
+
+/// Why a set of build numbers is not a usable geometry.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum GeometryError {
+    /// A coordinate or angle of leg `leg` (1..=6) is NaN or infinite.
+    NonFiniteLeg {
+        /// Leg number, 1..=6.
+        leg: u8,
+    },
+    /// A length is NaN, infinite, zero or negative.
+    BadLength {
+        /// Which length.
+        which: Length,
+        /// The value given, mm.
+        value_mm: f32,
+    },
+    /// Eq. 10 has no real solution for this leg: the rod and arm are too short to reach the
+    /// platform joint with arm and rod at right angles, or the platform would sit at or below
+    /// the servo shaft.
+    NoHomeHeight {
+        /// Leg number, 1..=6.
+        leg: u8,
+    },
+    /// The legs' home heights (eq. 10) differ by more than [`HOME_HEIGHT_TOLERANCE_MM`].
+    LegsDisagree {
+        /// The first leg that disagrees with leg 1, 1..=6.
+        leg: u8,
+        /// Its home height, mm.
+        home_height_mm: f32,
+        /// Leg 1's home height, mm.
+        leg1_home_height_mm: f32,
+    },
+    /// At the home pose this leg's arm cannot reach its rod (eq. 9 has no solution).
+    HomeUnreachable {
+        /// Leg number, 1..=6.
+        leg: u8,
+    },
+}
+
+impl fmt::Display for GeometryError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            GeometryError::NonFiniteLeg { leg } => {
+                write!(f, "leg {leg} has a coordinate that is not a finite number")
+            }
+            GeometryError::BadLength { which, value_mm } => {
+                write!(f, "{which} must be a positive number of mm, not {value_mm}")
+            }
+            GeometryError::NoHomeHeight { leg } => write!(
+                f,
+                "leg {leg}: no home height with arm and rod at right angles (rod too short or joints too far apart)"
+            ),
+            GeometryError::LegsDisagree {
+                leg,
+                home_height_mm,
+                leg1_home_height_mm,
+            } => write!(
+                f,
+                "legs disagree on the home height: leg {leg} gives {home_height_mm:.3} mm, leg 1 gives {leg1_home_height_mm:.3} mm"
+            ),
+            GeometryError::HomeUnreachable { leg } => {
+                write!(f, "leg {leg}: the arm cannot reach the rod at the home pose")
+            }
+        }
+    }
+}
+
+fn check_length(which: Length, value_mm: f32) -> Result<f32, GeometryError> {
+    if value_mm.is_finite() && value_mm > 0.0 {
+        Ok(value_mm)
+    } else {
+        Err(GeometryError::BadLength { which, value_mm })
+    }
+}
+
+fn leg_number(index: usize) -> u8 {
+    // LEGS is 6, so this never truncates.
+    (index + 1) as u8
+}
+
+impl Geometry {
+    /// Validates explicit build coordinates and derives `h0` and `alpha0`.
+    pub fn new(legs: [Leg; LEGS], arm_mm: f32, rod_mm: f32) -> Result<Geometry, GeometryError> {
+        let arm_mm = check_length(Length::Arm, arm_mm)?;
+        let rod_mm = check_length(Length::Rod, rod_mm)?;
+        for (i, leg) in legs.iter().enumerate() {
+            let finite = leg.base_mm.iter().all(|v| v.is_finite())
+                && leg.platform_mm.iter().all(|v| v.is_finite())
+                && leg.beta_rad.is_finite();
+            if !finite {
+                return Err(GeometryError::NonFiniteLeg { leg: leg_number(i) });
+            }
+        }
+
+        // Eq. 10, generalised to a shaft at height z_b: at home (T = (0, 0, h0), R = I) the arm
+        // and rod are at right angles, so |l|^2 = s^2 + a^2 with
+        // l = (x_p - x_b, y_p - y_b, h0 + z_p - z_b); take the root with the platform above.
+        let mut heights = [0.0f32; LEGS];
+        for (i, leg) in legs.iter().enumerate() {
+            let d = leg.platform_mm - leg.base_mm;
+            let vertical_sq = rod_mm * rod_mm + arm_mm * arm_mm - d.x * d.x - d.y * d.y;
+            if vertical_sq.partial_cmp(&0.0) != Some(core::cmp::Ordering::Greater) {
+                return Err(GeometryError::NoHomeHeight { leg: leg_number(i) });
+            }
+            heights[i] = libm::sqrtf(vertical_sq) - d.z;
+        }
+        for (i, &h) in heights.iter().enumerate().skip(1) {
+            if libm::fabsf(h - heights[0]) > HOME_HEIGHT_TOLERANCE_MM {
+                return Err(GeometryError::LegsDisagree {
+                    leg: leg_number(i),
+                    home_height_mm: h,
+                    leg1_home_height_mm: heights[0],
+                });
+            }
+        }
+        let home_height_mm = heights.iter().sum::<f32>() / LEGS as f32;
+
+        let mut geometry = Geometry {
+            legs,
+            arm_mm,
+            rod_mm,
+            home_height_mm,
+            rod_sq_minus_arm_sq: rod_mm * rod_mm - arm_mm * arm_mm,
+            two_arm_mm: 2.0 * arm_mm,
+            constants: [LegConstants::default(); LEGS],
+        };
+        for (c, leg) in geometry.constants.iter_mut().zip(legs.iter()) {
+            let (sin_beta, cos_beta) = libm::sincosf(leg.beta_rad);
+            c.sin_beta = sin_beta;
+            c.cos_beta = cos_beta;
+        }
+        // Eq. 12 is eq. 9 at the home pose (with eq. 9's naming: M0 = 2a(h0 + z_p - z_b),
+        // N0 = 2a[cos(beta)(x_p - x_b) + sin(beta)(y_p - y_b)], L0 = 2a^2 when the legs agree
+        // exactly). Evaluating eq. 9 itself at home gives the exact alpha0 of every leg.
+        let home = ik::arm_angles_raw::<Libm>(&geometry, &Pose::HOME)
+            .map_err(|leg| GeometryError::HomeUnreachable { leg })?;
+        for (c, alpha0) in geometry.constants.iter_mut().zip(home) {
+            c.alpha0_rad = alpha0;
+        }
+        Ok(geometry)
+    }
+
+    /// The six legs' build coordinates.
+    pub fn legs(&self) -> &[Leg; LEGS] {
+        &self.legs
+    }
+
+    /// Leg `index` (0..=5).
+    pub fn leg(&self, index: usize) -> &Leg {
+        &self.legs[index]
+    }
+
+    /// Servo arm (horn) length `a`, mm.
+    pub fn arm_mm(&self) -> f32 {
+        self.arm_mm
+    }
+
+    /// Rod length `s`, mm.
+    pub fn rod_mm(&self) -> f32 {
+        self.rod_mm
+    }
+
+    /// Home height `h0` (eq. 10): the height of the platform frame above the base frame at the
+    /// home pose, mm.
+    pub fn home_height_mm(&self) -> f32 {
+        self.home_height_mm
+    }
+
+    /// Home arm angle `alpha0` (eq. 12) of leg `index` (0..=5), rad, above horizontal.
+    pub fn alpha0_rad(&self, index: usize) -> f32 {
+        self.constants[index].alpha0_rad
+    }
+}
+
+impl Default for Geometry {
+    /// The default build, [`PairedLayout::default`].
+    fn default() -> Geometry {
+        PairedLayout::default()
+            .build()
+            .expect("the default paired layout is a valid geometry (tested)")
+    }
+}
+
+/// Joints on two circles at given angles (seed 000, "general configuration"), each leg with its
+/// own arm-plane angle. Angles in degrees, as users measure them.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CircularLayout {
+    /// Radius of the circle through the servo shaft centres, mm.
+    pub base_radius_mm: f32,
+    /// Radius of the circle through the platform joints, mm.
+    pub platform_radius_mm: f32,
+    /// Angle of each servo shaft centre about z from the base x axis, degrees.
+    pub base_angles_deg: [f32; LEGS],
+    /// Angle of each platform joint about z from the platform x axis, degrees.
+    pub platform_angles_deg: [f32; LEGS],
+    /// Arm-plane angle `beta_i` of each servo, degrees.
+    pub beta_deg: [f32; LEGS],
+    /// Servo arm (horn) length `a`, mm.
+    pub arm_mm: f32,
+    /// Rod length `s`, mm.
+    pub rod_mm: f32,
+}
+
+impl CircularLayout {
+    /// The explicit legs of this layout (all joints in their frame's z = 0 plane).
+    pub fn legs(&self) -> [Leg; LEGS] {
+        core::array::from_fn(|i| {
+            let (sb, cb) = libm::sincosf(self.base_angles_deg[i].to_radians());
+            let (sp, cp) = libm::sincosf(self.platform_angles_deg[i].to_radians());
+            Leg {
+                base_mm: Vec3::new(self.base_radius_mm * cb, self.base_radius_mm * sb, 0.0),
+                platform_mm: Vec3::new(
+                    self.platform_radius_mm * cp,
+                    self.platform_radius_mm * sp,
+                    0.0,
+                ),
+                beta_rad: self.beta_deg[i].to_radians(),
+            }
+        })
+    }
+
+    /// Validates the layout and derives the geometry.
+    pub fn build(&self) -> Result<Geometry, GeometryError> {
+        check_length(Length::BaseRadius, self.base_radius_mm)?;
+        check_length(Length::PlatformRadius, self.platform_radius_mm)?;
+        Geometry::new(self.legs(), self.arm_mm, self.rod_mm)
+    }
+}
+
+/// The usual hobby layout: three pairs of mirrored servos 120 degrees apart, arms tangential
+/// and pointing away from their pair's centre, each rod running to the platform joint pair
+/// turned 60 degrees towards it. Three-fold symmetric about z.
+///
+/// Servo pair `k` (0, 1, 2) is centred at `120k` degrees: servo `2k+1` sits at
+/// `120k - base_half_angle`, servo `2k+2` at `120k + base_half_angle`. Their platform joints
+/// are at `120k - 60 + platform_half_angle` and `120k + 60 - platform_half_angle`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PairedLayout {
+    /// Radius of the circle through the servo shaft centres, mm.
+    pub base_radius_mm: f32,
+    /// Half the angle between the two servos of a pair, degrees.
+    pub base_half_angle_deg: f32,
+    /// Radius of the circle through the platform joints, mm.
+    pub platform_radius_mm: f32,
+    /// Half the angle between the two platform joints of a pair, degrees.
+    pub platform_half_angle_deg: f32,
+    /// Servo arm (horn) length `a`, mm.
+    pub arm_mm: f32,
+    /// Rod length `s`, mm.
+    pub rod_mm: f32,
+}
+
+impl Default for PairedLayout {
+    /// A typical desk-sized build with standard servos, 20 mm horns and 120 mm rods. The
+    /// numbers put the arms nearly horizontal at home (alpha0 = -0.25 degrees, h0 = 118.46 mm),
+    /// which centres the servos' travel: with tangential arms, alpha0 = 0 exactly when
+    /// `platform_radius * sin(60 - base_half_angle - platform_half_angle) = arm`.
+    fn default() -> PairedLayout {
+        PairedLayout {
+            base_radius_mm: 75.0,
+            base_half_angle_deg: 20.0,
+            platform_radius_mm: 60.0,
+            platform_half_angle_deg: 20.0,
+            arm_mm: 20.0,
+            rod_mm: 120.0,
+        }
+    }
+}
+
+impl PairedLayout {
+    /// The equivalent general circular layout.
+    pub fn circular(&self) -> CircularLayout {
+        let db = self.base_half_angle_deg;
+        let dp = self.platform_half_angle_deg;
+        let mut base = [0.0; LEGS];
+        let mut platform = [0.0; LEGS];
+        let mut beta = [0.0; LEGS];
+        for k in 0..3 {
+            let centre = 120.0 * k as f32;
+            // Odd servo (2k+1, index 2k): arm points clockwise, away from the pair centre.
+            base[2 * k] = centre - db;
+            platform[2 * k] = centre - 60.0 + dp;
+            beta[2 * k] = centre - db - 90.0;
+            // Even servo (2k+2, index 2k+1): the mirror image.
+            base[2 * k + 1] = centre + db;
+            platform[2 * k + 1] = centre + 60.0 - dp;
+            beta[2 * k + 1] = centre + db + 90.0;
+        }
+        CircularLayout {
+            base_radius_mm: self.base_radius_mm,
+            platform_radius_mm: self.platform_radius_mm,
+            base_angles_deg: base,
+            platform_angles_deg: platform,
+            beta_deg: beta,
+            arm_mm: self.arm_mm,
+            rod_mm: self.rod_mm,
+        }
+    }
+
+    /// Validates the layout and derives the geometry.
+    pub fn build(&self) -> Result<Geometry, GeometryError> {
+        self.circular().build()
+    }
+}
+
+/// Wraps an angle into `(-pi, pi]`, rad.
+pub(crate) fn wrap_angle_rad(mut a: f32) -> f32 {
+    if a > PI {
+        a -= 2.0 * PI;
+    } else if a <= -PI {
+        a += 2.0 * PI;
+    }
+    a
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn default_geometry_is_valid_and_symmetric() {
+        let g = Geometry::default();
+        assert!(
+            (g.home_height_mm() - 118.458).abs() < 0.01,
+            "{}",
+            g.home_height_mm()
+        );
+        let a0 = g.alpha0_rad(0);
+        for i in 0..LEGS {
+            assert!((g.alpha0_rad(i) - a0).abs() < 1e-5, "leg {i}");
+        }
+        // The default is chosen with the arms close to horizontal at home.
+        assert!(
+            a0.abs() < 0.5f32.to_radians(),
+            "alpha0 = {} deg",
+            a0.to_degrees()
+        );
+    }
+
+    #[test]
+    fn home_height_puts_arm_and_rod_at_right_angles() {
+        let g = Geometry::default();
+        for (i, leg) in g.legs().iter().enumerate() {
+            let alpha0 = g.alpha0_rad(i);
+            let c = g.constants[i];
+            let tip = leg.base_mm
+                + g.arm_mm()
+                    * Vec3::new(
+                        alpha0.cos() * c.cos_beta,
+                        alpha0.cos() * c.sin_beta,
+                        alpha0.sin(),
+                    );
+            let joint = leg.platform_mm + Vec3::new(0.0, 0.0, g.home_height_mm());
+            let arm = tip - leg.base_mm;
+            let rod = joint - tip;
+            assert!(
+                (rod.norm() - g.rod_mm()).abs() < 1e-3,
+                "rod closure leg {i}"
+            );
+            assert!(
+                arm.dot(&rod).abs() / (arm.norm() * rod.norm()) < 1e-4,
+                "leg {i}"
+            );
+        }
+    }
+
+    fn layout_with(change: impl FnOnce(&mut PairedLayout)) -> Result<Geometry, GeometryError> {
+        let mut p = PairedLayout::default();
+        change(&mut p);
+        p.build()
+    }
+
+    #[test]
+    fn bad_lengths_are_named() {
+        assert_eq!(
+            layout_with(|p| p.arm_mm = 0.0),
+            Err(GeometryError::BadLength {
+                which: Length::Arm,
+                value_mm: 0.0
+            })
+        );
+        assert!(matches!(
+            layout_with(|p| p.rod_mm = f32::NAN),
+            Err(GeometryError::BadLength {
+                which: Length::Rod,
+                ..
+            })
+        ));
+        assert!(matches!(
+            layout_with(|p| p.platform_radius_mm = -1.0),
+            Err(GeometryError::BadLength {
+                which: Length::PlatformRadius,
+                ..
+            })
+        ));
+    }
+
+    #[test]
+    fn too_short_rod_has_no_home_height() {
+        assert!(matches!(
+            layout_with(|p| p.rod_mm = 10.0),
+            Err(GeometryError::NoHomeHeight { leg: 1 })
+        ));
+    }
+
+    #[test]
+    fn a_moved_joint_makes_legs_disagree() {
+        let mut legs = PairedLayout::default().circular().legs();
+        legs[3].platform_mm.y += 10.0;
+        let err = Geometry::new(legs, 20.0, 120.0).unwrap_err();
+        assert!(
+            matches!(err, GeometryError::LegsDisagree { leg: 4, .. }),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn non_finite_leg_is_named() {
+        let mut legs = PairedLayout::default().circular().legs();
+        legs[5].beta_rad = f32::INFINITY;
+        assert_eq!(
+            Geometry::new(legs, 20.0, 120.0),
+            Err(GeometryError::NonFiniteLeg { leg: 6 })
+        );
+    }
+
+    #[test]
+    fn wrap_angle_stays_in_range() {
+        assert!((wrap_angle_rad(3.0 * PI / 2.0) + PI / 2.0).abs() < 1e-6);
+        assert!((wrap_angle_rad(-3.0 * PI / 2.0) - PI / 2.0).abs() < 1e-6);
+        assert_eq!(wrap_angle_rad(0.5), 0.5);
+    }
+}

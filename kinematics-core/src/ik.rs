@@ -1,0 +1,254 @@
+//! Inverse kinematics: pose -> six arm angles (rad) -> six pulse widths (us).
+//!
+//! For each leg (seed 001):
+//! - eq. 1: `R = Rz(yaw) Ry(pitch) Rx(roll)`;
+//! - eq. 2, 3: platform joint `q_i = T + R p_i` with `T = (x, y, h0 + z)`, leg `l_i = q_i - b_i`;
+//! - eq. 9: the arm tip `A(alpha) = b + a (cos(alpha) cos(beta), cos(alpha) sin(beta), sin(alpha))`
+//!   is at rod length `s` from `q` exactly when `L = M sin(alpha) + N cos(alpha)` with
+//!   `L = |l|^2 - (s^2 - a^2)`, `M = 2a l_z`, `N = 2a (cos(beta) l_x + sin(beta) l_y)`.
+//!
+//! Eq. 9 solves this as `alpha = asin(L / sqrt(M^2 + N^2)) - atan(N / M)`. We use the same
+//! root in half-angle form, which needs no `asin` and stays well conditioned when `M` is small
+//! or negative: with `t = tan(alpha / 2)` the equation becomes
+//! `(L + N) t^2 - 2 M t + (L - N) = 0`, whose root on eq. 9's branch (`cos(alpha + delta) >= 0`,
+//! `delta = atan2(N, M)`) is `t = (L - N) / (M + sqrt(M^2 + N^2 - L^2))`, so
+//! `alpha = 2 atan2(L - N, M + sqrt(M^2 + N^2 - L^2))`.
+//! The leg is unreachable exactly when `M^2 + N^2 - L^2 < 0`, i.e. `|L| / sqrt(M^2 + N^2) > 1`.
+//!
+//! Eq. 13, 14 then map `alpha` to a pulse width (see [`crate::servo`]). A pose is accepted or
+//! rejected as a whole: there is never a partial or NaN result.
+
+use core::f32::consts::PI;
+use core::fmt;
+
+use crate::geometry::{wrap_angle_rad, Geometry};
+use crate::math::Math;
+use crate::pose::{Axis, Pose};
+use crate::servo::ServoSet;
+use crate::{Vec3, LEGS};
+
+/// Largest rotation accepted about any axis, rad (180 degrees). Larger angles describe the same
+/// orientation as a smaller one and would only hide typing mistakes.
+pub const MAX_ANGLE_RAD: f32 = PI;
+
+/// The arm angles and pulse widths for one pose.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Solution {
+    /// Arm angle `alpha_i` of each servo above horizontal, rad.
+    pub arm_rad: [f32; LEGS],
+    /// Pulse width `W_i` of each servo, us; finite and within that servo's limits.
+    pub pulse_us: [f32; LEGS],
+}
+
+/// Why a pose cannot be driven.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum IkError {
+    /// A pose coordinate is NaN or infinite.
+    NonFinite {
+        /// The offending coordinate.
+        axis: Axis,
+    },
+    /// A rotation is larger than [`MAX_ANGLE_RAD`].
+    AngleTooLarge {
+        /// The offending rotation.
+        axis: Axis,
+        /// The value given, rad.
+        value_rad: f32,
+    },
+    /// The arm of this leg cannot reach its rod's platform joint (eq. 9 has no solution).
+    Unreachable {
+        /// Leg number, 1..=6.
+        leg: u8,
+    },
+    /// The pose needs a pulse outside this servo's limits.
+    ServoLimit {
+        /// Servo number, 1..=6.
+        servo: u8,
+        /// The pulse the pose would need, us.
+        pulse_us: f32,
+        /// The servo's lower limit, us.
+        min_us: f32,
+        /// The servo's upper limit, us.
+        max_us: f32,
+    },
+}
+
+impl fmt::Display for IkError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            IkError::NonFinite { axis } => write!(f, "{} is not a finite number", axis.name()),
+            IkError::AngleTooLarge { axis, value_rad } => write!(
+                f,
+                "{} {:.3} deg is beyond +-180 deg",
+                axis.name(),
+                value_rad.to_degrees()
+            ),
+            IkError::Unreachable { leg } => {
+                write!(f, "leg {leg} cannot reach: pose is outside the workspace")
+            }
+            IkError::ServoLimit {
+                servo,
+                pulse_us,
+                min_us,
+                max_us,
+            } => write!(
+                f,
+                "servo {servo} would need {pulse_us:.2} us, outside its limits {min_us:.2}..{max_us:.2} us"
+            ),
+        }
+    }
+}
+
+/// Checks that a pose is made of usable numbers.
+pub fn check_pose(pose: &Pose) -> Result<(), IkError> {
+    if let Some(axis) = pose.first_non_finite() {
+        return Err(IkError::NonFinite { axis });
+    }
+    for axis in [Axis::Roll, Axis::Pitch, Axis::Yaw] {
+        let value_rad = pose.get(axis);
+        if value_rad.abs() > MAX_ANGLE_RAD {
+            return Err(IkError::AngleTooLarge { axis, value_rad });
+        }
+    }
+    Ok(())
+}
+
+/// Platform joints `q_i` in the base frame for a pose (eq. 2), mm. The pose must be finite.
+pub fn platform_joints<M: Math>(geometry: &Geometry, pose: &Pose) -> [Vec3; LEGS] {
+    let r = pose.rotation::<M>();
+    let t = Vec3::new(pose.x_mm, pose.y_mm, geometry.home_height_mm() + pose.z_mm);
+    core::array::from_fn(|i| t + r * geometry.leg(i).platform_mm)
+}
+
+/// Leg vectors `l_i = q_i - b_i` for a pose (eq. 3), mm. The pose must be finite.
+pub fn leg_vectors<M: Math>(geometry: &Geometry, pose: &Pose) -> [Vec3; LEGS] {
+    let q = platform_joints::<M>(geometry, pose);
+    core::array::from_fn(|i| q[i] - geometry.leg(i).base_mm)
+}
+
+/// Eq. 9 for all legs without the pose checks; `Err(leg number)` if a leg cannot reach.
+pub(crate) fn arm_angles_raw<M: Math>(geometry: &Geometry, pose: &Pose) -> Result<[f32; LEGS], u8> {
+    let legs = leg_vectors::<M>(geometry, pose);
+    let mut alpha = [0.0f32; LEGS];
+    for (i, l) in legs.iter().enumerate() {
+        let c = &geometry.constants[i];
+        let big_l = l.dot(l) - geometry.rod_sq_minus_arm_sq;
+        let big_m = geometry.two_arm_mm * l.z;
+        let big_n = geometry.two_arm_mm * (c.cos_beta * l.x + c.sin_beta * l.y);
+        let discriminant = big_m * big_m + big_n * big_n - big_l * big_l;
+        // Rejects negative discriminants and NaN (from overflowing inputs) alike.
+        if discriminant.is_nan() || discriminant < 0.0 {
+            return Err(i as u8 + 1);
+        }
+        let a = 2.0 * M::atan2(big_l - big_n, big_m + M::sqrt(discriminant));
+        if !a.is_finite() {
+            return Err(i as u8 + 1);
+        }
+        alpha[i] = a;
+    }
+    Ok(alpha)
+}
+
+/// Arm angles `alpha_i` for a pose (eq. 9), rad, each within `(-pi, pi]` of its `alpha0`.
+pub fn arm_angles<M: Math>(geometry: &Geometry, pose: &Pose) -> Result<[f32; LEGS], IkError> {
+    check_pose(pose)?;
+    let mut alpha =
+        arm_angles_raw::<M>(geometry, pose).map_err(|leg| IkError::Unreachable { leg })?;
+    for (i, a) in alpha.iter_mut().enumerate() {
+        let alpha0 = geometry.alpha0_rad(i);
+        *a = alpha0 + wrap_angle_rad(*a - alpha0);
+    }
+    Ok(alpha)
+}
+
+/// Arm angles and pulse widths for a pose (eq. 9, 13, 14): all six or an error naming the
+/// first leg or servo that cannot follow.
+pub fn solve<M: Math>(
+    geometry: &Geometry,
+    servos: &ServoSet,
+    pose: &Pose,
+) -> Result<Solution, IkError> {
+    let arm_rad = arm_angles::<M>(geometry, pose)?;
+    let mut pulse_us = [0.0f32; LEGS];
+    for (i, (servo, w)) in servos.0.iter().zip(pulse_us.iter_mut()).enumerate() {
+        let pulse = servo.pulse_us(arm_rad[i], geometry.alpha0_rad(i));
+        if !servo.allows(pulse) {
+            return Err(IkError::ServoLimit {
+                servo: i as u8 + 1,
+                pulse_us: pulse,
+                min_us: servo.min_us,
+                max_us: servo.max_us,
+            });
+        }
+        *w = pulse;
+    }
+    Ok(Solution { arm_rad, pulse_us })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::Libm;
+
+    #[test]
+    fn home_gives_home_pulses_exactly() {
+        let g = Geometry::default();
+        let s = ServoSet::default();
+        let sol = solve::<Libm>(&g, &s, &Pose::HOME).unwrap();
+        for i in 0..LEGS {
+            assert_eq!(sol.pulse_us[i], s.0[i].home_us, "servo {}", i + 1);
+        }
+    }
+
+    #[test]
+    fn far_pose_is_unreachable_and_names_a_leg() {
+        let g = Geometry::default();
+        let err = arm_angles::<Libm>(&g, &Pose::from_degrees(0.0, 0.0, 80.0, 0.0, 0.0, 0.0));
+        assert!(
+            matches!(err, Err(IkError::Unreachable { leg: 1 })),
+            "{err:?}"
+        );
+    }
+
+    #[test]
+    fn limit_error_names_servo_and_pulse() {
+        let g = Geometry::default();
+        let mut s = ServoSet::default();
+        s.0[1].max_us = 1510.0;
+        // Pure heave up: even servos' pulses grow.
+        let err = solve::<Libm>(&g, &s, &Pose::from_degrees(0.0, 0.0, 5.0, 0.0, 0.0, 0.0));
+        match err {
+            Err(IkError::ServoLimit {
+                servo: 2,
+                pulse_us,
+                max_us,
+                ..
+            }) => assert!(pulse_us > max_us),
+            other => panic!("{other:?}"),
+        }
+    }
+
+    #[test]
+    fn non_finite_and_huge_inputs_are_errors() {
+        let g = Geometry::default();
+        let s = ServoSet::default();
+        let nan = Pose::from_degrees(0.0, f32::NAN, 0.0, 0.0, 0.0, 0.0);
+        assert_eq!(
+            solve::<Libm>(&g, &s, &nan),
+            Err(IkError::NonFinite { axis: Axis::Y })
+        );
+        let big = Pose::from_degrees(0.0, 0.0, 0.0, 0.0, 200.0, 0.0);
+        assert!(matches!(
+            solve::<Libm>(&g, &s, &big),
+            Err(IkError::AngleTooLarge {
+                axis: Axis::Pitch,
+                ..
+            })
+        ));
+        let huge = Pose::from_degrees(3e38, 0.0, 0.0, 0.0, 0.0, 0.0);
+        assert!(matches!(
+            solve::<Libm>(&g, &s, &huge),
+            Err(IkError::Unreachable { .. })
+        ));
+    }
+}

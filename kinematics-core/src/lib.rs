@@ -1,0 +1,40 @@
+//! Inverse kinematics of a six-servo Stewart platform ("hexapod"), `no_std`, `f32`, no allocation.
+//!
+//! The maths follows seed 001 ("The Mathematics of the Stewart Platform"); equation numbers in
+//! comments are that document's. Data flows one way:
+//!
+//! [`Pose`] (mm, rad) -> rotation `R` (eq. 1) -> platform joints `q_i` and leg vectors `l_i`
+//! (eq. 2, 3) -> servo arm angles `alpha_i` (eq. 9) -> pulse widths `W_i` (eq. 13, 14).
+//!
+//! - [`geometry`]: where the servos and rod joints are; derived home height `h0` (eq. 10) and home
+//!   arm angles `alpha0` (eq. 12).
+//! - [`pose`]: the platform pose and its rotation matrix.
+//! - [`servo`]: per-servo pulse mapping (home pulse, rate, direction, limits).
+//! - [`ik`]: pose -> arm angles -> pulse widths, all-or-nothing with errors naming the leg/servo.
+//! - [`math`]: the few transcendental functions the IK needs, behind a trait so the firmware can
+//!   supply the RP2040 boot ROM's fast routines while the host uses `libm`.
+//!
+//! Legs and servos are numbered 1..=6 in everything a user sees (errors, reports) and indexed
+//! 0..=5 in arrays. Leg `i` is driven by servo `i`.
+#![cfg_attr(not(test), no_std)]
+#![deny(missing_docs)]
+
+pub mod geometry;
+pub mod ik;
+pub mod math;
+pub mod pose;
+pub mod servo;
+
+pub use geometry::{Geometry, GeometryError, Leg};
+pub use ik::{IkError, Solution};
+pub use math::{Libm, Math};
+pub use pose::Pose;
+pub use servo::{Direction, ServoConfig, ServoError, ServoSet};
+
+/// Number of legs (and servos) of a Stewart platform.
+pub const LEGS: usize = 6;
+
+/// A 3-vector in millimetres (base or platform frame, as the name of the value says).
+pub type Vec3 = nalgebra::Vector3<f32>;
+/// A 3x3 rotation matrix.
+pub type Mat3 = nalgebra::Matrix3<f32>;

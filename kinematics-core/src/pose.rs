@@ -1,0 +1,205 @@
+//! The platform pose: a translation in mm and ZYX Euler angles in radians.
+//!
+//! `z_mm` is measured from the home height `h0`, so [`Pose::HOME`] is all zeros. The rotation is
+//! `R = Rz(yaw) * Ry(pitch) * Rx(roll)` (seed 001, eq. 1): yaw about z, then pitch about the new
+//! y, then roll about the new x.
+
+use crate::math::Math;
+use crate::Mat3;
+
+/// A platform pose relative to home.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Pose {
+    /// Translation along the base x axis, mm.
+    pub x_mm: f32,
+    /// Translation along the base y axis, mm.
+    pub y_mm: f32,
+    /// Translation along the base z axis, mm, measured from the home height `h0`.
+    pub z_mm: f32,
+    /// Rotation about x (phi), radians.
+    pub roll_rad: f32,
+    /// Rotation about y (theta), radians.
+    pub pitch_rad: f32,
+    /// Rotation about z (psi), radians.
+    pub yaw_rad: f32,
+}
+
+/// One of the six pose coordinates, for error messages and per-axis commands.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Axis {
+    /// Translation along x.
+    X,
+    /// Translation along y.
+    Y,
+    /// Translation along z.
+    Z,
+    /// Rotation about x.
+    Roll,
+    /// Rotation about y.
+    Pitch,
+    /// Rotation about z.
+    Yaw,
+}
+
+impl Axis {
+    /// All axes in pose order.
+    pub const ALL: [Axis; 6] = [
+        Axis::X,
+        Axis::Y,
+        Axis::Z,
+        Axis::Roll,
+        Axis::Pitch,
+        Axis::Yaw,
+    ];
+
+    /// The axis name users type (`x`, `y`, `z`, `roll`, `pitch`, `yaw`).
+    pub const fn name(self) -> &'static str {
+        match self {
+            Axis::X => "x",
+            Axis::Y => "y",
+            Axis::Z => "z",
+            Axis::Roll => "roll",
+            Axis::Pitch => "pitch",
+            Axis::Yaw => "yaw",
+        }
+    }
+
+    /// True for the three rotations.
+    pub const fn is_angle(self) -> bool {
+        matches!(self, Axis::Roll | Axis::Pitch | Axis::Yaw)
+    }
+}
+
+impl Pose {
+    /// The home pose: platform level and centred, at height `h0`.
+    pub const HOME: Pose = Pose {
+        x_mm: 0.0,
+        y_mm: 0.0,
+        z_mm: 0.0,
+        roll_rad: 0.0,
+        pitch_rad: 0.0,
+        yaw_rad: 0.0,
+    };
+
+    /// A pose from millimetres and degrees (the units users type).
+    pub fn from_degrees(
+        x_mm: f32,
+        y_mm: f32,
+        z_mm: f32,
+        roll_deg: f32,
+        pitch_deg: f32,
+        yaw_deg: f32,
+    ) -> Pose {
+        Pose {
+            x_mm,
+            y_mm,
+            z_mm,
+            roll_rad: roll_deg.to_radians(),
+            pitch_rad: pitch_deg.to_radians(),
+            yaw_rad: yaw_deg.to_radians(),
+        }
+    }
+
+    /// The six coordinates in pose order (mm, mm, mm, rad, rad, rad).
+    pub const fn to_array(&self) -> [f32; 6] {
+        [
+            self.x_mm,
+            self.y_mm,
+            self.z_mm,
+            self.roll_rad,
+            self.pitch_rad,
+            self.yaw_rad,
+        ]
+    }
+
+    /// A pose from six coordinates in pose order (mm, mm, mm, rad, rad, rad).
+    pub const fn from_array(v: [f32; 6]) -> Pose {
+        Pose {
+            x_mm: v[0],
+            y_mm: v[1],
+            z_mm: v[2],
+            roll_rad: v[3],
+            pitch_rad: v[4],
+            yaw_rad: v[5],
+        }
+    }
+
+    /// One coordinate (mm or rad).
+    pub const fn get(&self, axis: Axis) -> f32 {
+        self.to_array()[axis as usize]
+    }
+
+    /// Sets one coordinate (mm or rad).
+    pub fn set(&mut self, axis: Axis, value: f32) {
+        let mut v = self.to_array();
+        v[axis as usize] = value;
+        *self = Pose::from_array(v);
+    }
+
+    /// The first coordinate that is NaN or infinite, if any.
+    pub fn first_non_finite(&self) -> Option<Axis> {
+        Axis::ALL.into_iter().find(|&a| !self.get(a).is_finite())
+    }
+
+    /// The rotation matrix `R = Rz(yaw) Ry(pitch) Rx(roll)`, written out as in seed 001 eq. 1.
+    /// Angles must be finite; keep them within +-2*pi (the boot ROM's sin/cos need |x| < 128).
+    pub fn rotation<M: Math>(&self) -> Mat3 {
+        let (s_phi, c_phi) = M::sin_cos(self.roll_rad);
+        let (s_theta, c_theta) = M::sin_cos(self.pitch_rad);
+        let (s_psi, c_psi) = M::sin_cos(self.yaw_rad);
+        Mat3::new(
+            c_psi * c_theta,
+            -s_psi * c_phi + c_psi * s_theta * s_phi,
+            s_psi * s_phi + c_psi * s_theta * c_phi,
+            s_psi * c_theta,
+            c_psi * c_phi + s_psi * s_theta * s_phi,
+            -c_psi * s_phi + s_psi * s_theta * c_phi,
+            -s_theta,
+            c_theta * s_phi,
+            c_theta * c_phi,
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::Libm;
+    use crate::Vec3;
+
+    fn rx(a: f32) -> Mat3 {
+        Mat3::new(1.0, 0.0, 0.0, 0.0, a.cos(), -a.sin(), 0.0, a.sin(), a.cos())
+    }
+    fn ry(a: f32) -> Mat3 {
+        Mat3::new(a.cos(), 0.0, a.sin(), 0.0, 1.0, 0.0, -a.sin(), 0.0, a.cos())
+    }
+    fn rz(a: f32) -> Mat3 {
+        Mat3::new(a.cos(), -a.sin(), 0.0, a.sin(), a.cos(), 0.0, 0.0, 0.0, 1.0)
+    }
+
+    #[test]
+    fn rotation_is_the_product_of_the_three_elementary_rotations() {
+        let pose = Pose::from_degrees(0.0, 0.0, 0.0, 10.0, -20.0, 35.0);
+        let expected = rz(pose.yaw_rad) * ry(pose.pitch_rad) * rx(pose.roll_rad);
+        let r = pose.rotation::<Libm>();
+        assert!((r - expected).abs().max() < 1e-6, "{r} vs {expected}");
+    }
+
+    #[test]
+    fn yaw_turns_x_towards_y() {
+        let r = Pose::from_degrees(0.0, 0.0, 0.0, 0.0, 0.0, 90.0).rotation::<Libm>();
+        let v = r * Vec3::new(1.0, 0.0, 0.0);
+        assert!((v - Vec3::new(0.0, 1.0, 0.0)).norm() < 1e-6);
+    }
+
+    #[test]
+    fn get_set_roundtrip_every_axis() {
+        let mut p = Pose::HOME;
+        for (i, a) in Axis::ALL.into_iter().enumerate() {
+            p.set(a, i as f32 + 1.0);
+        }
+        assert_eq!(p.to_array(), [1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
+        p.set(Axis::Pitch, f32::NAN);
+        assert_eq!(p.first_non_finite(), Some(Axis::Pitch));
+    }
+}

@@ -1,0 +1,296 @@
+//! Servo pulse mapping: arm angle (rad) -> pulse width (us), seed 001 eq. 13 and 14.
+//!
+//! `W_i = W0_i + d_i (alpha_i - alpha0_i) r_i`, where `W0_i` is the pulse that holds servo `i`
+//! at home (its trim), `r_i` the servo rate in us per radian and `d_i` its direction: `+1` for
+//! even servos (eq. 13) and `-1` for odd servos (eq. 14) by default, because the servos of a
+//! pair are mounted in mirror image. Every servo also has pulse limits it is never driven past.
+
+use core::f32::consts::PI;
+use core::fmt;
+
+use crate::LEGS;
+
+/// Default home pulse `W0`, us (seed 001: nominally 1500 us).
+pub const DEFAULT_HOME_US: f32 = 1500.0;
+/// Default servo rate `r`, us per radian: 400 us per 45 degrees, `1600 / pi` (seed 001).
+pub const DEFAULT_RATE_US_PER_RAD: f32 = 1600.0 / PI;
+/// Default travel either side of home, rad (seed 001 restricts the servos to +-45 degrees).
+pub const DEFAULT_TRAVEL_RAD: f32 = PI / 4.0;
+/// No servo limit may go below this, us: shorter pulses are outside any RC servo's range.
+pub const MIN_PULSE_US: f32 = 400.0;
+/// No servo limit may go above this, us: longer pulses are outside any RC servo's range
+/// (and must fit in the frame at the highest frame rate, 333 Hz = 3003 us).
+pub const MAX_PULSE_US: f32 = 2600.0;
+/// Smallest magnitude allowed for a servo rate, us/rad.
+pub const MIN_RATE_US_PER_RAD: f32 = 100.0;
+/// Largest magnitude allowed for a servo rate, us/rad.
+pub const MAX_RATE_US_PER_RAD: f32 = 5000.0;
+
+/// Whether a servo's pulse grows or shrinks as its arm rises.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Direction {
+    /// Pulse grows as the arm angle grows (eq. 13, default for even servos).
+    Normal,
+    /// Pulse shrinks as the arm angle grows (eq. 14, default for odd servos).
+    Reversed,
+}
+
+impl Direction {
+    /// `+1.0` or `-1.0`.
+    pub const fn sign(self) -> f32 {
+        match self {
+            Direction::Normal => 1.0,
+            Direction::Reversed => -1.0,
+        }
+    }
+
+    /// The seed's default for servo number `servo` (1..=6): even servos add, odd subtract.
+    pub const fn default_for(servo: u8) -> Direction {
+        if servo % 2 == 0 {
+            Direction::Normal
+        } else {
+            Direction::Reversed
+        }
+    }
+}
+
+/// One servo's pulse mapping and limits.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ServoConfig {
+    /// Pulse at the home pose `W0`, us (the trim).
+    pub home_us: f32,
+    /// Servo rate `r`, us per radian of arm.
+    pub rate_us_per_rad: f32,
+    /// Sense of rotation.
+    pub direction: Direction,
+    /// Shortest pulse this servo may get, us.
+    pub min_us: f32,
+    /// Longest pulse this servo may get, us.
+    pub max_us: f32,
+}
+
+impl ServoConfig {
+    /// The seed's servo for servo number `servo` (1..=6): 1500 us home, `1600/pi` us/rad,
+    /// odd/even direction and +-45 degrees of arm travel (1100..1900 us).
+    pub fn default_for(servo: u8) -> ServoConfig {
+        let travel_us = DEFAULT_TRAVEL_RAD * DEFAULT_RATE_US_PER_RAD;
+        ServoConfig {
+            home_us: DEFAULT_HOME_US,
+            rate_us_per_rad: DEFAULT_RATE_US_PER_RAD,
+            direction: Direction::default_for(servo),
+            min_us: DEFAULT_HOME_US - travel_us,
+            max_us: DEFAULT_HOME_US + travel_us,
+        }
+    }
+
+    /// Pulse width for an arm angle, us (eq. 13 / 14). Not limited; see [`ServoConfig::limit`].
+    #[inline]
+    pub fn pulse_us(&self, alpha_rad: f32, alpha0_rad: f32) -> f32 {
+        self.home_us + self.direction.sign() * (alpha_rad - alpha0_rad) * self.rate_us_per_rad
+    }
+
+    /// Arm angle for a pulse width, rad (the inverse of [`ServoConfig::pulse_us`]).
+    pub fn alpha_rad(&self, pulse_us: f32, alpha0_rad: f32) -> f32 {
+        alpha0_rad + (pulse_us - self.home_us) / (self.direction.sign() * self.rate_us_per_rad)
+    }
+
+    /// True if `pulse_us` is finite and within `[min_us, max_us]`.
+    #[inline]
+    pub fn allows(&self, pulse_us: f32) -> bool {
+        pulse_us >= self.min_us && pulse_us <= self.max_us
+    }
+
+    /// Checks this servo's numbers; `servo` (1..=6) names it in the error.
+    pub fn validate(&self, servo: u8) -> Result<(), ServoError> {
+        let in_range = |v: f32| (MIN_PULSE_US..=MAX_PULSE_US).contains(&v);
+        for (field, value) in [
+            (ServoField::Home, self.home_us),
+            (ServoField::Min, self.min_us),
+            (ServoField::Max, self.max_us),
+        ] {
+            if !in_range(value) {
+                return Err(ServoError::PulseOutOfRange {
+                    servo,
+                    field,
+                    value_us: value,
+                });
+            }
+        }
+        if !(MIN_RATE_US_PER_RAD..=MAX_RATE_US_PER_RAD).contains(&self.rate_us_per_rad) {
+            return Err(ServoError::RateOutOfRange {
+                servo,
+                value: self.rate_us_per_rad,
+            });
+        }
+        if !(self.min_us <= self.home_us && self.home_us <= self.max_us) {
+            return Err(ServoError::HomeOutsideLimits {
+                servo,
+                home_us: self.home_us,
+                min_us: self.min_us,
+                max_us: self.max_us,
+            });
+        }
+        Ok(())
+    }
+}
+
+/// The six servos' mappings, servo `i + 1` at index `i`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ServoSet(pub [ServoConfig; LEGS]);
+
+impl Default for ServoSet {
+    fn default() -> ServoSet {
+        ServoSet(core::array::from_fn(|i| {
+            ServoConfig::default_for(i as u8 + 1)
+        }))
+    }
+}
+
+impl ServoSet {
+    /// Checks every servo; the first bad one is named.
+    pub fn validate(&self) -> Result<(), ServoError> {
+        self.0
+            .iter()
+            .enumerate()
+            .try_for_each(|(i, s)| s.validate(i as u8 + 1))
+    }
+
+    /// Servo number `servo` (1..=6), if it exists.
+    pub fn servo(&self, servo: u8) -> Option<&ServoConfig> {
+        self.0.get(usize::from(servo).wrapping_sub(1))
+    }
+}
+
+/// Which pulse setting of a servo a [`ServoError`] is about.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ServoField {
+    /// Home pulse `W0`.
+    Home,
+    /// Lower pulse limit.
+    Min,
+    /// Upper pulse limit.
+    Max,
+}
+
+impl fmt::Display for ServoField {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            ServoField::Home => "home pulse",
+            ServoField::Min => "minimum pulse",
+            ServoField::Max => "maximum pulse",
+        })
+    }
+}
+
+/// Why a servo configuration is refused.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ServoError {
+    /// A pulse setting is not a number within [`MIN_PULSE_US`]..=[`MAX_PULSE_US`].
+    PulseOutOfRange {
+        /// Servo number, 1..=6.
+        servo: u8,
+        /// Which setting.
+        field: ServoField,
+        /// The value given, us.
+        value_us: f32,
+    },
+    /// The rate is not within [`MIN_RATE_US_PER_RAD`]..=[`MAX_RATE_US_PER_RAD`].
+    RateOutOfRange {
+        /// Servo number, 1..=6.
+        servo: u8,
+        /// The value given, us/rad.
+        value: f32,
+    },
+    /// The home pulse is not between the limits (or the limits are reversed).
+    HomeOutsideLimits {
+        /// Servo number, 1..=6.
+        servo: u8,
+        /// Home pulse, us.
+        home_us: f32,
+        /// Lower limit, us.
+        min_us: f32,
+        /// Upper limit, us.
+        max_us: f32,
+    },
+}
+
+impl fmt::Display for ServoError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            ServoError::PulseOutOfRange {
+                servo,
+                field,
+                value_us,
+            } => write!(
+                f,
+                "servo {servo}: {field} {value_us} us is outside {MIN_PULSE_US}..{MAX_PULSE_US} us"
+            ),
+            ServoError::RateOutOfRange { servo, value } => write!(
+                f,
+                "servo {servo}: rate {value} us/rad is outside {MIN_RATE_US_PER_RAD}..{MAX_RATE_US_PER_RAD} us/rad"
+            ),
+            ServoError::HomeOutsideLimits {
+                servo,
+                home_us,
+                min_us,
+                max_us,
+            } => write!(
+                f,
+                "servo {servo}: home pulse {home_us} us must lie within its limits {min_us}..{max_us} us"
+            ),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_follow_the_seed() {
+        let set = ServoSet::default();
+        set.validate().unwrap();
+        for (i, s) in set.0.iter().enumerate() {
+            let number = i as u8 + 1;
+            let expected = if number % 2 == 0 { 1.0 } else { -1.0 };
+            assert_eq!(s.direction.sign(), expected, "servo {number}");
+            // +-45 degrees at 400 us per 45 degrees.
+            assert!((s.min_us - 1100.0).abs() < 1e-3 && (s.max_us - 1900.0).abs() < 1e-3);
+        }
+    }
+
+    #[test]
+    fn pulse_and_angle_are_inverse() {
+        let s = ServoConfig::default_for(3);
+        let w = s.pulse_us(0.3, 0.1);
+        // Odd servo: arm up by 0.2 rad shortens the pulse by 0.2 * 1600/pi us.
+        assert!((w - (1500.0 - 0.2 * 1600.0 / PI)).abs() < 1e-3);
+        assert!((s.alpha_rad(w, 0.1) - 0.3).abs() < 1e-6);
+    }
+
+    #[test]
+    fn validation_names_servo_and_field() {
+        let mut set = ServoSet::default();
+        set.0[4].max_us = 3000.0;
+        assert!(matches!(
+            set.validate(),
+            Err(ServoError::PulseOutOfRange {
+                servo: 5,
+                field: ServoField::Max,
+                ..
+            })
+        ));
+        let mut set = ServoSet::default();
+        set.0[1].home_us = 1950.0;
+        assert!(matches!(
+            set.validate(),
+            Err(ServoError::HomeOutsideLimits { servo: 2, .. })
+        ));
+        let mut set = ServoSet::default();
+        set.0[0].rate_us_per_rad = f32::NAN;
+        assert!(matches!(
+            set.validate(),
+            Err(ServoError::RateOutOfRange { servo: 1, .. })
+        ));
+    }
+}
