@@ -1,0 +1,149 @@
+//! hexapod-fw: the RP2040 board layer.
+//!
+//! Data flows one way: UART0 bytes -> controller (lines, commands, motion) -> six pulse
+//! widths per servo frame -> PWM registers. This file only wires the pieces together:
+//! clocks and watchdog, UART0 ([`serial`]), the six servo outputs ([`servo_pwm`]) and the
+//! controller (for now [`stand_in`], later `control::Controller`).
+
+#![no_std]
+#![no_main]
+
+mod serial;
+mod servo_pwm;
+mod stand_in;
+
+use core::fmt::Write;
+
+use defmt_rtt as _;
+use panic_probe as _;
+use rp2040_hal::{self as hal, clocks::Clock, fugit::ExtU32, pac, Sio, Watchdog};
+
+use serial::Serial;
+use servo_pwm::ServoPwm;
+use stand_in::Controller;
+
+/// Second-stage bootloader for the Pico's W25Q080 flash: the first 256 bytes of flash.
+#[unsafe(link_section = ".boot2")]
+#[used]
+pub static BOOT2: [u8; 256] = rp2040_boot2::BOOT_LOADER_W25Q080;
+
+const XTAL_HZ: u32 = 12_000_000;
+/// Reset the chip if the main loop stalls this long (a pass normally takes well under a frame).
+const WATCHDOG_TIMEOUT_MS: u32 = 500;
+/// Received bytes handed to the controller per pass, so servo frames are never kept waiting.
+const RX_BYTES_PER_PASS: usize = 64;
+
+#[hal::entry]
+fn main() -> ! {
+    let mut p = pac::Peripherals::take().expect("peripherals are taken once, here");
+    let mut watchdog = Watchdog::new(p.WATCHDOG);
+    // 12 MHz crystal -> PLL -> 125 MHz clk_sys and clk_peri.
+    let Ok(clocks) = hal::clocks::init_clocks_and_plls(
+        XTAL_HZ,
+        p.XOSC,
+        p.CLOCKS,
+        p.PLL_SYS,
+        p.PLL_USB,
+        &mut p.RESETS,
+        &mut watchdog,
+    ) else {
+        panic!("clock setup failed");
+    };
+    let sio = Sio::new(p.SIO);
+    let pins = hal::gpio::Pins::new(p.IO_BANK0, p.PADS_BANK0, sio.gpio_bank0, &mut p.RESETS);
+
+    let mut controller = Controller::new();
+    let mut serial = Serial::new(
+        p.UART0,
+        pins.gpio0,
+        pins.gpio1,
+        &mut p.RESETS,
+        clocks.peripheral_clock.freq(),
+        controller.baud(),
+    )
+    .expect("the default baud rate is in range");
+    let mut servos = ServoPwm::new(
+        p.PWM,
+        &mut p.RESETS,
+        (
+            pins.gpio2, pins.gpio3, pins.gpio4, pins.gpio5, pins.gpio6, pins.gpio7,
+        ),
+        controller.frame_rate_hz(),
+        &controller.on_frame(),
+        controller.pulse_window_us(),
+    )
+    .expect("the default frame rate is in range");
+    watchdog.start(WATCHDOG_TIMEOUT_MS.millis());
+
+    let _ = write!(
+        serial,
+        "hexapod-fw {} ready - type 'help'\r\n",
+        env!("CARGO_PKG_VERSION")
+    );
+    defmt::info!("ready");
+
+    let mut rx_trouble_reported = (0, 0);
+    loop {
+        watchdog.feed();
+
+        // Serial bytes -> controller -> replies. Input waits in the receive queue while the
+        // transmit buffer lacks room for a whole reply, so replies are never cut.
+        for _ in 0..RX_BYTES_PER_PASS {
+            if !serial.has_room_for_reply() {
+                break;
+            }
+            let Some(byte) = serial.read_byte() else {
+                break;
+            };
+            controller.on_byte(byte, &mut serial);
+        }
+
+        // Once per servo frame: the controller's next six pulse widths.
+        let frames = servos.frames_since_last_poll();
+        if frames > 0 {
+            servos.set_pulse_widths_us(&controller.on_frame(), controller.pulse_window_us());
+            if frames > 1 {
+                defmt::warn!("missed {} servo frames", frames - 1);
+            }
+        }
+
+        apply_settings(&controller, &mut servos, &mut serial);
+        serial.send_some();
+
+        let rx_trouble = (serial.rx_overflow_bytes(), serial.rx_line_errors());
+        if rx_trouble != rx_trouble_reported {
+            defmt::warn!(
+                "serial receive: {} bytes dropped (queue full), {} line errors",
+                rx_trouble.0,
+                rx_trouble.1
+            );
+            rx_trouble_reported = rx_trouble;
+        }
+
+        sleep_unless(|| serial.rx_pending() || serial.tx_pending() || servos.frame_pending());
+    }
+}
+
+/// Makes the hardware follow the controller's settings (frame rate, baud rate).
+fn apply_settings(controller: &Controller, servos: &mut ServoPwm, serial: &mut Serial) {
+    let frame_hz = controller.frame_rate_hz();
+    if frame_hz != servos.frame_rate_hz() && servos.set_frame_rate_hz(frame_hz).is_err() {
+        defmt::error!("frame rate {} Hz out of range", frame_hz);
+    }
+    // Switch only once the reply announcing the change has been sent at the old rate.
+    let baud = controller.baud();
+    if baud != serial.baud() && !serial.tx_pending() && serial.set_baud(baud).is_err() {
+        defmt::error!("baud rate {} out of range", baud);
+    }
+}
+
+/// Sleeps until the next interrupt (received bytes, servo frame start) unless `busy()`.
+fn sleep_unless(busy: impl FnOnce() -> bool) {
+    // Interrupts stay masked from the check to the WFI: one arriving in between stays pending,
+    // so WFI returns at once instead of sleeping through it; its handler runs right after.
+    cortex_m::interrupt::free(|_| {
+        if !busy() {
+            cortex_m::asm::wfi();
+        }
+    });
+}

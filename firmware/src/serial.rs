@@ -1,0 +1,279 @@
+//! UART0 on GP0 (TX) / GP1 (RX), 8N1, baud rate changeable at run time.
+//!
+//! Receive: the `UART0_IRQ` handler (RX FIFO level and RX timeout interrupts) moves bytes from
+//! the 32-byte hardware FIFO into a lock-free queue that the main loop reads. It never waits:
+//! when the queue is full it drops the byte and counts it.
+//!
+//! Transmit: the main loop writes replies into a software buffer (`core::fmt::Write`) and calls
+//! [`Serial::send_some`] each pass, which moves only what fits into the 32-byte TX FIFO.
+
+use core::{cell::RefCell, fmt};
+
+use critical_section::Mutex;
+use heapless::{
+    spsc::{Consumer, Producer, Queue},
+    Deque,
+};
+use rp2040_hal::{
+    fugit::{HertzU32, RateExtU32},
+    gpio::{bank0, DefaultTypeState, FunctionUart, Pin, PullNone, PullUp},
+    pac::{self, interrupt},
+    uart::{DataBits, Enabled, FifoWatermark, StopBits, UartConfig, UartPeripheral},
+};
+
+/// Receive queue size; holds `RX_QUEUE_BYTES - 1` bytes (~44 ms of input at 115,200 baud).
+pub const RX_QUEUE_BYTES: usize = 512;
+/// The longest reply one received byte may produce (the command interpreter's help or
+/// settings listing).
+pub const LONGEST_REPLY_BYTES: usize = 2048;
+/// Transmit buffer: room for two of the longest replies.
+pub const TX_BUFFER_BYTES: usize = 2 * LONGEST_REPLY_BYTES;
+
+pub const BAUD_MIN: u32 = 9_600;
+pub const BAUD_MAX: u32 = 921_600;
+
+type TxPin = Pin<bank0::Gpio0, FunctionUart, PullNone>;
+/// Pulled up so an unconnected RX line idles high instead of reading breaks.
+type RxPin = Pin<bank0::Gpio1, FunctionUart, PullUp>;
+type Uart = UartPeripheral<Enabled, pac::UART0, (TxPin, RxPin)>;
+type DefaultPin<Id> =
+    Pin<Id, <Id as DefaultTypeState>::Function, <Id as DefaultTypeState>::PullType>;
+
+/// State shared by `UART0_IRQ` and the main loop, only ever touched inside a critical section.
+struct Shared {
+    /// `None` only during a baud-rate change, which happens inside one critical section.
+    uart: Option<Uart>,
+    rx_queue: Producer<'static, u8, RX_QUEUE_BYTES>,
+    /// Bytes received while the queue was full.
+    rx_overflow_bytes: u32,
+    /// Framing, parity, break and hardware-FIFO overrun errors.
+    rx_line_errors: u32,
+}
+
+static SHARED: Mutex<RefCell<Option<Shared>>> = Mutex::new(RefCell::new(None));
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, defmt::Format)]
+pub struct BaudOutOfRange;
+
+/// The main loop's side of UART0.
+pub struct Serial {
+    rx_queue: Consumer<'static, u8, RX_QUEUE_BYTES>,
+    tx_buffer: Deque<u8, TX_BUFFER_BYTES>,
+    baud: u32,
+    peripheral_clock: HertzU32,
+}
+
+impl Serial {
+    /// Configures UART0 at `baud` (8N1) and starts interrupt-driven receive.
+    /// Call once: the receive queue is a static singleton.
+    pub fn new(
+        uart0: pac::UART0,
+        tx_pin: DefaultPin<bank0::Gpio0>,
+        rx_pin: DefaultPin<bank0::Gpio1>,
+        resets: &mut pac::RESETS,
+        peripheral_clock: HertzU32,
+        baud: u32,
+    ) -> Result<Self, BaudOutOfRange> {
+        check_baud(baud)?;
+        let queue = cortex_m::singleton!(: Queue<u8, RX_QUEUE_BYTES> = Queue::new())
+            .expect("Serial::new is called once");
+        let (producer, consumer) = queue.split();
+
+        let pins = (tx_pin.reconfigure(), rx_pin.reconfigure());
+        let mut uart = UartPeripheral::new(uart0, pins, resets)
+            .enable(config(baud), peripheral_clock)
+            .map_err(|_| BaudOutOfRange)?;
+        // Interrupt when the FIFO holds 8 of 32 bytes (time to spare at 921,600 baud), or
+        // after 32 bit times of silence with anything left in it.
+        uart.set_rx_watermark(FifoWatermark::Bytes8);
+        uart.enable_rx_interrupt();
+
+        critical_section::with(|cs| {
+            SHARED.borrow(cs).replace(Some(Shared {
+                uart: Some(uart),
+                rx_queue: producer,
+                rx_overflow_bytes: 0,
+                rx_line_errors: 0,
+            }));
+        });
+        // SAFETY: the handler only uses `SHARED`, which is initialised above.
+        unsafe { pac::NVIC::unmask(pac::Interrupt::UART0_IRQ) };
+
+        Ok(Serial {
+            rx_queue: consumer,
+            tx_buffer: Deque::new(),
+            baud,
+            peripheral_clock,
+        })
+    }
+
+    /// Next received byte, if any.
+    pub fn read_byte(&mut self) -> Option<u8> {
+        self.rx_queue.dequeue()
+    }
+
+    pub fn rx_pending(&self) -> bool {
+        self.rx_queue.ready()
+    }
+
+    /// Received bytes dropped because the receive queue was full (the main loop fell behind).
+    pub fn rx_overflow_bytes(&self) -> u32 {
+        critical_section::with(|cs| {
+            SHARED
+                .borrow_ref(cs)
+                .as_ref()
+                .map_or(0, |shared| shared.rx_overflow_bytes)
+        })
+    }
+
+    /// Framing, parity, break and hardware-FIFO overrun errors seen by the receiver.
+    pub fn rx_line_errors(&self) -> u32 {
+        critical_section::with(|cs| {
+            SHARED
+                .borrow_ref(cs)
+                .as_ref()
+                .map_or(0, |shared| shared.rx_line_errors)
+        })
+    }
+
+    /// True if the transmit buffer can take [`LONGEST_REPLY_BYTES`] without waiting.
+    pub fn has_room_for_reply(&self) -> bool {
+        self.tx_buffer.capacity() - self.tx_buffer.len() >= LONGEST_REPLY_BYTES
+    }
+
+    /// True while buffered output has not all gone into the TX FIFO yet.
+    pub fn tx_pending(&self) -> bool {
+        !self.tx_buffer.is_empty()
+    }
+
+    /// Moves as much buffered output into the TX FIFO as fits; never waits.
+    pub fn send_some(&mut self) {
+        if self.tx_buffer.is_empty() {
+            return;
+        }
+        let written = critical_section::with(|cs| {
+            let shared = SHARED.borrow_ref(cs);
+            let Some(uart) = shared.as_ref().and_then(|shared| shared.uart.as_ref()) else {
+                return 0;
+            };
+            let (front, _) = self.tx_buffer.as_slices();
+            match uart.write_raw(front) {
+                Ok(rest) => front.len() - rest.len(),
+                Err(_) => 0, // nb::WouldBlock: FIFO full
+            }
+        });
+        for _ in 0..written {
+            self.tx_buffer.pop_front();
+        }
+    }
+
+    pub fn baud(&self) -> u32 {
+        self.baud
+    }
+
+    /// Switches to `baud` after everything already buffered has been sent at the old rate
+    /// (so the reply that announces a change arrives readably). Blocks for that long.
+    pub fn set_baud(&mut self, baud: u32) -> Result<(), BaudOutOfRange> {
+        check_baud(baud)?;
+        if baud == self.baud {
+            return Ok(());
+        }
+        while self.tx_pending() {
+            self.send_some();
+        }
+        let peripheral_clock = self.peripheral_clock;
+        critical_section::with(|cs| {
+            let mut shared = SHARED.borrow_ref_mut(cs);
+            let Some(shared) = shared.as_mut() else {
+                return;
+            };
+            let Some(uart) = shared.uart.take() else {
+                return;
+            };
+            // Let the last byte leave the shift register before changing its clock.
+            while uart.uart_is_busy() {}
+            // Cannot fail: `check_baud` keeps the divider in range for a 125 MHz clk_peri.
+            let Ok(uart) = uart.disable().enable(config(baud), peripheral_clock) else {
+                panic!("UART0 rejected a checked baud rate");
+            };
+            // The interrupt mask and FIFO watermark survive disable/enable.
+            shared.uart = Some(uart);
+        });
+        self.baud = baud;
+        Ok(())
+    }
+}
+
+/// Buffers output. Should the buffer fill up anyway (the main loop checks
+/// [`Serial::has_room_for_reply`] first), it waits for the line to take bytes: back-pressure,
+/// never silent loss, since a host relies on every reply arriving whole.
+impl fmt::Write for Serial {
+    fn write_str(&mut self, text: &str) -> fmt::Result {
+        for &byte in text.as_bytes() {
+            while self.tx_buffer.push_back(byte).is_err() {
+                self.send_some();
+            }
+        }
+        Ok(())
+    }
+}
+
+fn check_baud(baud: u32) -> Result<(), BaudOutOfRange> {
+    if (BAUD_MIN..=BAUD_MAX).contains(&baud) {
+        Ok(())
+    } else {
+        Err(BaudOutOfRange)
+    }
+}
+
+fn config(baud: u32) -> UartConfig {
+    UartConfig::new(baud.Hz(), DataBits::Eight, None, StopBits::One)
+}
+
+impl Shared {
+    /// Empties the RX FIFO into the queue; this also clears the level and timeout interrupts.
+    fn receive(&mut self) {
+        let Some(uart) = self.uart.as_ref() else {
+            return;
+        };
+        let mut chunk = [0u8; 32];
+        // Bounded: a FIFO holds 32 bytes, so a few rounds empty it; should a (broken) UART keep
+        // reporting errors, the interrupt returns and fires again instead of hanging here.
+        for _ in 0..8 {
+            match uart.read_raw(&mut chunk) {
+                Ok(count) => enqueue(
+                    &mut self.rx_queue,
+                    &mut self.rx_overflow_bytes,
+                    &chunk[..count],
+                ),
+                Err(nb::Error::WouldBlock) => break,
+                Err(nb::Error::Other(error)) => {
+                    self.rx_line_errors = self.rx_line_errors.wrapping_add(1);
+                    // `discarded` holds the good bytes read before the bad one.
+                    enqueue(
+                        &mut self.rx_queue,
+                        &mut self.rx_overflow_bytes,
+                        error.discarded,
+                    );
+                }
+            }
+        }
+    }
+}
+
+fn enqueue(queue: &mut Producer<'static, u8, RX_QUEUE_BYTES>, dropped: &mut u32, bytes: &[u8]) {
+    for &byte in bytes {
+        if queue.enqueue(byte).is_err() {
+            *dropped = dropped.wrapping_add(1);
+        }
+    }
+}
+
+#[interrupt]
+fn UART0_IRQ() {
+    critical_section::with(|cs| {
+        if let Some(shared) = SHARED.borrow_ref_mut(cs).as_mut() {
+            shared.receive();
+        }
+    });
+}

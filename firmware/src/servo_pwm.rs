@@ -1,0 +1,220 @@
+//! Six hobby-servo outputs: servo i (1..=6) on GP(i+1), PWM slices 1-3, channels A and B.
+//!
+//! The counters run at 125 MHz / 40 = 3.125 MHz, so one count is 320 ns and a frame of
+//! `TOP + 1` counts lasts `(TOP + 1) * 320 ns`; `TOP = 3_125_000 / frame_hz - 1` (62,499 at
+//! 50 Hz). A pin is high from the start of the frame for `CC` counts. `CC` and `TOP` are
+//! double-buffered by the hardware (latched at the wrap), so a new pulse width takes effect at
+//! the next frame and never cuts a pulse short.
+//!
+//! Every frame start (slice 1 wrapping) raises `PWM_IRQ_WRAP`; the handler only counts frames,
+//! so the main loop can run the motion controller once per frame and knows if it missed any.
+
+use core::sync::atomic::{AtomicU32, Ordering};
+
+use embedded_hal::pwm::SetDutyCycle;
+use rp2040_hal::{
+    gpio::{bank0, DefaultTypeState, Pin},
+    pac::{self, interrupt},
+    pwm::{FreeRunning, Pwm1, Pwm2, Pwm3, Slice, SliceId, Slices},
+};
+
+pub const SERVO_COUNT: usize = 6;
+
+/// Integer clock divider: 125 MHz / 40 = 3.125 MHz, no fractional jitter.
+const CLOCK_DIVIDER: u8 = 40;
+/// PWM counts per second at 125 MHz / [`CLOCK_DIVIDER`].
+const COUNTS_PER_SECOND: u32 = 3_125_000;
+/// Counts per microsecond of pulse (1 count = 320 ns).
+const COUNTS_PER_US: f32 = 1.0 / 0.32;
+
+pub const FRAME_HZ_MIN: u16 = 50;
+pub const FRAME_HZ_MAX: u16 = 333;
+pub const FRAME_HZ_DEFAULT: u16 = 50;
+
+/// Frames started so far (slice 1 wraps). Written only by `PWM_IRQ_WRAP`.
+static FRAMES_STARTED: AtomicU32 = AtomicU32::new(0);
+
+/// The pins in their reset state; servo i is `.i-1` (GP2..GP7).
+pub type ServoPins = (
+    DefaultPin<bank0::Gpio2>,
+    DefaultPin<bank0::Gpio3>,
+    DefaultPin<bank0::Gpio4>,
+    DefaultPin<bank0::Gpio5>,
+    DefaultPin<bank0::Gpio6>,
+    DefaultPin<bank0::Gpio7>,
+);
+type DefaultPin<Id> =
+    Pin<Id, <Id as DefaultTypeState>::Function, <Id as DefaultTypeState>::PullType>;
+
+/// Allowed pulse widths in microseconds; every pulse is clamped into `[min_us, max_us]`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PulseWindowUs {
+    pub min_us: f32,
+    pub max_us: f32,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, defmt::Format)]
+pub struct FrameRateOutOfRange;
+
+pub struct ServoPwm {
+    slice1: Slice<Pwm1, FreeRunning>,
+    slice2: Slice<Pwm2, FreeRunning>,
+    slice3: Slice<Pwm3, FreeRunning>,
+    frame_hz: u16,
+    /// Compare value (pulse width in counts) per servo, as last written.
+    counts: [u16; SERVO_COUNT],
+    frames_seen: u32,
+}
+
+impl ServoPwm {
+    /// Takes PWM slices 1-3 and pins GP2..GP7, starts all six outputs at `frame_hz` with the
+    /// given first pulse widths (see [`ServoPwm::set_pulse_widths_us`]; a non-finite width
+    /// means no pulse) and enables the frame-start interrupt.
+    pub fn new(
+        pwm: pac::PWM,
+        resets: &mut pac::RESETS,
+        pins: ServoPins,
+        frame_hz: u16,
+        first_widths_us: &[f32; SERVO_COUNT],
+        window: PulseWindowUs,
+    ) -> Result<Self, FrameRateOutOfRange> {
+        let top = top_for(frame_hz)?;
+        let mut slices = Slices::new(pwm, resets);
+        let (gp2, gp3, gp4, gp5, gp6, gp7) = pins;
+        slices.pwm1.channel_a.output_to(gp2);
+        slices.pwm1.channel_b.output_to(gp3);
+        slices.pwm2.channel_a.output_to(gp4);
+        slices.pwm2.channel_b.output_to(gp5);
+        slices.pwm3.channel_a.output_to(gp6);
+        slices.pwm3.channel_b.output_to(gp7);
+        configure(&mut slices.pwm1, top);
+        configure(&mut slices.pwm2, top);
+        configure(&mut slices.pwm3, top);
+        let counts =
+            first_widths_us.map(|width_us| pulse_counts(width_us, window, top).unwrap_or(0));
+        write_counts(&mut slices.pwm1, &mut slices.pwm2, &mut slices.pwm3, counts);
+        slices.pwm1.clear_interrupt();
+        slices.pwm1.enable_interrupt();
+        // Start the three counters in the same cycle so the six pulses share one frame.
+        slices.enable_simultaneous(0b1110);
+
+        let servos = ServoPwm {
+            slice1: slices.pwm1,
+            slice2: slices.pwm2,
+            slice3: slices.pwm3,
+            frame_hz,
+            counts,
+            frames_seen: 0,
+        };
+        // SAFETY: the handler below touches only the slice-1 interrupt flag and an atomic.
+        unsafe { pac::NVIC::unmask(pac::Interrupt::PWM_IRQ_WRAP) };
+        Ok(servos)
+    }
+
+    pub fn frame_rate_hz(&self) -> u16 {
+        self.frame_hz
+    }
+
+    /// Changes the frame rate (50..=333 Hz) from the next frame on. Pulse widths keep their
+    /// microseconds (counts do not depend on the frame rate) but are cut to the new frame.
+    pub fn set_frame_rate_hz(&mut self, frame_hz: u16) -> Result<(), FrameRateOutOfRange> {
+        let top = top_for(frame_hz)?;
+        self.frame_hz = frame_hz;
+        self.set_top(top);
+        self.write_counts(self.counts.map(|count| count.min(top)));
+        Ok(())
+    }
+
+    /// Sets the six pulse widths for the next frame. A non-finite width keeps that servo's
+    /// previous pulse; finite widths are clamped into `window` (and into the frame) and
+    /// rounded to the nearest count, so no NaN or out-of-window value reaches a register.
+    pub fn set_pulse_widths_us(&mut self, widths_us: &[f32; SERVO_COUNT], window: PulseWindowUs) {
+        let top = self.slice1.get_top();
+        let mut counts = self.counts;
+        for (count, &width_us) in counts.iter_mut().zip(widths_us) {
+            if let Some(new) = pulse_counts(width_us, window, top) {
+                *count = new;
+            }
+        }
+        self.write_counts(counts);
+    }
+
+    /// How many frames started since the last call: 0 = none yet, 1 = the normal case,
+    /// more = the main loop missed frames.
+    pub fn frames_since_last_poll(&mut self) -> u32 {
+        let started = FRAMES_STARTED.load(Ordering::Relaxed);
+        let new = started.wrapping_sub(self.frames_seen);
+        self.frames_seen = started;
+        new
+    }
+
+    /// True if a frame started that [`ServoPwm::frames_since_last_poll`] has not reported.
+    pub fn frame_pending(&self) -> bool {
+        FRAMES_STARTED.load(Ordering::Relaxed) != self.frames_seen
+    }
+
+    fn set_top(&mut self, top: u16) {
+        self.slice1.set_top(top);
+        self.slice2.set_top(top);
+        self.slice3.set_top(top);
+    }
+
+    fn write_counts(&mut self, counts: [u16; SERVO_COUNT]) {
+        write_counts(&mut self.slice1, &mut self.slice2, &mut self.slice3, counts);
+        self.counts = counts;
+    }
+}
+
+/// Servo 1..6 = slice 1 A, 1 B, 2 A, 2 B, 3 A, 3 B. The compare registers latch at the wrap.
+fn write_counts(
+    slice1: &mut Slice<Pwm1, FreeRunning>,
+    slice2: &mut Slice<Pwm2, FreeRunning>,
+    slice3: &mut Slice<Pwm3, FreeRunning>,
+    counts: [u16; SERVO_COUNT],
+) {
+    // `set_duty_cycle` is infallible on this HAL.
+    let _ = slice1.channel_a.set_duty_cycle(counts[0]);
+    let _ = slice1.channel_b.set_duty_cycle(counts[1]);
+    let _ = slice2.channel_a.set_duty_cycle(counts[2]);
+    let _ = slice2.channel_b.set_duty_cycle(counts[3]);
+    let _ = slice3.channel_a.set_duty_cycle(counts[4]);
+    let _ = slice3.channel_b.set_duty_cycle(counts[5]);
+}
+
+/// Divider 40, edge-aligned, pins not inverted, counter at 0, no pulse yet.
+fn configure<I: SliceId>(slice: &mut Slice<I, FreeRunning>, top: u16) {
+    slice.default_config();
+    slice.set_div_int(CLOCK_DIVIDER);
+    slice.set_top(top);
+}
+
+/// `TOP = 3_125_000 / frame_hz - 1` for a frame rate in range.
+fn top_for(frame_hz: u16) -> Result<u16, FrameRateOutOfRange> {
+    if !(FRAME_HZ_MIN..=FRAME_HZ_MAX).contains(&frame_hz) {
+        return Err(FrameRateOutOfRange);
+    }
+    let top = COUNTS_PER_SECOND / u32::from(frame_hz) - 1;
+    u16::try_from(top).map_err(|_| FrameRateOutOfRange)
+}
+
+/// Microseconds -> compare counts, or `None` for a non-finite width. Clamps to `window`, then
+/// to `0..=top` (a pulse never outlasts its frame), and rounds half up.
+fn pulse_counts(width_us: f32, window: PulseWindowUs, top: u16) -> Option<u16> {
+    if !width_us.is_finite() {
+        return None;
+    }
+    // `f32::max`/`min` ignore a NaN bound, so a broken window cannot produce NaN either.
+    let clamped_us = width_us.max(window.min_us).min(window.max_us);
+    let counts = clamped_us * COUNTS_PER_US + 0.5;
+    // `as` saturates (negative -> 0); the value is finite here.
+    Some((counts as u32).min(u32::from(top)) as u16)
+}
+
+#[interrupt]
+fn PWM_IRQ_WRAP() {
+    // SAFETY: INTR is write-1-to-clear; writing only slice 1's bit touches no other state.
+    unsafe { (*pac::PWM::ptr()).intr().write(|w| w.bits(1 << 1)) };
+    // Only this handler writes the counter, so load + store cannot lose a count.
+    let frames = FRAMES_STARTED.load(Ordering::Relaxed);
+    FRAMES_STARTED.store(frames.wrapping_add(1), Ordering::Relaxed);
+}
