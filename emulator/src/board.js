@@ -1,0 +1,262 @@
+// A Raspberry Pi Pico running the real firmware ELF in rp2040js, with a host on UART0 and a
+// logic analyser on the six servo pins. Everything runs in emulated time: the same calls give
+// the same results on every run and machine, however fast the host is.
+
+import { dirname, join } from 'node:path';
+import { fileURLToPath } from 'node:url';
+
+import { RP2040 } from 'rp2040js';
+
+import { loadBootrom } from './bootrom.js';
+import { loadSegments } from './elf.js';
+import { PacedUartInput, patchEmulatorGaps } from './rp2040js-gaps.js';
+import { ServoPulseMeter } from './servo-pulses.js';
+
+const REPO = join(dirname(fileURLToPath(import.meta.url)), '..', '..');
+/** The ELF `cargo fw` builds; FIRMWARE_ELF=path overrides. */
+export const DEFAULT_ELF =
+  process.env.FIRMWARE_ELF ?? join(REPO, 'target', 'thumbv6m-none-eabi', 'release', 'firmware');
+
+const FLASH_START = 0x10000000;
+const FLASH_BYTES = 16 * 1024 * 1024; // what rp2040js models; the Pico has 2 MiB
+const WATCHDOG_BASE = 0x40058;
+/** Every command line gets exactly one final reply: `ok` or `error:...`. */
+export const FINAL_REPLY = /^(ok|error:)/;
+/** The boot banner, e.g. `hexapod-fw 0.1.0 ready - type 'help'`. */
+export const BANNER = /^hexapod-fw \S+ ready/;
+/** How often `runUntil` looks at its condition, besides on every received line. */
+const CHECK_EVERY_NANOS = 100_000;
+
+export class EmulatedBoard {
+  /**
+   * @param {object} [options]
+   * @param {string} [options.elf] firmware ELF (default: the `cargo fw` output)
+   * @param {Uint32Array} [options.bootrom] boot ROM words (default: `loadBootrom()`)
+   */
+  constructor({ elf = DEFAULT_ELF, bootrom = loadBootrom() } = {}) {
+    const mcu = new RP2040();
+    this.mcu = mcu;
+    patchEmulatorGaps(mcu);
+    // loadBootrom resets the chip and wipes flash: the firmware goes in after it.
+    mcu.loadBootrom(bootrom);
+    for (const { address, bytes } of loadSegments(elf)) {
+      const offset = address - FLASH_START;
+      if (offset < 0 || offset + bytes.length > FLASH_BYTES) {
+        throw new Error(`${elf}: segment at 0x${address.toString(16)} is not in flash`);
+      }
+      mcu.flash.set(bytes, offset);
+    }
+    // Start in boot2, as the boot ROM would after finding it valid (a reset through the ROM
+    // needs a flash interface rp2040js does not model).
+    mcu.core.PC = FLASH_START;
+
+    this.nanosPerCycle = 1e9 / mcu.clkSys;
+    mcu.addClockListener((clkSys) => {
+      this.nanosPerCycle = 1e9 / clkSys;
+    });
+
+    this.fault = null;
+    this.eventPending = false;
+    mcu.onBreak = (code) => {
+      this.fail(`firmware stopped: breakpoint/UDF #${code} at PC 0x${mcu.core.PC.toString(16)} (a panic?)`);
+    };
+    mcu.peripherals[WATCHDOG_BASE].onWatchdogTrigger = () => {
+      this.fail('watchdog expired: the firmware main loop stalled');
+    };
+
+    // UART0: what the firmware sends, split into lines; what we send, paced.
+    this.outputBytes = [];
+    this.lines = [];
+    this.partialLine = '';
+    this.lineCursor = 0;
+    this.outputListeners = new Set();
+    mcu.uart[0].onByte = (byte) => this.received(byte);
+    this.input = new PacedUartInput(mcu, mcu.uart[0]);
+
+    this.servoMeter = new ServoPulseMeter(mcu);
+  }
+
+  // ---- time ----
+
+  /** Emulated time since power-on. */
+  get nanos() {
+    return this.mcu.clock.nanos;
+  }
+
+  get millis() {
+    return this.mcu.clock.nanos / 1e6;
+  }
+
+  /** CPU cycles executed (not counting sleep in WFI). */
+  get cycles() {
+    return this.mcu.core.cycles;
+  }
+
+  /** Advances emulated time by `ms`. */
+  runMs(ms) {
+    this.runUntil(() => false, { timeoutMs: ms });
+  }
+
+  /**
+   * Runs until `condition()` is true (checked on every received line and every 0.1 ms) or
+   * `timeoutMs` of emulated time have passed. Returns whether the condition was met.
+   */
+  runUntil(condition, { timeoutMs }) {
+    const end = this.nanos + timeoutMs * 1e6;
+    if (condition()) {
+      return true;
+    }
+    while (this.nanos < end) {
+      if (this.runSlice(Math.min(end, this.nanos + CHECK_EVERY_NANOS), condition)) {
+        return true;
+      }
+      if (condition()) {
+        return true;
+      }
+    }
+    return false;
+  }
+
+  /** Executes instructions (or skips sleep to the next timer event) until `endNanos`. */
+  runSlice(endNanos, condition) {
+    const { core, clock } = this.mcu;
+    while (clock.nanos < endNanos) {
+      if (core.waiting) {
+        // Asleep in WFI: nothing happens until the next timer event (or the end).
+        const next = clock.nextAlarm;
+        const toEnd = endNanos - clock.nanos;
+        clock.tick(next ? Math.min(Math.max(next.nanos - clock.nanos, 0), toEnd) : toEnd);
+      } else {
+        clock.tick(core.executeInstruction() * this.nanosPerCycle);
+      }
+      if (this.eventPending) {
+        this.eventPending = false;
+        if (this.fault) {
+          throw this.fault;
+        }
+        if (condition()) {
+          return true;
+        }
+      }
+    }
+    return false;
+  }
+
+  fail(message) {
+    this.fault ??= new Error(`${message} (at ${this.millis.toFixed(3)} ms emulated)`);
+    this.eventPending = true;
+  }
+
+  // ---- UART0 ----
+
+  /** Runs until the boot banner; returns it. */
+  boot({ timeoutMs = 1000 } = {}) {
+    return this.waitForLine(BANNER, { timeoutMs });
+  }
+
+  /** Sends raw bytes (a string is sent as latin1), paced at the firmware's baud rate. */
+  sendBytes(data) {
+    const bytes = typeof data === 'string' ? Buffer.from(data, 'latin1') : data;
+    this.input.send(bytes);
+  }
+
+  /** Sends `text` and a LF, paced at the firmware's baud rate. */
+  sendLine(text) {
+    this.sendBytes(`${text}\n`);
+  }
+
+  /**
+   * Waits for the next received line (without its CR/LF) that matches `matcher` (a RegExp or
+   * a predicate on the line). Lines are consumed in order: the search starts after the line
+   * the previous wait returned, and lines skipped on the way are consumed too.
+   * Throws if none arrives within `timeoutMs` of emulated time.
+   */
+  waitForLine(matcher, { timeoutMs = 1000 } = {}) {
+    const matches = typeof matcher === 'function' ? matcher : (line) => matcher.test(line);
+    let found;
+    const seen = () => {
+      for (; this.lineCursor < this.lines.length; this.lineCursor++) {
+        if (matches(this.lines[this.lineCursor])) {
+          found = this.lines[this.lineCursor++];
+          return true;
+        }
+      }
+      return false;
+    };
+    if (!this.runUntil(seen, { timeoutMs })) {
+      throw new Error(
+        `no line matching ${matcher} within ${timeoutMs} ms (emulated); ` +
+          `last lines: ${JSON.stringify(this.lines.slice(-5))}, partial: ${JSON.stringify(this.partialLine)}`,
+      );
+    }
+    return found;
+  }
+
+  /**
+   * Sends a command line and waits for its final reply (`ok` / `error:...`).
+   * Returns `{ reply, lines }`: the final reply and every line received up to it.
+   */
+  request(text, { timeoutMs = 1000, final = FINAL_REPLY } = {}) {
+    const first = this.lineCursor;
+    this.sendLine(text);
+    const reply = this.waitForLine(final, { timeoutMs });
+    return { reply, lines: this.lines.slice(first, this.lineCursor) };
+  }
+
+  /** Everything the firmware sent on UART0 so far, as text. */
+  get output() {
+    return Buffer.from(this.outputBytes).toString('latin1');
+  }
+
+  /** Calls `listener(byte)` for every byte the firmware sends; returns an unsubscribe. */
+  onOutput(listener) {
+    this.outputListeners.add(listener);
+    return () => this.outputListeners.delete(listener);
+  }
+
+  /** Bytes lost because they arrived while the 32-byte RX FIFO was full. */
+  get rxFifoDroppedBytes() {
+    return this.input.droppedBytes;
+  }
+
+  /** Bytes queued by `sendBytes` that are not on the wire yet. */
+  get inputPending() {
+    return this.input.pending;
+  }
+
+  received(byte) {
+    this.outputBytes.push(byte);
+    for (const listener of this.outputListeners) {
+      listener(byte);
+    }
+    if (byte === 0x0a) {
+      this.lines.push(this.partialLine.replace(/\r$/, ''));
+      this.partialLine = '';
+      this.eventPending = true;
+    } else {
+      this.partialLine += String.fromCharCode(byte);
+    }
+  }
+
+  // ---- servos ----
+
+  /** Per servo (1..6): widthUs, periodUs, widthNanos, periodNanos, widthCounts, pulses, live. */
+  servos() {
+    return this.servoMeter.read();
+  }
+
+  /** The six most recent pulse widths in microseconds (null before the first pulse). */
+  pulseWidthsUs() {
+    return this.servos().map((servo) => servo.widthUs);
+  }
+
+  /** The six most recent frame periods in microseconds (null before two pulses). */
+  periodsUs() {
+    return this.servos().map((servo) => servo.periodUs);
+  }
+
+  /** Calls `listener(board)` whenever a servo's measured pulse width changes. */
+  onServoChange(listener) {
+    this.servoMeter.onChange = () => listener(this);
+  }
+}

@@ -1,0 +1,36 @@
+// Minimal ELF32 reader: the firmware's loadable segments, placed at their load (physical)
+// addresses, which is how a programmer writes them to flash (.data's initial values included).
+
+import { readFileSync } from 'node:fs';
+
+const PT_LOAD = 1;
+
+/** @returns {{ address: number, bytes: Uint8Array }[]} PT_LOAD segments with file contents. */
+export function loadSegments(elfPath) {
+  const file = readFileSync(elfPath);
+  const view = new DataView(file.buffer, file.byteOffset, file.byteLength);
+  const isElf32LittleEndian =
+    file.length >= 52 &&
+    file[0] === 0x7f && file[1] === 0x45 && file[2] === 0x4c && file[3] === 0x46 && // "\x7fELF"
+    file[4] === 1 && // ELFCLASS32
+    file[5] === 1; // ELFDATA2LSB
+  if (!isElf32LittleEndian) {
+    throw new Error(`${elfPath} is not a 32-bit little-endian ELF file`);
+  }
+  const programHeaderOffset = view.getUint32(0x1c, true);
+  const programHeaderSize = view.getUint16(0x2a, true);
+  const programHeaderCount = view.getUint16(0x2c, true);
+
+  const segments = [];
+  for (let i = 0; i < programHeaderCount; i++) {
+    const header = programHeaderOffset + i * programHeaderSize;
+    const type = view.getUint32(header, true);
+    const offset = view.getUint32(header + 4, true);
+    const physicalAddress = view.getUint32(header + 12, true);
+    const fileSize = view.getUint32(header + 16, true);
+    if (type === PT_LOAD && fileSize > 0) {
+      segments.push({ address: physicalAddress, bytes: file.subarray(offset, offset + fileSize) });
+    }
+  }
+  return segments;
+}

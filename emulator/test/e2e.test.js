@@ -1,0 +1,104 @@
+// End-to-end: the real firmware ELF in the emulator, observed only from outside (UART0 bytes
+// and servo pin edges), in emulated time.
+
+import assert from 'node:assert/strict';
+import { existsSync } from 'node:fs';
+import { before, test } from 'node:test';
+
+import { DEFAULT_ELF, EmulatedBoard, FINAL_REPLY } from '../src/board.js';
+import { loadBootrom } from '../src/bootrom.js';
+
+// The wiring and timing the firmware promises (docs: CONTEXT "Wiring"), restated here from
+// the spec rather than taken from the firmware: 125 MHz / divider 40 -> 320 ns per count.
+const NANOS_PER_COUNT = 320;
+const COUNTS_PER_SECOND = 125_000_000 / 40;
+const HOME_PULSE_US = 1500;
+const DEFAULT_FRAME_HZ = 50;
+
+let bootrom;
+before(() => {
+  assert.ok(existsSync(DEFAULT_ELF), `no firmware ELF at ${DEFAULT_ELF}: build it with \`cargo fw\``);
+  bootrom = loadBootrom();
+});
+
+function bootedBoard() {
+  const board = new EmulatedBoard({ bootrom });
+  board.boot();
+  return board;
+}
+
+test('boot prints the banner as its first line', () => {
+  const board = new EmulatedBoard({ bootrom });
+  const banner = board.boot();
+  assert.match(banner, /^hexapod-fw \d+\.\d+\.\d+ ready - type 'help'$/);
+  assert.equal(board.lines[0], banner);
+  assert.ok(board.millis < 100, `banner after ${board.millis} ms`);
+});
+
+test('at boot all six servos get 1500 us pulses at 50 Hz, exact to the count', () => {
+  const board = bootedBoard();
+  board.runMs(3.5 * (1000 / DEFAULT_FRAME_HZ)); // at least two whole frames on every pin
+
+  const periodNanos = (COUNTS_PER_SECOND / DEFAULT_FRAME_HZ) * NANOS_PER_COUNT;
+  const widthNanos = Math.round((HOME_PULSE_US * 1000) / NANOS_PER_COUNT) * NANOS_PER_COUNT;
+  assert.equal(periodNanos, 20_000_000);
+
+  const servos = board.servos();
+  assert.deepEqual(
+    servos.map((servo) => [servo.servo, servo.gpio]),
+    [[1, 2], [2, 3], [3, 4], [4, 5], [5, 6], [6, 7]],
+  );
+  for (const servo of servos) {
+    assert.ok(servo.pulses >= 2, `servo ${servo.servo}: ${servo.pulses} pulses`);
+    assert.ok(servo.live, `servo ${servo.servo} stopped pulsing`);
+    assert.equal(servo.periodNanos, periodNanos, `servo ${servo.servo} period`);
+    assert.equal(servo.widthNanos, widthNanos, `servo ${servo.servo} width`);
+  }
+  assert.deepEqual(board.pulseWidthsUs(), Array(6).fill(widthNanos / 1000));
+  assert.deepEqual(board.periodsUs(), Array(6).fill(20_000));
+});
+
+test('a line gets exactly one final reply', () => {
+  const board = bootedBoard();
+  const { reply, lines } = board.request('frobnicate 1 2 3');
+  assert.equal(reply, 'error:unknown-command frobnicate');
+  assert.deepEqual(lines, [reply]);
+
+  board.runMs(50); // nothing else may follow
+  assert.deepEqual(board.lines.slice(1), [reply]);
+});
+
+test('LF and CRLF each end one line; back-to-back lines are answered in order', () => {
+  const board = bootedBoard();
+  board.sendBytes('one\r\ntwo\nthree\r\n');
+  board.waitForLine(/three/);
+  board.runMs(20);
+  const replies = board.lines.slice(1);
+  assert.deepEqual(replies, [
+    'error:unknown-command one',
+    'error:unknown-command two',
+    'error:unknown-command three',
+  ]);
+  assert.ok(replies.every((line) => FINAL_REPLY.test(line)));
+  assert.equal(board.rxFifoDroppedBytes, 0);
+});
+
+test('input is paced at the baud rate: a line of n bytes takes n byte times', () => {
+  const board = bootedBoard();
+  const start = board.nanos;
+  board.request('x'.repeat(39)); // 40 bytes with the LF
+  const byteNanos = 1e9 * (10 / 115_200); // 8N1
+  const elapsed = board.nanos - start;
+  assert.ok(elapsed >= 40 * byteNanos * 0.99, `reply after ${elapsed} ns`);
+  assert.ok(elapsed < 40 * byteNanos + 1e6, `reply after ${elapsed} ns`);
+});
+
+test('runs are deterministic', () => {
+  const script = () => {
+    const board = bootedBoard();
+    const replies = ['help', 'pose 1 2 3', ''].map((line) => board.request(line).reply);
+    board.runMs(45);
+    return { replies, nanos: board.nanos, cycles: board.cycles, output: board.output, servos: board.servos() };
+  };
+  assert.deepEqual(script(), script());
+});
