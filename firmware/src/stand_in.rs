@@ -2,8 +2,9 @@
 //!
 //! It has the same shape (bytes in, replies out, six pulse widths per frame, settings
 //! getters) so swapping it for the real one touches only `main.rs`. Behaviour: assembles
-//! lines (LF, CRLF or a lone CR end a line), answers every line with exactly one final reply,
-//! and holds all six servos at the home pulse.
+//! lines (LF, CRLF or a lone CR end a line; backspace or DEL deletes the last character),
+//! answers every line with exactly one final reply, and holds all six servos at the home
+//! pulse.
 
 use core::fmt::Write;
 
@@ -38,6 +39,9 @@ impl Controller {
                 self.reply(out);
                 self.line.clear();
                 self.line_too_long = false;
+            }
+            0x08 | 0x7f => {
+                self.line.pop();
             }
             _ => {
                 if self.line.push(byte).is_err() {
