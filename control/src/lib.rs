@@ -4,3 +4,4 @@
 
 pub mod number;
 pub mod protocol;
+pub mod motion;
