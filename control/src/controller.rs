@@ -1,0 +1,537 @@
+//! The controller: bytes in, replies out, six pulse widths per frame.
+//!
+//! It owns the line buffer, the settings and the motion, and runs commands. Data flows one way:
+//! [`protocol`](crate::protocol) (bytes -> lines) -> [`command`](crate::command) (line ->
+//! command) -> here (command -> target pose, checked by the IK) -> [`motion`](crate::motion)
+//! (target -> one pose per frame) -> IK -> pulse widths. Everything written goes through
+//! [`report`](crate::report).
+//!
+//! Rules it keeps:
+//! - exactly one final reply per completed non-blank line;
+//! - a target is accepted only if it and the straight path to it can be driven; otherwise
+//!   nothing changes and the platform holds its pose;
+//! - a settings change is committed only if the complete new settings are valid and the pose
+//!   being held can still be driven with them; changes to the frame rate, geometry or servos
+//!   are refused while moving (`error:busy`);
+//! - [`Controller::on_frame`] always returns finite pulses within the servo limits: if the IK
+//!   fails on a frame, the last good pulses are held and the motion stops (a fault notice).
+//!
+//! Link loss: with `link_timeout_s` set, when that long passes without a completed non-blank
+//! line (any line, valid or not, counts as a sign of life), the platform returns home at the
+//! configured speeds (a group whose speed is off uses [`LINK_LOSS_SPEED_MM_S`] /
+//! [`LINK_LOSS_SPEED_DEG_S`] so it never jumps). It fires once per silence.
+
+use core::fmt::Write;
+use core::marker::PhantomData;
+
+use kinematics_core::ik::{self, IkError, Solution};
+use kinematics_core::{Geometry, Libm, Math, Pose, ServoSet, LEGS};
+
+use crate::command::{self, Command};
+use crate::motion::{Motion, Segment, SpeedLimits};
+use crate::protocol::{Feed, LineBuffer, Spoiled};
+use crate::report::{self, Error, Fault, MotionReport, Notice, StatusReport, EOL, PROMPT};
+use crate::settings::{SettingId, Settings};
+
+/// Linear speed for returning home after link loss when `speed_mm_s` is off, mm/s.
+pub const LINK_LOSS_SPEED_MM_S: f32 = 10.0;
+/// Angular speed for returning home after link loss when `speed_deg_s` is off, deg/s.
+pub const LINK_LOSS_SPEED_DEG_S: f32 = 15.0;
+
+/// Notices waiting to be written.
+const NOTICE_QUEUE: usize = 4;
+
+/// Solves the IK with the chosen math.
+fn solve<M: Math>(
+    geometry: &Geometry,
+    servos: &ServoSet,
+    pose: &Pose,
+) -> Result<Solution, IkError> {
+    ik::solve::<M>(geometry, servos, pose)
+}
+
+/// The hardware-independent firmware: feed it bytes and frames.
+///
+/// `M` supplies sin/cos, sqrt and atan2 (the host and default use `libm`; the board may
+/// supply faster routines).
+#[derive(Debug, Clone)]
+pub struct Controller<M: Math = Libm> {
+    settings: Settings,
+    generation: u32,
+    geometry: Geometry,
+    line: LineBuffer,
+    motion: Motion,
+    /// The last good IK result (what the servos are being given).
+    solution: Solution,
+    /// The move in progress was started by link loss.
+    returning_home: bool,
+    /// Time since the last completed line, us.
+    silence_us: u32,
+    /// Link loss already handled for this silence.
+    link_loss_handled: bool,
+    /// The last fault, until the next accepted move.
+    fault: Option<Fault>,
+    notices: heapless::Deque<Notice, NOTICE_QUEUE>,
+    _math: PhantomData<M>,
+}
+
+impl Controller<Libm> {
+    /// A controller with these settings, using `libm`. Invalid settings are replaced by the
+    /// defaults (the banner says so); use [`Controller::try_with_math`] to handle that yourself.
+    pub fn new(settings: Settings) -> Self {
+        Self::with_math(settings)
+    }
+}
+
+impl<M: Math> Controller<M> {
+    /// A controller with these settings and math routines (invalid settings: see
+    /// [`Controller::new`]).
+    pub fn with_math(settings: Settings) -> Self {
+        match Self::try_with_math(settings) {
+            Ok(c) => c,
+            Err(e) => {
+                let mut c = Self::try_with_math(Settings::default())
+                    .expect("the default settings are valid (tested)");
+                c.notify(Notice::SettingsRejected(e));
+                c
+            }
+        }
+    }
+
+    /// A controller with these settings, or why they cannot be used.
+    pub fn try_with_math(settings: Settings) -> Result<Self, Error> {
+        let geometry = settings.validate()?;
+        let solution = solve::<M>(&geometry, &settings.servos, &Pose::HOME)?;
+        Ok(Controller {
+            settings,
+            generation: 0,
+            geometry,
+            line: LineBuffer::new(),
+            motion: Motion::new(Pose::HOME),
+            solution,
+            returning_home: false,
+            silence_us: 0,
+            link_loss_handled: false,
+            fault: None,
+            notices: heapless::Deque::new(),
+            _math: PhantomData,
+        })
+    }
+
+    // ----- what the board reads -----
+
+    /// The active settings.
+    pub fn settings(&self) -> &Settings {
+        &self.settings
+    }
+
+    /// Increases every time the settings change; the board compares it with the value it last
+    /// applied and then reconfigures (UART baud after the reply has been sent, PWM frame rate).
+    pub fn settings_generation(&self) -> u32 {
+        self.generation
+    }
+
+    /// Servo frame rate, Hz.
+    pub fn frame_hz(&self) -> u16 {
+        self.settings.frame_hz
+    }
+
+    /// UART baud rate.
+    pub fn baud(&self) -> u32 {
+        self.settings.baud
+    }
+
+    /// The active geometry.
+    pub fn geometry(&self) -> &Geometry {
+        &self.geometry
+    }
+
+    /// The pose commanded on the last frame.
+    pub fn pose(&self) -> &Pose {
+        self.motion.pose()
+    }
+
+    /// Where the platform is going.
+    pub fn target(&self) -> &Pose {
+        self.motion.target()
+    }
+
+    /// True while a move is in progress.
+    pub fn is_moving(&self) -> bool {
+        self.motion.is_moving()
+    }
+
+    /// The pulses being commanded, us.
+    pub fn pulses_us(&self) -> [f32; LEGS] {
+        self.solution.pulse_us
+    }
+
+    /// The arm angles being commanded, rad.
+    pub fn arm_rad(&self) -> [f32; LEGS] {
+        self.solution.arm_rad
+    }
+
+    /// The last fault, until the next accepted move.
+    pub fn fault(&self) -> Option<&Fault> {
+        self.fault.as_ref()
+    }
+
+    // ----- what the board calls -----
+
+    /// Writes the start-up banner (and any notice, e.g. refused settings), then the prompt.
+    pub fn banner(&mut self, out: &mut impl Write) {
+        report::write_banner(out);
+        self.flush_notices(out);
+        self.prompt(out);
+    }
+
+    /// Feeds one received byte: echo and line editing; at the end of a line, runs it and
+    /// writes exactly one final reply (blank lines get none).
+    pub fn on_byte(&mut self, byte: u8, out: &mut impl Write) {
+        let echo = self.settings.echo;
+        let feed = self.line.feed(byte);
+        if echo {
+            match feed {
+                Feed::Added(b) => {
+                    let _ = out.write_char(char::from(b));
+                }
+                Feed::Erased => {
+                    let _ = out.write_str("\x08 \x08");
+                }
+                Feed::ErasedLine(n) => {
+                    for _ in 0..n {
+                        let _ = out.write_str("\x08 \x08");
+                    }
+                }
+                Feed::Cancelled => {
+                    let _ = out.write_str("^C");
+                    let _ = out.write_str(EOL);
+                }
+                Feed::Overflowed => {
+                    let _ = out.write_char('\x07'); // bell: the rest of the line is ignored
+                }
+                Feed::Empty | Feed::Line | Feed::Spoiled(_) => {
+                    let _ = out.write_str(EOL);
+                }
+                Feed::Nothing => {}
+            }
+        }
+        match feed {
+            Feed::Line => {
+                // Copy the line out so the buffer is free while the command runs.
+                let mut copy = [0u8; crate::protocol::MAX_LINE];
+                let len = self.line.len();
+                copy[..len].copy_from_slice(self.line.line().as_bytes());
+                self.line.clear();
+                let text = core::str::from_utf8(&copy[..len]).unwrap_or("");
+                self.execute_line(text, out);
+                self.prompt(out);
+            }
+            Feed::Spoiled(why) => {
+                self.heard_from_host();
+                self.flush_notices(out);
+                let error = match why {
+                    Spoiled::TooLong => Error::LineTooLong,
+                    Spoiled::BadByte(byte) => Error::BadCharacter { byte },
+                    Spoiled::RxOverflow(dropped) => Error::RxOverflow { dropped },
+                };
+                report::write_error(out, &error);
+                self.prompt(out);
+            }
+            Feed::Empty | Feed::Cancelled => self.prompt(out),
+            _ => {}
+        }
+    }
+
+    /// The board's receive queue dropped `dropped` bytes: the line being received is refused
+    /// when it ends (`error:rx-overflow`), and a warning is written now.
+    pub fn on_rx_overflow(&mut self, dropped: u32, out: &mut impl Write) {
+        self.line.rx_overflow(dropped);
+        self.notify(Notice::RxOverflow { dropped });
+        self.write_notices(out);
+    }
+
+    /// Writes pending notices (faults, link loss) now, restoring the prompt and the line being
+    /// typed when echo is on. Optional: pending notices are also written before the next reply.
+    pub fn write_notices(&mut self, out: &mut impl Write) {
+        if self.notices.is_empty() {
+            return;
+        }
+        if self.settings.echo {
+            let _ = out.write_str(EOL);
+        }
+        self.flush_notices(out);
+        if self.settings.echo {
+            let _ = out.write_str(PROMPT);
+            let _ = out.write_str(self.line.line());
+        }
+    }
+
+    /// Advances by one frame (`1 / frame_hz` s): link-loss timer, motion, IK. Returns the six
+    /// pulse widths (us, servo 1 first), always finite and within each servo's limits.
+    pub fn on_frame(&mut self) -> [f32; LEGS] {
+        let frame_us = 1_000_000 / u32::from(self.settings.frame_hz.max(1));
+        self.silence_us = self.silence_us.saturating_add(frame_us);
+        self.check_link();
+
+        let next = self.motion.next_pose();
+        match solve::<M>(&self.geometry, &self.settings.servos, &next) {
+            Ok(solution) => {
+                self.motion.commit();
+                self.solution = solution;
+                if !self.motion.is_moving() {
+                    self.returning_home = false;
+                }
+            }
+            Err(cause) => {
+                // Should not happen (targets and paths are checked), but if it does: hold the
+                // last good pulses and stop where the last good frame was.
+                let first = self.fault.is_none() || self.motion.is_moving();
+                self.motion.stop();
+                self.returning_home = false;
+                if first {
+                    let fault = Fault::IkFailed {
+                        cause,
+                        held: *self.motion.pose(),
+                    };
+                    self.fault = Some(fault);
+                    self.notify(Notice::Fault(fault));
+                }
+            }
+        }
+        self.safe_pulses()
+    }
+
+    /// Runs one line as if it had been typed (any case, blank lines ignored) and writes its
+    /// replies; for transports other than the byte stream.
+    pub fn execute_line(&mut self, line: &str, out: &mut impl Write) {
+        if line.bytes().all(|b| b == b' ' || b == b'\t') {
+            return;
+        }
+        self.heard_from_host();
+        self.flush_notices(out);
+        let result = command::parse(line).and_then(|cmd| self.run(cmd, out));
+        match result {
+            Ok(()) => report::write_ok(out),
+            Err(e) => report::write_error(out, &e),
+        }
+    }
+
+    // ----- commands -----
+
+    fn run(&mut self, cmd: Command, out: &mut impl Write) -> Result<(), Error> {
+        match cmd {
+            Command::Pose(target) => self.move_to(target),
+            Command::Move(values) => self.move_to(values.apply(self.motion.target(), false)),
+            Command::Nudge(values) => self.move_to(values.apply(self.motion.target(), true)),
+            Command::Home => self.move_to(Pose::HOME),
+            Command::Check(target) => {
+                let (solution, segment) = self.plan(target, self.speed_limits())?;
+                let duration_s = segment.frames() as f32 / f32::from(self.settings.frame_hz);
+                let duration_s = if segment.start() == segment.target() {
+                    0.0
+                } else {
+                    duration_s
+                };
+                report::write_check(out, &solution.arm_rad, &solution.pulse_us, duration_s);
+                Ok(())
+            }
+            Command::Stop => {
+                self.motion.stop();
+                self.returning_home = false;
+                Ok(())
+            }
+            Command::Status => {
+                report::write_status(out, &self.status());
+                Ok(())
+            }
+            Command::Geometry => {
+                report::write_geometry(out, &self.settings, &self.geometry);
+                Ok(())
+            }
+            Command::Config => {
+                report::write_config(out, &self.settings);
+                Ok(())
+            }
+            Command::Help => {
+                report::write_help(out);
+                Ok(())
+            }
+            Command::Set(id, value) => {
+                let moves_matter = matches!(
+                    id,
+                    SettingId::FrameHz | SettingId::Layout(_) | SettingId::Servo(..)
+                );
+                if moves_matter && self.motion.is_moving() {
+                    return Err(Error::Busy);
+                }
+                self.change_settings(self.settings.with(id, value))
+            }
+            Command::Defaults => {
+                if self.motion.is_moving() {
+                    return Err(Error::Busy);
+                }
+                self.change_settings(Settings::default())
+            }
+        }
+    }
+
+    fn speed_limits(&self) -> SpeedLimits {
+        SpeedLimits {
+            mm_per_s: self.settings.speed_mm_s,
+            deg_per_s: self.settings.speed_deg_s,
+        }
+    }
+
+    /// Checks a target and the straight path to it from the current pose.
+    fn plan(&self, target: Pose, limits: SpeedLimits) -> Result<(Solution, Segment), Error> {
+        // The target itself first: its error is the most useful one.
+        let solution = solve::<M>(&self.geometry, &self.settings.servos, &target)?;
+        let segment = Segment::plan(
+            *self.motion.pose(),
+            target,
+            limits,
+            f32::from(self.settings.frame_hz),
+        );
+        segment
+            .check_path(|p| solve::<M>(&self.geometry, &self.settings.servos, p).map(|_| ()))
+            .map_err(|e| Error::PathBlocked {
+                percent: e.fraction * 100.0,
+                cause: e.error,
+            })?;
+        Ok((solution, segment))
+    }
+
+    fn move_to(&mut self, target: Pose) -> Result<(), Error> {
+        let (_, segment) = self.plan(target, self.speed_limits())?;
+        self.start(segment);
+        Ok(())
+    }
+
+    /// Starts a checked move.
+    fn start(&mut self, segment: Segment) {
+        self.motion.start(segment);
+        self.returning_home = false;
+        self.fault = None;
+    }
+
+    fn change_settings(&mut self, candidate: Settings) -> Result<(), Error> {
+        let geometry = candidate.validate()?;
+        // The pose being held must stay drivable (and the pulses change right away).
+        let solution = solve::<M>(&geometry, &candidate.servos, self.motion.pose())
+            .map_err(|cause| Error::PoseConflict { cause })?;
+        self.settings = candidate;
+        self.geometry = geometry;
+        self.solution = solution;
+        self.generation = self.generation.wrapping_add(1);
+        Ok(())
+    }
+
+    fn status(&self) -> StatusReport<'_> {
+        let hz = f32::from(self.settings.frame_hz);
+        let motion = match self.motion.progress() {
+            None => MotionReport::Idle,
+            Some((done, total)) => {
+                let (elapsed_s, duration_s) = (done as f32 / hz, total as f32 / hz);
+                if self.returning_home {
+                    MotionReport::ReturningHome {
+                        elapsed_s,
+                        duration_s,
+                    }
+                } else {
+                    MotionReport::Moving {
+                        elapsed_s,
+                        duration_s,
+                    }
+                }
+            }
+        };
+        StatusReport {
+            motion,
+            pose: self.motion.pose(),
+            target: self.motion.target(),
+            arm_rad: &self.solution.arm_rad,
+            pulse_us: &self.solution.pulse_us,
+            fault: self.fault.as_ref(),
+        }
+    }
+
+    // ----- link loss -----
+
+    fn heard_from_host(&mut self) {
+        self.silence_us = 0;
+        self.link_loss_handled = false;
+    }
+
+    fn check_link(&mut self) {
+        let timeout_s = self.settings.link_timeout_s;
+        if timeout_s <= 0.0 || self.link_loss_handled {
+            return;
+        }
+        if (self.silence_us as f32) < timeout_s * 1e6 {
+            return;
+        }
+        self.link_loss_handled = true;
+        if *self.motion.pose() == Pose::HOME && !self.motion.is_moving() {
+            return;
+        }
+        let or = |v: f32, fallback: f32| if v > 0.0 { v } else { fallback };
+        let limits = SpeedLimits {
+            mm_per_s: or(self.settings.speed_mm_s, LINK_LOSS_SPEED_MM_S),
+            deg_per_s: or(self.settings.speed_deg_s, LINK_LOSS_SPEED_DEG_S),
+        };
+        match self.plan(Pose::HOME, limits) {
+            Ok((_, segment)) => {
+                self.start(segment);
+                self.returning_home = true;
+                self.notify(Notice::LinkLost { timeout_s });
+            }
+            Err(e) => {
+                self.motion.stop();
+                let cause = match e {
+                    Error::Pose(cause) | Error::PathBlocked { cause, .. } => cause,
+                    // `plan` only fails with the two above.
+                    _ => IkError::Unreachable { leg: 0 },
+                };
+                let fault = Fault::HomeBlocked { cause };
+                self.fault = Some(fault);
+                self.notify(Notice::Fault(fault));
+            }
+        }
+    }
+
+    // ----- output helpers -----
+
+    fn notify(&mut self, notice: Notice) {
+        if self.notices.is_full() {
+            self.notices.pop_front();
+        }
+        let _ = self.notices.push_back(notice);
+    }
+
+    fn flush_notices(&mut self, out: &mut impl Write) {
+        while let Some(n) = self.notices.pop_front() {
+            report::write_notice(out, &n);
+        }
+    }
+
+    fn prompt(&self, out: &mut impl Write) {
+        if self.settings.echo {
+            let _ = out.write_str(PROMPT);
+        }
+    }
+
+    /// The last good pulses, guarded once more: finite and within the current limits.
+    fn safe_pulses(&self) -> [f32; LEGS] {
+        let servos = &self.settings.servos.0;
+        core::array::from_fn(|i| {
+            let s = &servos[i];
+            let w = self.solution.pulse_us[i];
+            if w.is_finite() {
+                w.clamp(s.min_us, s.max_us)
+            } else {
+                s.home_us
+            }
+        })
+    }
+}
