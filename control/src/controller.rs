@@ -371,7 +371,14 @@ impl<M: Math> Controller<M> {
                 if self.motion.is_moving() {
                     return Err(Error::Busy);
                 }
-                self.change_settings(Settings::default())
+                // The link stays as it is: a host talking at 921600 baud without echo keeps
+                // talking.
+                let defaults = Settings {
+                    baud: self.settings.baud,
+                    echo: self.settings.echo,
+                    ..Settings::default()
+                };
+                self.change_settings(defaults)
             }
         }
     }
@@ -533,5 +540,148 @@ impl<M: Math> Controller<M> {
                 s.home_us
             }
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::report::Code;
+
+    fn quiet() -> Controller {
+        Controller::new(Settings {
+            echo: false,
+            ..Settings::default()
+        })
+    }
+
+    fn run(c: &mut Controller, line: &str) -> std::string::String {
+        let mut out = std::string::String::new();
+        c.execute_line(line, &mut out);
+        out
+    }
+
+    fn within_limits(c: &Controller, pulses: &[f32; LEGS]) -> bool {
+        pulses
+            .iter()
+            .zip(c.settings().servos.0.iter())
+            .all(|(w, s)| w.is_finite() && *w >= s.min_us && *w <= s.max_us)
+    }
+
+    /// Reachable, but the straight line between them is not (found by search).
+    const FROM: [f32; 6] = [-28.0, 19.0, -2.5, 11.0, 2.0, -20.0];
+    const TO: [f32; 6] = [30.0, -12.0, -13.5, 5.0, -13.0, 28.0];
+
+    fn pose_command(v: [f32; 6]) -> std::string::String {
+        std::format!("pose {} {} {} {} {} {}", v[0], v[1], v[2], v[3], v[4], v[5])
+    }
+
+    fn pose(v: [f32; 6]) -> Pose {
+        Pose::from_degrees(v[0], v[1], v[2], v[3], v[4], v[5])
+    }
+
+    #[test]
+    fn ik_failure_on_a_frame_holds_the_last_good_pulses_and_stops() {
+        let mut c = quiet();
+        assert_eq!(run(&mut c, &pose_command(FROM)), "ok\r\n");
+        while c.is_moving() {
+            c.on_frame();
+        }
+        // Start the blocked move without its path check, as if the check had missed it.
+        let segment = Segment::plan(*c.pose(), pose(TO), c.speed_limits(), 50.0);
+        assert!(segment
+            .check_path(|p| solve::<Libm>(&c.geometry, &c.settings.servos, p).map(|_| ()))
+            .is_err());
+        c.start(segment);
+        let mut last_good = c.pulses_us();
+        let mut frames = 0;
+        while c.is_moving() {
+            let before = *c.pose();
+            let pulses = c.on_frame();
+            assert!(within_limits(&c, &pulses), "{pulses:?}");
+            if c.is_moving() {
+                last_good = pulses;
+            } else {
+                // The failing frame: nothing new commanded, stopped where the last good was.
+                assert_eq!(pulses, last_good);
+                assert_eq!(*c.pose(), before);
+                assert_eq!(*c.target(), before);
+            }
+            frames += 1;
+        }
+        assert!(
+            frames < segment.frames(),
+            "the move should have failed part way"
+        );
+        assert!(matches!(c.fault(), Some(Fault::IkFailed { .. })));
+        // Holding from now on.
+        for _ in 0..10 {
+            assert_eq!(c.on_frame(), last_good);
+        }
+        let mut out = std::string::String::new();
+        c.write_notices(&mut out);
+        assert!(out.starts_with("# fault: motion stopped: "), "{out:?}");
+        let status = run(&mut c, "status");
+        assert!(status.contains("# fault: motion stopped"), "{status}");
+        // The next accepted move clears the fault.
+        assert_eq!(run(&mut c, "home"), "ok\r\n");
+        assert!(c.fault().is_none());
+    }
+
+    #[test]
+    fn link_loss_with_the_way_home_blocked_holds_and_reports() {
+        let mut c = quiet();
+        assert_eq!(run(&mut c, "set link_timeout_s 0.1"), "ok\r\n");
+        // Put the platform at a reachable pose from which the line home is not.
+        let stuck = pose([40.0, 20.0, -18.5, -5.0, -16.0, -26.0]);
+        c.motion = Motion::new(stuck);
+        c.solution = solve::<Libm>(&c.geometry, &c.settings.servos, &stuck).unwrap();
+        for _ in 0..20 {
+            let pulses = c.on_frame();
+            assert!(within_limits(&c, &pulses));
+        }
+        assert!(!c.is_moving());
+        assert_eq!(*c.pose(), stuck);
+        assert!(matches!(c.fault(), Some(Fault::HomeBlocked { .. })));
+        let mut out = std::string::String::new();
+        c.write_notices(&mut out);
+        assert!(
+            out.starts_with("# fault: link lost but the way home is blocked"),
+            "{out:?}"
+        );
+    }
+
+    #[test]
+    fn pulses_are_finite_and_within_limits_even_if_the_solution_were_not() {
+        let mut c = quiet();
+        c.solution.pulse_us = [f32::NAN, 5000.0, -3.0, 1500.0, f32::INFINITY, 1200.0];
+        let w = c.safe_pulses();
+        assert!(within_limits(&c, &w), "{w:?}");
+        assert_eq!(w[0], c.settings.servos.0[0].home_us);
+        assert_eq!(w[1], c.settings.servos.0[1].max_us);
+    }
+
+    #[test]
+    fn blank_lines_through_execute_line_get_no_reply() {
+        let mut c = quiet();
+        assert_eq!(run(&mut c, "   "), "");
+        assert!(
+            run(&mut c, "nonsense").starts_with(&std::format!("error:{} ", Code::UnknownCommand))
+        );
+    }
+
+    #[test]
+    fn notice_queue_keeps_the_latest() {
+        let mut c = quiet();
+        for dropped in 1..=10 {
+            c.notify(Notice::RxOverflow { dropped });
+        }
+        let mut out = std::string::String::new();
+        c.write_notices(&mut out);
+        assert_eq!(out.lines().count(), NOTICE_QUEUE);
+        assert!(
+            out.contains("10 bytes") && !out.contains(" 1 bytes"),
+            "{out}"
+        );
     }
 }

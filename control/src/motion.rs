@@ -9,7 +9,7 @@
 //!
 //! so both limits hold and the slower group sets the pace. A limit of 0 means "no limit"; with
 //! both off a move is a jump (one frame). The duration is rounded up to whole frames, so the
-//! speeds are never exceeded; frame `k` of `N` commands `P(k / N)` and the last frame commands
+//! speeds are never exceeded (beyond f32 rounding, at most 0.001 %); frame `k` of `N` commands `P(k / N)` and the last frame commands
 //! `P1` exactly.
 //!
 //! Before a move starts, [`Segment::check_path`] runs a caller-supplied check (the IK) along
@@ -35,6 +35,9 @@ pub const PATH_STEP_DEG: f32 = 0.25;
 pub const MAX_PATH_CHECKS: u32 = 1024;
 /// Most frames one move may take (2^24, about 14 h at 333 Hz; keeps `k / N` exact in f32).
 pub const MAX_FRAMES: u32 = 1 << 24;
+
+/// Relative allowance when rounding a duration up to whole frames.
+const FRAME_ROUNDING_ALLOWANCE: f32 = 1e-5;
 
 /// Speed limits; 0 (or anything not positive) means no limit on that group.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -96,7 +99,11 @@ impl Segment {
         if limits.deg_per_s > 0.0 {
             duration_s = duration_s.max(angular_distance_deg(&start, &target) / limits.deg_per_s);
         }
-        let frames = libm::ceilf(duration_s * frame_hz);
+        // Rounding up to whole frames keeps both speeds within their limits. The small
+        // relative allowance absorbs f32 rounding (6 deg -> rad -> deg is 6.0000005 deg), so
+        // a move that needs exactly N frames does not take N + 1; it can exceed a limit by
+        // at most 0.001 %.
+        let frames = libm::ceilf(duration_s * frame_hz * (1.0 - FRAME_ROUNDING_ALLOWANCE));
         // NaN (never expected: poses are finite) falls back to a single frame.
         let frames = if frames >= MAX_FRAMES as f32 {
             MAX_FRAMES

@@ -668,7 +668,7 @@ pub const HELP: &[&str] = &[
     "  geometry                               the active geometry",
     "  config                                 list the settings",
     "  set <name> <value>                     change a setting (names as in config)",
-    "  defaults                               restore the default settings",
+    "  defaults                               restore the default settings (except baud and echo)",
     "  help                                   this list",
     "axes: x y z (mm, z from the home height) roll pitch yaw (degrees, applied yaw-pitch-roll)",
     "moves run in a straight line at speed_mm_s / speed_deg_s (0 or off: jump)",
