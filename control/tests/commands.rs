@@ -1,0 +1,583 @@
+//! Every command and every error class, through the byte interface.
+
+mod common;
+
+use common::{code_of, is_final, pose_values, six, Session};
+use control::report::Code;
+use control::Settings;
+use kinematics_core::geometry::PairedLayout;
+use kinematics_core::{ik, Libm, Pose, ServoSet};
+
+/// A reachable pose whose straight path from home is clear, and a reachable pose whose
+/// straight path from the first crosses a region the legs cannot reach (found by search).
+const BLOCKED_FROM: &str = "pose -28 19 -2.5 11 2 -20";
+const BLOCKED_TO: &str = "30 -12 -13.5 5 -13 28";
+
+fn close(a: f32, b: f32, tol: f32) -> bool {
+    (a - b).abs() <= tol
+}
+
+#[test]
+fn banner_then_prompt_when_echo_is_on() {
+    let mut ctl = control::Controller::new(Settings::default());
+    let mut out = String::new();
+    ctl.banner(&mut out);
+    assert!(out.starts_with("# hexapod control"), "{out:?}");
+    assert!(out.ends_with("\r\n> "), "{out:?}");
+    assert!(!out.contains("ok") && !out.contains("error:"));
+}
+
+#[test]
+fn typed_characters_are_echoed_and_backspace_erases() {
+    let mut s = Session::with(Settings::default());
+    let out = s.feed(b"hoxx\x08\x7fme\r");
+    assert_eq!(out, "hoxx\x08 \x08\x08 \x08me\r\nok\r\n> ");
+    // Ctrl-C abandons the line without a reply.
+    let out = s.feed(b"pose 1\x03");
+    assert_eq!(out, "pose 1^C\r\n> ");
+    // Ctrl-U erases the whole line on the screen.
+    let out = s.feed(b"ab\x15");
+    assert_eq!(out, "ab\x08 \x08\x08 \x08");
+    // A blank line is just a fresh prompt.
+    assert_eq!(s.feed(b"\r"), "\r\n> ");
+    assert_eq!(s.feed(b"   \r\n"), "   \r\n> ");
+}
+
+#[test]
+fn echo_off_is_for_programs() {
+    let mut s = Session::with(Settings::default());
+    assert_eq!(s.feed(b"set echo off\r\n"), "set echo off\r\nok\r\n");
+    assert!(!s.ctl.settings().echo);
+    assert_eq!(s.feed(b"home\r\n"), "ok\r\n");
+    assert_eq!(s.feed(b"\r\n \n"), "");
+    assert_eq!(s.feed(b"ab\x08c\x03"), "");
+    assert_eq!(s.feed(b"set echo on\n"), "ok\r\n> ");
+}
+
+#[test]
+fn every_line_end_gets_one_reply() {
+    let mut s = Session::quiet();
+    for end in ["\r", "\n", "\r\n"] {
+        let out = s.feed(format!("status{end}").as_bytes());
+        assert_eq!(out.lines().filter(|l| is_final(l)).count(), 1, "{end:?}");
+    }
+    // Two lines in one burst, LF CR between them (a CR after an LF is a blank line).
+    let out = s.feed(b"home\n\rstop\r\n");
+    assert_eq!(out, "ok\r\nok\r\n");
+}
+
+#[test]
+fn commands_are_case_insensitive() {
+    let mut s = Session::quiet();
+    s.ok("POSE 0 0 2 0 0 0");
+    s.ok("Set Speed_MM_S 20");
+    s.ok("STATUS");
+    s.ok("?");
+}
+
+#[test]
+fn status_shows_pose_target_state_angles_and_pulses() {
+    let mut s = Session::quiet();
+    let data = s.ok("status");
+    let keys: Vec<&str> = data
+        .iter()
+        .map(|l| l.trim_start_matches("# ").split(':').next().unwrap())
+        .collect();
+    assert_eq!(keys, ["state", "pose", "target", "arm_deg", "pulse_us"]);
+    assert_eq!(s.status_field("state"), "idle");
+    // Arm angles with 3 decimals, pulses with 2.
+    for (key, decimals) in [("arm_deg", 3), ("pulse_us", 2)] {
+        let text = s.status_field(key);
+        for v in text.split(' ') {
+            assert_eq!(
+                v.split('.').nth(1).map(str::len),
+                Some(decimals),
+                "{key}: {text}"
+            );
+        }
+    }
+    // At home the pulses are the trims and the arms are at alpha0.
+    let g = PairedLayout::default().build().unwrap();
+    let arm = six(&s.status_field("arm_deg"));
+    for (i, a) in arm.iter().enumerate() {
+        assert!(close(*a, g.alpha0_rad(i).to_degrees(), 1e-3));
+    }
+    assert_eq!(six(&s.status_field("pulse_us")), [1500.0; 6]);
+}
+
+#[test]
+fn pose_moves_there_and_status_reports_it() {
+    let mut s = Session::quiet();
+    s.ok("pose 3 -2 5 4 -3 6");
+    assert!(s.ctl.is_moving());
+    assert!(s.status_field("state").starts_with("moving"));
+    assert_eq!(
+        pose_values(&s.status_field("target")),
+        [3.0, -2.0, 5.0, 4.0, -3.0, 6.0]
+    );
+    s.run_until_idle();
+    s.frames(1);
+    assert_eq!(s.status_field("state"), "idle");
+    assert_eq!(
+        pose_values(&s.status_field("pose")),
+        [3.0, -2.0, 5.0, 4.0, -3.0, 6.0]
+    );
+    // The pulses are what the IK says for that pose.
+    let expected = ik::solve::<Libm>(
+        &PairedLayout::default().build().unwrap(),
+        &ServoSet::default(),
+        &Pose::from_degrees(3.0, -2.0, 5.0, 4.0, -3.0, 6.0),
+    )
+    .unwrap();
+    let shown = six(&s.status_field("pulse_us"));
+    let given = s.ctl.on_frame();
+    for i in 0..6 {
+        assert!(close(shown[i], expected.pulse_us[i], 0.006));
+        assert!(close(given[i], expected.pulse_us[i], 1e-3));
+    }
+}
+
+#[test]
+fn move_changes_only_the_named_axes() {
+    let mut s = Session::quiet();
+    s.ok("pose 1 2 3 4 5 6");
+    s.ok("move z=-4 yaw=-2");
+    assert_eq!(
+        pose_values(&s.status_field("target")),
+        [1.0, 2.0, -4.0, 4.0, 5.0, -2.0]
+    );
+    s.run_until_idle();
+    assert_eq!(
+        pose_values(&s.status_field("pose")),
+        [1.0, 2.0, -4.0, 4.0, 5.0, -2.0]
+    );
+}
+
+#[test]
+fn nudge_is_relative_to_the_target_and_accumulates() {
+    let mut s = Session::quiet();
+    s.ok("pose 1 2 3 4 5 6");
+    s.ok("nudge x=1 roll=-1");
+    s.ok("nudge x=1.5");
+    assert_eq!(
+        pose_values(&s.status_field("target")),
+        [3.5, 2.0, 3.0, 3.0, 5.0, 6.0]
+    );
+    s.run_until_idle();
+    assert_eq!(
+        pose_values(&s.status_field("pose")),
+        [3.5, 2.0, 3.0, 3.0, 5.0, 6.0]
+    );
+}
+
+#[test]
+fn home_returns_and_stop_freezes() {
+    let mut s = Session::quiet();
+    s.ok("set speed_mm_s 10");
+    s.ok("pose 0 0 10 0 0 0");
+    s.frames(10);
+    s.ok("stop");
+    let here = pose_values(&s.status_field("pose"));
+    assert!(close(here[2], 2.0, 1e-3), "{here:?}");
+    assert_eq!(pose_values(&s.status_field("target")), here);
+    assert_eq!(s.status_field("state"), "idle");
+    let held = s.ctl.on_frame();
+    assert_eq!(s.frames(20), vec![held; 20]);
+    s.ok("home");
+    s.run_until_idle();
+    assert_eq!(pose_values(&s.status_field("pose")), [0.0; 6]);
+    assert_eq!(s.ctl.on_frame(), [1500.0; 6]);
+}
+
+#[test]
+fn check_reports_pulses_and_nothing_moves() {
+    let mut s = Session::quiet();
+    let data = s.ok("check 5 0 -3 2 0 -4");
+    let field = |key: &str| {
+        data.iter()
+            .find_map(|l| l.strip_prefix(&format!("# {key}: ")))
+            .unwrap()
+            .to_owned()
+    };
+    let expected = ik::solve::<Libm>(
+        &PairedLayout::default().build().unwrap(),
+        &ServoSet::default(),
+        &Pose::from_degrees(5.0, 0.0, -3.0, 2.0, 0.0, -4.0),
+    )
+    .unwrap();
+    let pulses = six(&field("pulse_us"));
+    let arm = six(&field("arm_deg"));
+    for i in 0..6 {
+        assert!(close(pulses[i], expected.pulse_us[i], 0.006));
+        assert!(close(arm[i], expected.arm_rad[i].to_degrees(), 6e-4));
+    }
+    // sqrt(25 + 9) mm at 50 mm/s vs sqrt(4 + 16) deg at 60 deg/s: linear is slower.
+    let duration: f32 = field("duration_s").parse().unwrap();
+    let needed = 34f32.sqrt() / 50.0;
+    assert!(duration >= needed && duration < needed + 0.02, "{duration}");
+    assert!(!s.ctl.is_moving());
+    s.frames(50);
+    assert_eq!(pose_values(&s.status_field("pose")), [0.0; 6]);
+    // The same refusals as pose.
+    assert_eq!(s.code("check 0 0 60 0 0 0"), "unreachable");
+    assert_eq!(s.code("check 0 0 0 0 0"), "missing-field");
+}
+
+#[test]
+fn geometry_lists_the_build() {
+    let mut s = Session::quiet();
+    let data = s.ok("geometry");
+    let g = PairedLayout::default().build().unwrap();
+    let h0: f32 = data
+        .iter()
+        .find_map(|l| l.strip_prefix("# home_height_mm (h0): "))
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(close(h0, g.home_height_mm(), 6e-4));
+    assert!(data.iter().any(|l| l == "# arm_mm (a): 20.000"));
+    assert!(data.iter().any(|l| l == "# rod_mm (s): 120.000"));
+    for (i, leg) in g.legs().iter().enumerate() {
+        let line = data
+            .iter()
+            .find(|l| l.starts_with(&format!("# leg {}: ", i + 1)))
+            .unwrap();
+        let beta = format!("beta_deg={:.3}", leg.beta_rad.to_degrees());
+        let alpha0 = format!("alpha0_deg={:.3}", g.alpha0_rad(i).to_degrees());
+        assert!(line.contains(&beta) && line.contains(&alpha0), "{line}");
+        assert!(line.contains("b_mm=(") && line.contains("p_mm=("), "{line}");
+    }
+}
+
+#[test]
+fn config_values_can_be_set_back_unchanged() {
+    let mut s = Session::quiet();
+    s.ok("set servo3.trim_us 1512.5");
+    s.ok("set link_timeout_s 4");
+    let before = *s.ctl.settings();
+    let data = s.ok("config");
+    let mut commands = Vec::new();
+    for line in &data {
+        let line = line.strip_prefix("# ").unwrap();
+        let (name, rest) = line.split_once(':').unwrap();
+        if let Some(servo) = name.strip_prefix("servo") {
+            for kv in rest.split_whitespace() {
+                let (field, value) = kv.split_once('=').unwrap();
+                commands.push(format!("set servo{servo}.{field} {value}"));
+            }
+        } else {
+            commands.push(format!("set {name} {}", rest.trim()));
+        }
+    }
+    assert_eq!(commands.len(), 12 + 6 * 5);
+    for c in &commands {
+        s.ok(c);
+    }
+    let after = *s.ctl.settings();
+    // Values shown with 2-3 decimals come back within that rounding.
+    assert_eq!(after.servos.0[2].home_us, 1512.5);
+    assert_eq!(after.link_timeout_s, 4.0);
+    assert_eq!(
+        (after.frame_hz, after.baud, after.echo),
+        (before.frame_hz, before.baud, before.echo)
+    );
+    for (a, b) in after.servos.0.iter().zip(before.servos.0.iter()) {
+        assert!(close(a.rate_us_per_rad, b.rate_us_per_rad, 6e-4));
+        assert_eq!(a.direction, b.direction);
+        assert!(close(a.min_us, b.min_us, 6e-3) && close(a.max_us, b.max_us, 6e-3));
+    }
+}
+
+#[test]
+fn help_lists_every_command() {
+    let mut s = Session::quiet();
+    let help = s.ok("help").join("\n");
+    for cmd in [
+        "pose", "move", "nudge", "check", "home", "stop", "status", "?", "geometry", "config",
+        "set", "defaults", "help",
+    ] {
+        assert!(
+            help.contains(&format!("  {cmd} "))
+                || help.contains(&format!("({cmd} "))
+                || help.contains(&format!("or {cmd})")),
+            "{cmd}"
+        );
+    }
+}
+
+#[test]
+fn settings_change_bumps_the_generation() {
+    let mut s = Session::quiet();
+    let g0 = s.ctl.settings_generation();
+    s.ok("set frame_hz 200");
+    s.ok("set baud 921600");
+    assert_eq!((s.ctl.frame_hz(), s.ctl.baud()), (200, 921_600));
+    assert_eq!(s.ctl.settings_generation(), g0 + 2);
+}
+
+#[test]
+fn refused_settings_change_nothing() {
+    let mut s = Session::quiet();
+    let before = *s.ctl.settings();
+    let generation = s.ctl.settings_generation();
+    for (line, code) in [
+        ("set frame_hz 49", "out-of-range"),
+        ("set frame_hz 334", "out-of-range"),
+        ("set frame_hz 60.5", "bad-value"),
+        ("set baud 100000", "bad-value"),
+        ("set baud 1e3", "bad-value"),
+        ("set echo sometimes", "bad-value"),
+        ("set speed_mm_s -3", "out-of-range"),
+        ("set speed_deg_s inf", "not-finite"),
+        ("set link_timeout_s 1e39", "number-too-large"),
+        ("set servo1.trim_us 2700", "out-of-range"),
+        ("set servo1.trim_us 1950", "bad-servo-config"),
+        ("set servo6.min_us 1600", "bad-servo-config"),
+        ("set servos.max_us 1400", "bad-servo-config"),
+        ("set servo2.rate_us_rad 50", "out-of-range"),
+        ("set servo2.dir up", "bad-value"),
+        ("set servo7.dir normal", "unknown-setting"),
+        ("set rod_mm 15", "bad-geometry"),
+        ("set arm_mm 0", "out-of-range"),
+        ("set colour red", "unknown-setting"),
+        ("set frame_hz", "missing-field"),
+        ("set frame_hz 100 200", "extra-field"),
+        ("set frame_hz abc", "bad-number"),
+    ] {
+        assert_eq!(s.code(line), code, "{line}");
+        assert_eq!(*s.ctl.settings(), before, "{line}");
+        assert_eq!(s.ctl.settings_generation(), generation, "{line}");
+    }
+}
+
+#[test]
+fn error_messages_name_the_setting_servo_and_limit() {
+    let mut s = Session::quiet();
+    let e = s.err("set servo4.trim_us 1950");
+    assert!(
+        e.contains("servo4.trim_us") && e.contains("1950.00") && e.contains("1900.00"),
+        "{e}"
+    );
+    let e = s.err("set frame_hz 20");
+    assert!(
+        e.contains("frame_hz") && e.contains("50") && e.contains("333"),
+        "{e}"
+    );
+    let e = s.err("set rod_mm 15");
+    assert!(e.contains("rod_mm"), "{e}");
+}
+
+#[test]
+fn trim_and_direction_apply_at_once() {
+    let mut s = Session::quiet();
+    s.ok("pose 0 0 5 0 0 0");
+    s.run_until_idle();
+    let before = s.ctl.on_frame();
+    s.ok("set servo2.trim_us 1520");
+    let after = s.ctl.on_frame();
+    assert!(close(after[1] - before[1], 20.0, 1e-3));
+    assert_eq!(after[0], before[0]);
+    // Reversing servo 2 mirrors its pulse about the trim.
+    s.ok("set servo2.dir reversed");
+    let mirrored = s.ctl.on_frame();
+    assert!(close(mirrored[1] - 1520.0, -(before[1] - 1500.0), 1e-2));
+    s.ok("set baud 921600");
+    s.ok("defaults");
+    // Everything back to the defaults except the link settings.
+    let expected = Settings {
+        echo: false,
+        baud: 921_600,
+        ..Settings::default()
+    };
+    assert_eq!(*s.ctl.settings(), expected);
+}
+
+#[test]
+fn settings_that_would_drop_the_held_pose_are_refused() {
+    let mut s = Session::quiet();
+    s.ok("pose 0 0 -8 0 0 0");
+    s.run_until_idle();
+    let pulses = s.ctl.on_frame();
+    // Servo 1's pulse here is well above 1600 us.
+    assert!(pulses[0] > 1650.0, "{pulses:?}");
+    let before = *s.ctl.settings();
+    let e = s.err("set servo1.max_us 1600");
+    assert_eq!(code_of(&e), "pose-conflict");
+    assert!(e.contains("servo 1"), "{e}");
+    assert_eq!(*s.ctl.settings(), before);
+    s.ok("home");
+    s.run_until_idle();
+    s.ok("set servo1.max_us 1600");
+}
+
+#[test]
+fn motion_settings_are_busy_while_moving_but_others_are_not() {
+    let mut s = Session::quiet();
+    s.ok("set speed_mm_s 5");
+    s.ok("pose 0 0 5 0 0 0");
+    assert!(s.ctl.is_moving());
+    for line in [
+        "set servo1.trim_us 1510",
+        "set frame_hz 100",
+        "set arm_mm 21",
+        "defaults",
+    ] {
+        assert_eq!(s.code(line), "busy", "{line}");
+    }
+    s.ok("set speed_mm_s 10");
+    s.ok("set link_timeout_s 5");
+    s.ok("stop");
+    s.ok("set frame_hz 100");
+}
+
+#[test]
+fn every_pose_error_class_and_the_next_line_works() {
+    let mut s = Session::quiet();
+    s.ok("pose 1 1 1 1 1 1");
+    s.run_until_idle();
+    let target = s.status_field("target");
+    for (line, code) in [
+        ("pose 0 0 80 0 0 0", "unreachable"),
+        ("pose 0 0 -15 0 0 0", "servo-limit"),
+        ("pose 0 0 0 181 0 0", "angle-too-large"),
+        ("pose 1 2 3", "missing-field"),
+        ("pose 1 2 3 4 5 6 7", "extra-field"),
+        ("pose 1 2 three 4 5 6", "bad-number"),
+        ("pose 0x10 0 0 0 0 0", "bad-number"),
+        ("pose 1 2 3 nan 5 6", "not-finite"),
+        ("pose inf 2 3 4 5 6", "not-finite"),
+        ("pose 1e39 0 0 0 0 0", "number-too-large"),
+        ("move", "missing-field"),
+        ("move z", "bad-assignment"),
+        ("move q=1", "unknown-axis"),
+        ("move z=1 z=2", "duplicate-axis"),
+        ("nudge z=1e39", "number-too-large"),
+        ("nudge z=100", "unreachable"),
+        ("home now", "extra-field"),
+        ("fly 1 2 3", "unknown-command"),
+    ] {
+        assert_eq!(s.code(line), code, "{line}");
+        assert!(!s.ctl.is_moving(), "{line}");
+        assert_eq!(s.status_field("target"), target, "{line}");
+    }
+    s.ok("pose 0 0 2 0 0 0");
+}
+
+#[test]
+fn pose_errors_name_the_field_leg_or_servo() {
+    let mut s = Session::quiet();
+    let e = s.err("pose 1 2 3 nan 5 6");
+    assert!(e.contains("roll") && e.contains("'nan'"), "{e}");
+    let e = s.err("pose 1 2");
+    assert!(e.contains("missing z"), "{e}");
+    let e = s.err("pose 0 0 80 0 0 0");
+    assert!(e.contains("leg "), "{e}");
+    let e = s.err("pose 0 0 -15 0 0 0");
+    assert!(
+        e.contains("servo ") && e.contains("1100.00..1900.00"),
+        "{e}"
+    );
+    let e = s.err("move yaw=200");
+    assert!(e.contains("yaw 200.000 deg"), "{e}");
+}
+
+#[test]
+fn path_through_unreachable_space_is_refused_before_anything_moves() {
+    let mut s = Session::quiet();
+    s.ok(BLOCKED_FROM);
+    s.run_until_idle();
+    s.frames(1);
+    let pose = s.status_field("pose");
+    let pulses = s.ctl.on_frame();
+    // The target itself is fine ...
+    let to: Vec<f32> = BLOCKED_TO.split(' ').map(|v| v.parse().unwrap()).collect();
+    let target = Pose::from_degrees(to[0], to[1], to[2], to[3], to[4], to[5]);
+    let geometry = PairedLayout::default().build().unwrap();
+    assert!(ik::solve::<Libm>(&geometry, &ServoSet::default(), &target).is_ok());
+    // ... but the straight line to it from here is not.
+    let e = s.err(&format!("pose {BLOCKED_TO}"));
+    assert_eq!(code_of(&e), "path-blocked");
+    assert!(e.contains("% of the way"), "{e}");
+    assert!(!s.ctl.is_moving());
+    assert_eq!(s.frames(10), vec![pulses; 10]);
+    assert_eq!(s.status_field("pose"), pose);
+    assert_eq!(s.status_field("target"), pose);
+    // check says the same, and a jump is refused too.
+    assert_eq!(s.code(&format!("check {BLOCKED_TO}")), "path-blocked");
+    s.ok("set speed_mm_s off");
+    s.ok("set speed_deg_s off");
+    assert_eq!(s.code(&format!("pose {BLOCKED_TO}")), "path-blocked");
+    assert_eq!(s.frames(3), vec![pulses; 3]);
+}
+
+#[test]
+fn too_long_line_gets_one_error_and_the_next_line_works() {
+    let mut s = Session::quiet();
+    // Exactly 128 characters is fine.
+    let line = format!("{:<128}", "pose 0 0 1 0 0 0");
+    assert_eq!(s.ok(&line), Vec::<String>::new());
+    let long = format!("{line}x");
+    let out = s.send(&long);
+    assert_eq!(out.len(), 1, "{out:?}");
+    assert_eq!(code_of(&out[0]), "line-too-long");
+    let very_long = "pose ".repeat(100);
+    assert_eq!(s.code(&very_long), "line-too-long");
+    s.ok("status");
+}
+
+#[test]
+fn non_ascii_is_refused() {
+    let mut s = Session::quiet();
+    assert_eq!(s.code("pose 0 0 1 0 0 0°"), "bad-character");
+    s.ok("status");
+}
+
+#[test]
+fn rx_overflow_warns_at_once_and_refuses_the_line() {
+    let mut s = Session::quiet();
+    s.feed(b"pose 1 2");
+    let mut out = String::new();
+    s.ctl.on_rx_overflow(17, &mut out);
+    assert!(out.starts_with("# ") && out.contains("17 bytes"), "{out:?}");
+    assert!(!out.contains("ok") && !out.contains("error:"));
+    let out = s.feed(b" 3 0 0 0\r\n");
+    assert_eq!(out.lines().count(), 1, "{out:?}");
+    assert_eq!(code_of(out.trim_end()), "rx-overflow");
+    assert!(!s.ctl.is_moving());
+    s.ok("status");
+}
+
+#[test]
+fn every_error_code_is_documented_in_the_readme() {
+    let readme = include_str!("../README.md");
+    for code in Code::ALL {
+        assert!(
+            readme.contains(&format!("error:{}", code.as_str())),
+            "README does not document error:{code}"
+        );
+    }
+    for name in [
+        "pose", "move", "nudge", "check", "home", "stop", "status", "geometry", "config", "set",
+        "defaults", "help",
+    ] {
+        assert!(
+            readme.contains(&format!("`{name}")),
+            "README does not document {name}"
+        );
+    }
+}
+
+#[test]
+fn invalid_start_up_settings_fall_back_to_defaults_and_say_so() {
+    let mut bad = Settings::default();
+    bad.layout.rod_mm = 5.0;
+    let mut ctl = control::Controller::new(bad);
+    assert_eq!(*ctl.settings(), Settings::default());
+    let mut out = String::new();
+    ctl.banner(&mut out);
+    assert!(
+        out.contains("# warning: stored settings refused (error:bad-geometry"),
+        "{out}"
+    );
+    assert!(control::Controller::<Libm>::try_with_math(bad).is_err());
+}
