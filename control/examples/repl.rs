@@ -25,7 +25,15 @@ fn main() {
             }
             ctl.on_frame();
             if frames > 0 {
-                out.push_str(&format!("\r\n[simulated {frames} frames]\r\n"));
+                // Before the prompt, if there is one.
+                let prompt = out.ends_with("> ");
+                if prompt {
+                    out.truncate(out.len() - 2);
+                }
+                out.push_str(&format!("[simulated {frames} frames]\r\n"));
+                if prompt {
+                    out.push_str("> ");
+                }
             }
             ctl.write_notices(&mut out);
         }

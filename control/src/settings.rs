@@ -24,7 +24,8 @@
 //! | `servoN.dir` | `normal` (even servos, eq. 13) / `reversed` (odd servos, eq. 14) | by parity |
 //! | `servoN.min_us`, `servoN.max_us` | pulse limits, 400..=2600 us | 1100, 1900 |
 //!
-//! `servos.<field>` sets that field of all six servos at once.
+//! `servos.<field>` sets that field of all six servos at once. The `defaults` command restores
+//! [`Settings::default`] except `baud` and `echo`, so the host keeps its connection.
 //!
 //! # Binary form ([`Settings::encode`], [`Settings::decode`])
 //!
