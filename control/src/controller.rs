@@ -1,10 +1,10 @@
 //! The controller: bytes in, replies out, six pulse widths per frame.
 //!
 //! It owns the line buffer, the settings and the motion, and runs commands. Data flows one way:
-//! [`protocol`](crate::protocol) (bytes -> lines) -> [`command`](crate::command) (line ->
+//! [`protocol`](crate::protocol) (bytes -> lines) -> [`command`] (line ->
 //! command) -> here (command -> target pose, checked by the IK) -> [`motion`](crate::motion)
 //! (target -> one pose per frame) -> IK -> pulse widths. Everything written goes through
-//! [`report`](crate::report).
+//! [`report`].
 //!
 //! Rules it keeps:
 //! - exactly one final reply per completed non-blank line;
