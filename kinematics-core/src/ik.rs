@@ -8,11 +8,14 @@
 //!   `L = |l|^2 - (s^2 - a^2)`, `M = 2a l_z`, `N = 2a (cos(beta) l_x + sin(beta) l_y)`.
 //!
 //! Eq. 9 solves this as `alpha = asin(L / sqrt(M^2 + N^2)) - atan(N / M)`. We use the same
-//! root in half-angle form, which needs no `asin` and stays well conditioned when `M` is small
-//! or negative: with `t = tan(alpha / 2)` the equation becomes
-//! `(L + N) t^2 - 2 M t + (L - N) = 0`, whose root on eq. 9's branch (`cos(alpha + delta) >= 0`,
-//! `delta = atan2(N, M)`) is `t = (L - N) / (M + sqrt(M^2 + N^2 - L^2))`, so
-//! `alpha = 2 atan2(L - N, M + sqrt(M^2 + N^2 - L^2))`.
+//! root in half-angle form, which needs no `asin`: with `t = tan(alpha / 2)` the equation
+//! becomes `(L + N) t^2 - 2 M t + (L - N) = 0`, whose root on eq. 9's branch
+//! (`cos(alpha + delta) >= 0`, `delta = atan2(N, M)`) is, with `D = M^2 + N^2 - L^2`,
+//! `t = (L - N) / (M + sqrt(D)) = (M - sqrt(D)) / (L + N)`. Each form is 0/0 somewhere: the
+//! first where `M = -sqrt(D)` (only possible for `M < 0`, joint below the shaft), the second
+//! where `M = sqrt(D)` (only for `M > 0`). So `alpha = 2 atan2(L - N, M + sqrt(D))` for
+//! `M >= 0` and `alpha = 2 atan2(M - sqrt(D), L + N)` for `M < 0`; both stay well
+//! conditioned away from the workspace boundary.
 //! The leg is unreachable exactly when `M^2 + N^2 - L^2 < 0`, i.e. `|L| / sqrt(M^2 + N^2) > 1`.
 //!
 //! Eq. 13, 14 then map `alpha` to a pulse width (see [`crate::servo`]). A pose is accepted or
@@ -140,7 +143,13 @@ pub(crate) fn arm_angles_raw<M: Math>(geometry: &Geometry, pose: &Pose) -> Resul
         if discriminant.is_nan() || discriminant < 0.0 {
             return Err(i as u8 + 1);
         }
-        let a = 2.0 * M::atan2(big_l - big_n, big_m + M::sqrt(discriminant));
+        // The two equal forms of the root; use the one that cannot be 0/0 (see module docs).
+        let root = M::sqrt(discriminant);
+        let a = if big_m >= 0.0 {
+            2.0 * M::atan2(big_l - big_n, big_m + root)
+        } else {
+            2.0 * M::atan2(big_m - root, big_l + big_n)
+        };
         if !a.is_finite() {
             return Err(i as u8 + 1);
         }
