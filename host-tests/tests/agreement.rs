@@ -419,3 +419,117 @@ fn workspace_boundary_is_where_the_reference_puts_it() {
         assert!(tally.poses > 300, "{}: too few boundary probes", case.name);
     }
 }
+
+/// A geometry whose six legs are all the same leg: any pose then asks the core about that one
+/// leg, so its arm angle can be probed wherever the joint can be put, not only where all six
+/// legs of a real layout happen to reach at once.
+fn single_leg(leg: kinematics_core::Leg, arm: f32, rod: f32) -> kinematics_core::Geometry {
+    kinematics_core::Geometry::new([leg; LEGS], arm, rod).expect("six equal legs agree")
+}
+
+/// The pose (no rotation) that puts every joint of a [`single_leg`] geometry at `q`.
+fn pose_for_joint(reference: &RefGeometry, q: [f64; 3]) -> Pose {
+    let p = reference.legs[0].p;
+    Pose {
+        x_mm: (q[0] - p[0]) as f32,
+        y_mm: (q[1] - p[1]) as f32,
+        z_mm: (q[2] - p[2] - reference.h0) as f32,
+        ..Pose::HOME
+    }
+}
+
+#[test]
+fn one_leg_agrees_with_the_reference_wherever_its_joint_can_be() {
+    // Joints all round the shaft, in the whole shell the rod can reach (and a little beyond
+    // both ways): above, level with and below the shaft, in and out of the arm's plane.
+    eprintln!("\none leg, joint anywhere within reach (arm_angles, no servo limits):");
+    for (n, case) in cases().iter().enumerate() {
+        let leg = *case.geometry.leg(n % LEGS);
+        let g = single_leg(leg, case.geometry.arm_mm(), case.geometry.rod_mm());
+        let reference = RefGeometry::from_core(&g);
+        let one = Case {
+            name: case.name,
+            geometry: g,
+            range: case.range,
+            angle_tol_deg: case.angle_tol_deg,
+        };
+        let (a, s) = (reference.arm, reference.rod);
+        let b = reference.legs[0].b;
+        let mut rng = Rng::new(0x5EED_0400 + n as u64);
+        let mut tally = Tally::default();
+        let mut below = 0;
+        while tally.poses < 6000 {
+            let dir = [rng.symmetric(1.0), rng.symmetric(1.0), rng.symmetric(1.0)];
+            let len = (dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]).sqrt();
+            if !(0.1..=1.0).contains(&len) {
+                continue;
+            }
+            let radius = s - a - 2.0 + (2.0 * a + 4.0) * rng.unit();
+            let q = core::array::from_fn(|c| b[c] + dir[c] * radius / len);
+            if q[2] < b[2] {
+                below += 1;
+            }
+            let pose = pose_for_joint(&reference, q);
+            if let Err(why) = check_arm_angles(&one, &reference, &pose, &mut tally) {
+                panic!(
+                    "{} (leg {} alone): joint at {q:?}: {why}",
+                    case.name,
+                    n % LEGS + 1
+                );
+            }
+        }
+        tally.print(case.name);
+        assert!(
+            tally.ok > 1000 && tally.unreachable > 1000 && below > 1000,
+            "{tally:?}"
+        );
+    }
+}
+
+#[test]
+fn half_angle_singularity_below_the_shaft_is_handled() {
+    // With the joint below the shaft (M = 2a l_z < 0) there is a surface on which
+    // L - N = 0 and M + sqrt(M^2 + N^2 - L^2) = 0 at once: the true angle is alpha = 2 phi
+    // (phi = atan2(M, N)), but a half-angle formula tan(alpha/2) = (L - N) / (M + sqrt(...))
+    // is 0/0 there and turns f32 rounding noise into any angle. Put the joint on (and a few
+    // f32 ulps around) that surface, in the arm's plane (w = 0) and just out of it.
+    let g0 = kinematics_core::Geometry::default();
+    let g = single_leg(*g0.leg(0), 20.0, 120.0);
+    let reference = RefGeometry::from_core(&g);
+    let leg = reference.legs[0];
+    let (a, s) = (reference.arm, reference.rod);
+    let u = [leg.beta.cos(), leg.beta.sin(), 0.0];
+    let v = [-leg.beta.sin(), leg.beta.cos(), 0.0];
+    let mut tally = Tally::default();
+    let one = Case {
+        name: "leg 1 alone",
+        geometry: g,
+        range: [0.0; 6],
+        angle_tol_deg: 0.0,
+    };
+    for phi_deg in [
+        -2.0, -5.0, -10.0, -20.0, -22.0, -30.0, -45.0, -60.0, -80.0, -89.0,
+    ] {
+        let phi = f64::to_radians(phi_deg);
+        // In the arm's plane at distance rho, direction phi: L = R cos(phi) gives
+        // rho^2 - 2 a rho cos(phi) + a^2 - s^2 + w^2 = 0.
+        for w in [-0.02, -0.003, -0.0004, 0.0, 0.0004, 0.003, 0.02] {
+            let half = a * phi.cos();
+            let rho = half + (half * half - a * a + s * s - w * w).sqrt();
+            let q = core::array::from_fn(|c| {
+                leg.b[c]
+                    + rho * phi.cos() * u[c]
+                    + w * v[c]
+                    + if c == 2 { rho * phi.sin() } else { 0.0 }
+            });
+            let pose = pose_for_joint(&reference, q);
+            if let Err(why) = check_arm_angles(&one, &reference, &pose, &mut tally) {
+                panic!(
+                    "phi {phi_deg} deg, w {w} mm (true alpha ~ {} deg): {why}",
+                    2.0 * phi_deg
+                );
+            }
+        }
+    }
+    assert_eq!(tally.ok, tally.poses, "{tally:?}");
+}
