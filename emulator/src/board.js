@@ -9,7 +9,7 @@ import { RP2040 } from 'rp2040js';
 
 import { loadBootrom } from './bootrom.js';
 import { loadSegments } from './elf.js';
-import { PacedUartInput, patchEmulatorGaps } from './rp2040js-gaps.js';
+import { onWatchdogExpiry, PacedUartInput, patchEmulatorGaps } from './rp2040js-gaps.js';
 import { ServoPulseMeter } from './servo-pulses.js';
 
 const REPO = join(dirname(fileURLToPath(import.meta.url)), '..', '..');
@@ -19,7 +19,6 @@ export const DEFAULT_ELF =
 
 const FLASH_START = 0x10000000;
 const FLASH_BYTES = 16 * 1024 * 1024; // what rp2040js models; the Pico has 2 MiB
-const WATCHDOG_BASE = 0x40058;
 /** Every command line gets exactly one final reply: `ok` or `error:...`. */
 export const FINAL_REPLY = /^(ok|error:)/;
 /** The boot banner, e.g. `hexapod-fw 0.1.0 ready - type 'help'`. */
@@ -60,9 +59,7 @@ export class EmulatedBoard {
     mcu.onBreak = (code) => {
       this.fail(`firmware stopped: breakpoint/UDF #${code} at PC 0x${mcu.core.PC.toString(16)} (a panic?)`);
     };
-    mcu.peripherals[WATCHDOG_BASE].onWatchdogTrigger = () => {
-      this.fail('watchdog expired: the firmware main loop stalled');
-    };
+    onWatchdogExpiry(mcu, () => this.fail('watchdog expired: the firmware main loop stalled'));
 
     // UART0: what the firmware sends, split into lines; what we send, paced.
     this.outputBytes = [];

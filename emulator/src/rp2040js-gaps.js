@@ -14,10 +14,15 @@
 //    (following run-time changes), in emulated time, as a real serial line would; a byte that
 //    finds the FIFO full is lost, as on hardware (an overrun), and counted.
 //    (Transmit has no timing in rp2040js: TX bytes appear the instant they are written.)
+// 4. Watchdog expiry: rp2040js calls `onWatchdogTrigger`, then re-arms the alarm of a counter
+//    that sits at 0, so it fires again at the same instant forever and emulated time stops.
+//    `onWatchdogExpiry` stops the watchdog timer when it fires and reports it once (a real
+//    chip would reset; a reset through the boot ROM is not possible here anyway).
 
 import { ConsoleLogger, LogLevel } from 'rp2040js';
 
 const UARTRSR = 0x04;
+const WATCHDOG_BASE = 0x40058;
 const BITS_PER_BYTE_8N1 = 10;
 const DEFAULT_BAUD = 115200;
 
@@ -34,6 +39,16 @@ export function patchEmulatorGaps(mcu) {
       }
     };
   }
+}
+
+/** Gap 4: calls `callback()` once when the watchdog expires, and stops it. */
+export function onWatchdogExpiry(mcu, callback) {
+  const watchdog = mcu.peripherals[WATCHDOG_BASE];
+  watchdog.onWatchdogTrigger = () => {
+    watchdog.alarm.enable = false;
+    watchdog.timer.enable = false;
+    callback();
+  };
 }
 
 /** Gap 3: a host sending into a UART's RX pin at the firmware's baud rate. */

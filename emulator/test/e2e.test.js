@@ -102,3 +102,11 @@ test('runs are deterministic', () => {
   };
   assert.deepEqual(script(), script());
 });
+
+test('the watchdog runs: a main loop that stops feeding it fails the run', () => {
+  const board = bootedBoard();
+  board.runMs(1000); // an idle second: fed every frame, no expiry
+  // Mask every interrupt in the emulated NVIC: the main loop sleeps in WFI for good.
+  board.mcu.core.enabledInterrupts = 0;
+  assert.throws(() => board.runMs(2000), /watchdog expired/);
+});
