@@ -4,6 +4,15 @@
 //!   eq. 10, 12, 13, 14). Nothing there reuses the core's closed form.
 //! - [`fixtures`]: the geometries the tests run on, a seeded random number generator and pose
 //!   samplers, shared by the test files in `tests/`.
+//!
+//! The tests (`cargo test -p host-tests -- --nocapture` prints the measured errors):
+//! - `tests/agreement.rs`: `solve` and `arm_angles` against the numeric reference over
+//!   thousands of seeded poses on seven geometries, reachability and the named leg/servo of
+//!   every error, the workspace boundary, one leg probed all round its shaft;
+//! - `tests/properties.rs`: proptest properties (rod closure, exact home pulses, symmetries,
+//!   garbage inputs, servo limits, error naming) and eq. 1-3, 13, 14 directly;
+//! - `tests/golden.rs`: the core against `golden.md` (written by `scripts/golden.py`);
+//! - `tests/geometry.rs`: h0 and alpha0 against eq. 10 and 12, every `GeometryError`.
 
 pub mod fixtures;
 pub mod reference;
