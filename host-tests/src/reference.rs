@@ -309,7 +309,7 @@ fn bisect_ascending(f: impl Fn(f64) -> f64, lo: f64, hi: f64) -> f64 {
 }
 
 /// Number of samples per turn used to bracket the extremes of `g`.
-const SAMPLES: usize = 72;
+pub const SAMPLES: usize = 72;
 
 /// Solves one leg numerically: the arm angle `alpha` with `|q - A(alpha)| = s`.
 ///
