@@ -11,13 +11,13 @@ import { fileURLToPath } from 'node:url';
 import { DEFAULT_ELF, EmulatedBoard } from './board.js';
 import { loadBootrom } from './bootrom.js';
 
-const USAGE = `usage: ./dev run [--pty] [--no-echo] [--elf PATH]
+const USAGE = `usage: ./dev run [--pty] [--local-echo] [--elf PATH]
 
-Runs the firmware in the emulator with UART0 on this terminal (raw mode).
-  Enter sends LF; typed characters are echoed locally (the firmware does not echo)
-  unless --no-echo. Ctrl-] or Ctrl-C quits.
+Runs the firmware in the emulator with UART0 on this terminal (raw mode, like picocom).
+  Enter sends LF. The firmware echoes what you type; if its echo is off, --local-echo
+  shows typed characters here. Ctrl-] or Ctrl-C quits.
   --pty      put UART0 on a pseudo-terminal instead and print its path, for picocom,
-             screen or a host program (e.g. picocom --omap crlf --echo /dev/pts/N).
+             screen or a host program (e.g. picocom -b 115200 --omap crlf /dev/pts/N).
              Ctrl-C quits.
   --elf PATH firmware ELF (default: ${DEFAULT_ELF})
 The status line (stderr) shows the six measured servo pulse widths in microseconds.`;
@@ -40,7 +40,7 @@ function main() {
     ({ values: options } = parseArgs({
       options: {
         pty: { type: 'boolean', default: false },
-        'no-echo': { type: 'boolean', default: false },
+        'local-echo': { type: 'boolean', default: false },
         elf: { type: 'string', default: DEFAULT_ELF },
         help: { type: 'boolean', short: 'h', default: false },
       },
@@ -61,7 +61,7 @@ function main() {
   const status = new StatusLine(process.stderr);
   const connection = options.pty
     ? new PtyConnection(board, status)
-    : new TerminalConnection(board, { echo: !options['no-echo'] });
+    : new TerminalConnection(board, { echo: options['local-echo'] });
 
   const quit = (code, message) => {
     connection.close();
@@ -200,7 +200,7 @@ class PtyConnection {
       }
       path = pending.subarray(0, newline).toString();
       status.message(
-        `UART0 is on ${path}  (e.g. picocom -b 115200 --omap crlf --echo ${path}); Ctrl-C quits`,
+        `UART0 is on ${path}  (e.g. picocom -b 115200 --omap crlf ${path}); Ctrl-C quits`,
       );
       const rest = pending.subarray(newline + 1);
       if (rest.length > 0) {

@@ -12,13 +12,11 @@ mod serial;
 mod servo_pwm;
 mod stand_in;
 
-use core::fmt::Write;
-
 use defmt_rtt as _;
 use panic_probe as _;
 use rp2040_hal::{self as hal, clocks::Clock, fugit::ExtU32, pac, Sio, Watchdog};
 
-use serial::Serial;
+use serial::{Received, Serial};
 use servo_pwm::ServoPwm;
 use stand_in::Controller;
 
@@ -68,21 +66,17 @@ fn main() -> ! {
         (
             pins.gpio2, pins.gpio3, pins.gpio4, pins.gpio5, pins.gpio6, pins.gpio7,
         ),
-        controller.frame_rate_hz(),
+        controller.frame_hz(),
         &controller.on_frame(),
-        controller.pulse_window_us(),
+        &controller.pulse_windows_us(),
     )
     .expect("the default frame rate is in range");
     watchdog.start(WATCHDOG_TIMEOUT_MS.millis());
 
-    let _ = write!(
-        serial,
-        "hexapod-fw {} ready - type 'help'\r\n",
-        env!("CARGO_PKG_VERSION")
-    );
+    controller.banner(&mut serial);
     defmt::info!("ready");
 
-    let mut rx_trouble_reported = (0, 0);
+    let mut rx_line_errors_reported = 0;
     loop {
         watchdog.feed();
 
@@ -92,16 +86,21 @@ fn main() -> ! {
             if !serial.has_room_for_reply() {
                 break;
             }
-            let Some(byte) = serial.read_byte() else {
-                break;
-            };
-            controller.on_byte(byte, &mut serial);
+            match serial.read() {
+                Some(Received::Byte(byte)) => controller.on_byte(byte, &mut serial),
+                // The main loop fell behind and bytes were lost here: that line is refused.
+                Some(Received::Lost(bytes)) => {
+                    defmt::warn!("serial receive queue full: {} bytes lost", bytes);
+                    controller.on_rx_overflow(bytes, &mut serial);
+                }
+                None => break,
+            }
         }
 
         // Once per servo frame: the controller's next six pulse widths.
         let frames = servos.frames_since_last_poll();
         if frames > 0 {
-            servos.set_pulse_widths_us(&controller.on_frame(), controller.pulse_window_us());
+            servos.set_pulse_widths_us(&controller.on_frame(), &controller.pulse_windows_us());
             if frames > 1 {
                 defmt::warn!("missed {} servo frames", frames - 1);
             }
@@ -110,14 +109,10 @@ fn main() -> ! {
         apply_settings(&controller, &mut servos, &mut serial);
         serial.send_some();
 
-        let rx_trouble = (serial.rx_overflow_bytes(), serial.rx_line_errors());
-        if rx_trouble != rx_trouble_reported {
-            defmt::warn!(
-                "serial receive: {} bytes dropped (queue full), {} line errors",
-                rx_trouble.0,
-                rx_trouble.1
-            );
-            rx_trouble_reported = rx_trouble;
+        let rx_line_errors = serial.rx_line_errors();
+        if rx_line_errors != rx_line_errors_reported {
+            rx_line_errors_reported = rx_line_errors;
+            defmt::warn!("serial receive: {} line errors so far", rx_line_errors);
         }
 
         sleep_unless(|| serial.rx_pending() || serial.tx_pending() || servos.frame_pending());
@@ -126,7 +121,7 @@ fn main() -> ! {
 
 /// Makes the hardware follow the controller's settings (frame rate, baud rate).
 fn apply_settings(controller: &Controller, servos: &mut ServoPwm, serial: &mut Serial) {
-    let frame_hz = controller.frame_rate_hz();
+    let frame_hz = controller.frame_hz();
     if frame_hz != servos.frame_rate_hz() && servos.set_frame_rate_hz(frame_hz).is_err() {
         defmt::error!("frame rate {} Hz out of range", frame_hz);
     }

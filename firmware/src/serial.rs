@@ -2,12 +2,18 @@
 //!
 //! Receive: the `UART0_IRQ` handler (RX FIFO level and RX timeout interrupts) moves bytes from
 //! the 32-byte hardware FIFO into a lock-free queue that the main loop reads. It never waits:
-//! when the queue is full it drops the byte and counts it.
+//! when the queue is full it drops the byte and counts it, and the main loop is told where in
+//! the byte stream the loss happened ([`Received::Lost`]), so exactly the damaged line can be
+//! refused.
 //!
 //! Transmit: the main loop writes replies into a software buffer (`core::fmt::Write`) and calls
 //! [`Serial::send_some`] each pass, which moves only what fits into the 32-byte TX FIFO.
 
-use core::{cell::RefCell, fmt};
+use core::{
+    cell::RefCell,
+    fmt,
+    sync::atomic::{AtomicBool, Ordering},
+};
 
 use critical_section::Mutex;
 use heapless::{
@@ -43,14 +49,38 @@ type DefaultPin<Id> =
 struct Shared {
     /// `None` only during a baud-rate change, which happens inside one critical section.
     uart: Option<Uart>,
-    rx_queue: Producer<'static, u8, RX_QUEUE_BYTES>,
-    /// Bytes received while the queue was full.
-    rx_overflow_bytes: u32,
+    rx: Receiver,
+}
+
+/// The interrupt's side of the receive queue.
+struct Receiver {
+    queue: Producer<'static, u8, RX_QUEUE_BYTES>,
+    /// Bytes put into the queue so far (wrapping): positions in the received stream.
+    enqueued: u32,
+    /// Bytes dropped (queue full) that the main loop has not been told about yet.
+    loss: Option<Loss>,
     /// Framing, parity, break and hardware-FIFO overrun errors.
-    rx_line_errors: u32,
+    line_errors: u32,
 }
 
 static SHARED: Mutex<RefCell<Option<Shared>>> = Mutex::new(RefCell::new(None));
+/// `Receiver::loss` is set: lets the main loop skip the critical section otherwise.
+static RX_LOSS_PENDING: AtomicBool = AtomicBool::new(false);
+
+/// Dropped bytes, and where: after the first `after` bytes ever enqueued.
+#[derive(Clone, Copy)]
+struct Loss {
+    after: u32,
+    bytes: u32,
+}
+
+/// What the receiver delivers next, in stream order.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Received {
+    Byte(u8),
+    /// This many bytes were lost here because the main loop fell behind (queue full).
+    Lost(u32),
+}
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, defmt::Format)]
 pub struct BaudOutOfRange;
@@ -58,6 +88,8 @@ pub struct BaudOutOfRange;
 /// The main loop's side of UART0.
 pub struct Serial {
     rx_queue: Consumer<'static, u8, RX_QUEUE_BYTES>,
+    /// Bytes taken from the queue so far (wrapping), to match `Loss::after`.
+    rx_dequeued: u32,
     tx_buffer: Deque<u8, TX_BUFFER_BYTES>,
     baud: u32,
     peripheral_clock: HertzU32,
@@ -91,9 +123,12 @@ impl Serial {
         critical_section::with(|cs| {
             SHARED.borrow(cs).replace(Some(Shared {
                 uart: Some(uart),
-                rx_queue: producer,
-                rx_overflow_bytes: 0,
-                rx_line_errors: 0,
+                rx: Receiver {
+                    queue: producer,
+                    enqueued: 0,
+                    loss: None,
+                    line_errors: 0,
+                },
             }));
         });
         // SAFETY: the handler only uses `SHARED`, which is initialised above.
@@ -101,28 +136,38 @@ impl Serial {
 
         Ok(Serial {
             rx_queue: consumer,
+            rx_dequeued: 0,
             tx_buffer: Deque::new(),
             baud,
             peripheral_clock,
         })
     }
 
-    /// Next received byte, if any.
-    pub fn read_byte(&mut self) -> Option<u8> {
-        self.rx_queue.dequeue()
+    /// The next received byte, or a note that bytes were lost at this point; `None` if
+    /// nothing is waiting.
+    pub fn read(&mut self) -> Option<Received> {
+        if RX_LOSS_PENDING.load(Ordering::Relaxed) {
+            if let Some(bytes) = self.take_loss_at(self.rx_dequeued) {
+                return Some(Received::Lost(bytes));
+            }
+        }
+        let byte = self.rx_queue.dequeue()?;
+        self.rx_dequeued = self.rx_dequeued.wrapping_add(1);
+        Some(Received::Byte(byte))
     }
 
     pub fn rx_pending(&self) -> bool {
-        self.rx_queue.ready()
+        self.rx_queue.ready() || RX_LOSS_PENDING.load(Ordering::Relaxed)
     }
 
-    /// Received bytes dropped because the receive queue was full (the main loop fell behind).
-    pub fn rx_overflow_bytes(&self) -> u32 {
+    fn take_loss_at(&self, position: u32) -> Option<u32> {
         critical_section::with(|cs| {
-            SHARED
-                .borrow_ref(cs)
-                .as_ref()
-                .map_or(0, |shared| shared.rx_overflow_bytes)
+            let mut shared = SHARED.borrow_ref_mut(cs);
+            let shared = shared.as_mut()?;
+            let loss = shared.rx.loss.filter(|loss| loss.after == position)?;
+            shared.rx.loss = None;
+            RX_LOSS_PENDING.store(false, Ordering::Relaxed);
+            Some(loss.bytes)
         })
     }
 
@@ -132,7 +177,7 @@ impl Serial {
             SHARED
                 .borrow_ref(cs)
                 .as_ref()
-                .map_or(0, |shared| shared.rx_line_errors)
+                .map_or(0, |shared| shared.rx.line_errors)
         })
     }
 
@@ -241,30 +286,33 @@ impl Shared {
         // reporting errors, the interrupt returns and fires again instead of hanging here.
         for _ in 0..8 {
             match uart.read_raw(&mut chunk) {
-                Ok(count) => enqueue(
-                    &mut self.rx_queue,
-                    &mut self.rx_overflow_bytes,
-                    &chunk[..count],
-                ),
+                Ok(count) => self.rx.enqueue(&chunk[..count]),
                 Err(nb::Error::WouldBlock) => break,
                 Err(nb::Error::Other(error)) => {
-                    self.rx_line_errors = self.rx_line_errors.wrapping_add(1);
+                    self.rx.line_errors = self.rx.line_errors.wrapping_add(1);
                     // `discarded` holds the good bytes read before the bad one.
-                    enqueue(
-                        &mut self.rx_queue,
-                        &mut self.rx_overflow_bytes,
-                        error.discarded,
-                    );
+                    self.rx.enqueue(error.discarded);
                 }
             }
         }
     }
 }
 
-fn enqueue(queue: &mut Producer<'static, u8, RX_QUEUE_BYTES>, dropped: &mut u32, bytes: &[u8]) {
-    for &byte in bytes {
-        if queue.enqueue(byte).is_err() {
-            *dropped = dropped.wrapping_add(1);
+impl Receiver {
+    fn enqueue(&mut self, bytes: &[u8]) {
+        for &byte in bytes {
+            if self.queue.enqueue(byte).is_ok() {
+                self.enqueued = self.enqueued.wrapping_add(1);
+                continue;
+            }
+            // Losses not yet reported merge into the first one (conservative: the earlier
+            // line is refused).
+            let loss = self.loss.get_or_insert(Loss {
+                after: self.enqueued,
+                bytes: 0,
+            });
+            loss.bytes = loss.bytes.wrapping_add(1);
+            RX_LOSS_PENDING.store(true, Ordering::Relaxed);
         }
     }
 }

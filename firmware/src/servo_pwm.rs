@@ -76,7 +76,7 @@ impl ServoPwm {
         pins: ServoPins,
         frame_hz: u16,
         first_widths_us: &[f32; SERVO_COUNT],
-        window: PulseWindowUs,
+        windows: &[PulseWindowUs; SERVO_COUNT],
     ) -> Result<Self, FrameRateOutOfRange> {
         let top = top_for(frame_hz)?;
         let mut slices = Slices::new(pwm, resets);
@@ -90,8 +90,10 @@ impl ServoPwm {
         configure(&mut slices.pwm1, top);
         configure(&mut slices.pwm2, top);
         configure(&mut slices.pwm3, top);
-        let counts =
-            first_widths_us.map(|width_us| pulse_counts(width_us, window, top).unwrap_or(0));
+        let mut counts = [0; SERVO_COUNT];
+        for ((count, &width_us), &window) in counts.iter_mut().zip(first_widths_us).zip(windows) {
+            *count = pulse_counts(width_us, window, top).unwrap_or(0);
+        }
         write_counts(&mut slices.pwm1, &mut slices.pwm2, &mut slices.pwm3, counts);
         slices.pwm1.clear_interrupt();
         slices.pwm1.enable_interrupt();
@@ -126,12 +128,16 @@ impl ServoPwm {
     }
 
     /// Sets the six pulse widths for the next frame. A non-finite width keeps that servo's
-    /// previous pulse; finite widths are clamped into `window` (and into the frame) and
-    /// rounded to the nearest count, so no NaN or out-of-window value reaches a register.
-    pub fn set_pulse_widths_us(&mut self, widths_us: &[f32; SERVO_COUNT], window: PulseWindowUs) {
+    /// previous pulse; finite widths are clamped into the servo's window (and into the frame)
+    /// and rounded to the nearest count, so no NaN or out-of-window value reaches a register.
+    pub fn set_pulse_widths_us(
+        &mut self,
+        widths_us: &[f32; SERVO_COUNT],
+        windows: &[PulseWindowUs; SERVO_COUNT],
+    ) {
         let top = self.slice1.get_top();
         let mut counts = self.counts;
-        for (count, &width_us) in counts.iter_mut().zip(widths_us) {
+        for ((count, &width_us), &window) in counts.iter_mut().zip(widths_us).zip(windows) {
             if let Some(new) = pulse_counts(width_us, window, top) {
                 *count = new;
             }
