@@ -3,22 +3,26 @@
 //! Data flows one way: UART0 bytes -> controller (lines, commands, motion) -> six pulse
 //! widths per servo frame -> PWM registers. This file only wires the pieces together:
 //! clocks and watchdog, UART0 ([`serial`]), the six servo outputs ([`servo_pwm`]) and the
-//! controller (for now [`stand_in`], later `control::Controller`).
+//! hardware-independent [`control::Controller`], which runs on the boot ROM's float routines
+//! ([`rom_math`]).
 
 #![no_std]
 #![no_main]
 
+mod rom_math;
 mod serial;
 mod servo_pwm;
-mod stand_in;
 
 use defmt_rtt as _;
 use panic_probe as _;
 use rp2040_hal::{self as hal, clocks::Clock, fugit::ExtU32, pac, Sio, Watchdog};
 
+use control::Settings;
+use rom_math::RomMath;
 use serial::{Received, Serial};
-use servo_pwm::ServoPwm;
-use stand_in::Controller;
+use servo_pwm::{PulseWindowUs, ServoPwm, SERVO_COUNT};
+
+type Controller = control::Controller<RomMath>;
 
 /// Second-stage bootloader for the Pico's W25Q080 flash: the first 256 bytes of flash.
 #[unsafe(link_section = ".boot2")]
@@ -50,7 +54,7 @@ fn main() -> ! {
     let sio = Sio::new(p.SIO);
     let pins = hal::gpio::Pins::new(p.IO_BANK0, p.PADS_BANK0, sio.gpio_bank0, &mut p.RESETS);
 
-    let mut controller = Controller::new();
+    let mut controller = Controller::with_math(Settings::default());
     let mut serial = Serial::new(
         p.UART0,
         pins.gpio0,
@@ -67,8 +71,8 @@ fn main() -> ! {
             pins.gpio2, pins.gpio3, pins.gpio4, pins.gpio5, pins.gpio6, pins.gpio7,
         ),
         controller.frame_hz(),
-        &controller.on_frame(),
-        &controller.pulse_windows_us(),
+        &controller.pulses_us(),
+        &pulse_windows_us(&controller),
     )
     .expect("the default frame rate is in range");
     watchdog.start(WATCHDOG_TIMEOUT_MS.millis());
@@ -100,7 +104,9 @@ fn main() -> ! {
         // Once per servo frame: the controller's next six pulse widths.
         let frames = servos.frames_since_last_poll();
         if frames > 0 {
-            servos.set_pulse_widths_us(&controller.on_frame(), &controller.pulse_windows_us());
+            let pulses_us = controller.on_frame();
+            servos.set_pulse_widths_us(&pulses_us, &pulse_windows_us(&controller));
+            controller.write_notices(&mut serial);
             if frames > 1 {
                 defmt::warn!("missed {} servo frames", frames - 1);
             }
@@ -117,6 +123,14 @@ fn main() -> ! {
 
         sleep_unless(|| serial.rx_pending() || serial.tx_pending() || servos.frame_pending());
     }
+}
+
+/// Each servo's configured pulse limits: the PWM layer clamps to them as a last resort.
+fn pulse_windows_us(controller: &Controller) -> [PulseWindowUs; SERVO_COUNT] {
+    controller.settings().servos.0.map(|servo| PulseWindowUs {
+        min_us: servo.min_us,
+        max_us: servo.max_us,
+    })
 }
 
 /// Makes the hardware follow the controller's settings (frame rate, baud rate).

@@ -35,8 +35,9 @@ pub const LONGEST_REPLY_BYTES: usize = 2048;
 /// Transmit buffer: room for two of the longest replies.
 pub const TX_BUFFER_BYTES: usize = 2 * LONGEST_REPLY_BYTES;
 
-pub const BAUD_MIN: u32 = 9_600;
-pub const BAUD_MAX: u32 = 921_600;
+/// The UART accepts the controller's baud rates (`set baud`), slowest to fastest.
+pub const BAUD_MIN: u32 = control::settings::BAUD_RATES[0];
+pub const BAUD_MAX: u32 = control::settings::BAUD_RATES[control::settings::BAUD_RATES.len() - 1];
 
 type TxPin = Pin<bank0::Gpio0, FunctionUart, PullNone>;
 /// Pulled up so an unconnected RX line idles high instead of reading breaks.

@@ -11,6 +11,7 @@
 
 use core::sync::atomic::{AtomicU32, Ordering};
 
+use control::settings::{FRAME_HZ_MAX, FRAME_HZ_MIN};
 use embedded_hal::pwm::SetDutyCycle;
 use rp2040_hal::{
     gpio::{bank0, DefaultTypeState, Pin},
@@ -26,10 +27,6 @@ const CLOCK_DIVIDER: u8 = 40;
 const COUNTS_PER_SECOND: u32 = 3_125_000;
 /// Counts per microsecond of pulse (1 count = 320 ns).
 const COUNTS_PER_US: f32 = 1.0 / 0.32;
-
-pub const FRAME_HZ_MIN: u16 = 50;
-pub const FRAME_HZ_MAX: u16 = 333;
-pub const FRAME_HZ_DEFAULT: u16 = 50;
 
 /// Frames started so far (slice 1 wraps). Written only by `PWM_IRQ_WRAP`.
 static FRAMES_STARTED: AtomicU32 = AtomicU32::new(0);
