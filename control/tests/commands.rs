@@ -549,7 +549,7 @@ fn rx_overflow_warns_at_once_and_refuses_the_line() {
 
 #[test]
 fn every_error_code_is_documented_in_the_readme() {
-    let readme = include_str!("../README.md");
+    let readme = include_str!("../../README.md");
     for code in Code::ALL {
         assert!(
             readme.contains(&format!("error:{}", code.as_str())),
@@ -564,6 +564,16 @@ fn every_error_code_is_documented_in_the_readme() {
             readme.contains(&format!("`{name}")),
             "README does not document {name}"
         );
+    }
+    for id in control::settings::SettingId::GLOBAL {
+        assert!(
+            readme.contains(&format!("`{id}`")),
+            "README does not document setting {id}"
+        );
+    }
+    for field in control::settings::ServoParam::ALL {
+        let name = format!("`servoN.{}`", field.name());
+        assert!(readme.contains(&name), "README does not document {name}");
     }
 }
 
