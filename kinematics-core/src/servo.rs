@@ -83,7 +83,7 @@ impl ServoConfig {
         }
     }
 
-    /// Pulse width for an arm angle, us (eq. 13 / 14). Not limited; see [`ServoConfig::limit`].
+    /// Pulse width for an arm angle, us (eq. 13 / 14). Not limited; see [`ServoConfig::allows`].
     #[inline]
     pub fn pulse_us(&self, alpha_rad: f32, alpha0_rad: f32) -> f32 {
         self.home_us + self.direction.sign() * (alpha_rad - alpha0_rad) * self.rate_us_per_rad
