@@ -198,7 +198,14 @@ export function capture(board, action, frames, hz = 50) {
   } finally {
     recording.stop();
   }
-  return recording.servos;
+  // Emulated time is a float sum: instants carry ~1e-8 ns of noise. To the nanosecond.
+  return recording.servos.map((servo) =>
+    servo.map(({ riseNanos, widthNanos, periodNanos }) => ({
+      riseNanos: Math.round(riseNanos),
+      widthNanos: Math.round(widthNanos),
+      periodNanos: periodNanos === null ? null : Math.round(periodNanos),
+    })),
+  );
 }
 
 /** Asserts that every pulse recorded has width `widthsUs[servo]` (to the nanosecond). */
@@ -211,7 +218,64 @@ export function assertConstant(pulses, widthsNanos, message = '') {
   });
 }
 
-/** The six current widths in ns (after at least one pulse). */
+/** The six current widths in ns (after at least one pulse), to the nanosecond. */
 export function widthsNanos(board) {
-  return board.servos().map((servo) => servo.widthNanos);
+  return board.servos().map((servo) => Math.round(servo.widthNanos));
+}
+
+/** The six latest frame periods in us, to the nanosecond. */
+export function periodsUs(board) {
+  return board.servos().map((servo) => Math.round(servo.periodNanos) / 1000);
+}
+
+/**
+ * Checks a captured move frame by frame, as a logic analyser would see it: every period is
+ * exactly `periodNanos`; each pin shows its start width, then frame k's expected width
+ * (`framesUs[k]`, the host core's pulses for the pose of frame k) for exactly one period each,
+ * in order, within one count, and then holds the last frame's width. So no frame is skipped,
+ * repeated or cut short, the move takes exactly `framesUs.length` frames, and every pulse lies
+ * within `[min_us, max_us]` of its servo. Returns the period index where the move began.
+ */
+export function assertMoveOnPins(pulses, startNanos, framesUs, { periodNanos, servos }) {
+  const n = framesUs.length;
+  const first = Math.min(
+    ...pulses.map((servo, i) => {
+      const index = servo.findIndex((pulse) => pulse.widthNanos !== startNanos[i]);
+      return index < 0 ? Infinity : index;
+    }),
+  );
+  assert.ok(Number.isFinite(first), 'nothing moved');
+  pulses.forEach((servo, i) => {
+    const label = `servo ${i + 1}`;
+    assert.ok(servo.length >= first + n + 2, `${label}: only ${servo.length} pulses captured`);
+    servo.forEach((pulse, j) => {
+      if (pulse.periodNanos !== null) {
+        assert.equal(pulse.periodNanos, periodNanos, `${label} period ${j}`);
+      }
+      const us = pulse.widthNanos / 1000;
+      assert.ok(
+        us >= servos[i].min_us - COUNT_US / 2 && us <= servos[i].max_us + COUNT_US / 2,
+        `${label} pulse ${j}: ${us} us outside its limits`,
+      );
+      if (j < first) {
+        assert.equal(pulse.widthNanos, startNanos[i], `${label} changed before the move`);
+      } else if (j < first + n) {
+        const expected = framesUs[j - first][i];
+        assert.ok(
+          Math.abs(us - expected) <= COUNT_US + 1e-9,
+          `${label} frame ${j - first + 1}/${n}: ${us} us, host core ${expected} us`,
+        );
+      } else {
+        assert.equal(pulse.widthNanos, servo[first + n - 1].widthNanos, `${label} moved after the last frame`);
+      }
+    });
+  });
+  // The move was still under way one frame before its end (it did not finish early).
+  if (n >= 2) {
+    assert.ok(
+      pulses.some((servo) => servo[first + n - 2].widthNanos !== servo[first + n - 1].widthNanos),
+      `no pin changed on frame ${n}: the move ended early`,
+    );
+  }
+  return first;
 }

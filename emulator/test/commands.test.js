@@ -19,6 +19,7 @@ import {
   HOME,
   lerpPose,
   ok,
+  periodsUs,
   plannedFrames,
   poseText,
   refused,
@@ -74,7 +75,7 @@ test('at power-up every servo gets its home pulse (the reference at the home pos
   board.boot();
   runFrames(board, 3);
   assertPins(board, solve(HOME).pulse_us);
-  assert.deepEqual(board.periodsUs(), Array(6).fill(20_000));
+  assert.deepEqual(periodsUs(board), Array(6).fill(20_000));
 });
 
 test('help lists every command, all on # lines, then ok', () => {
