@@ -96,7 +96,7 @@ export function bootQuiet(bootrom) {
   const board = new EmulatedBoard({ bootrom });
   board.boot();
   assert.equal(board.request('set echo off').reply, 'ok');
-  board.runUntil(() => board.servos().every((servo) => servo.pulses >= 1), { timeoutMs: 100 });
+  board.runUntil(() => board.servos().every((servo) => servo.live), { timeoutMs: 100 });
   return board;
 }
 
