@@ -53,7 +53,7 @@ test('moves started at every offset within a frame show each frame exactly once'
   }
   const period = framePeriodNanos(settings.frame_hz);
   const byteNanos = (10 * 1e9) / board.baud;
-  const step = 40_000;
+  const step = 60_000;
   for (let trial = 0; trial * step < period; trial++) {
     const move = moves[trial % 2];
     // The line's last byte arrives `trial * step` after a frame start.
