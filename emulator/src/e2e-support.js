@@ -236,8 +236,11 @@ export function periodsUs(board) {
  * repeated or cut short, the move takes exactly `framesUs.length` frames, and every pulse lies
  * within `[min_us, max_us]` of its servo. Returns the period index where the move began.
  */
-export function assertMoveOnPins(pulses, startNanos, framesUs, { periodNanos, servos }) {
+export function assertMoveOnPins(pulses, startNanos, framesUs, { periodNanos, servos, maxStretch = 0 }) {
   const n = framesUs.length;
+  if (maxStretch > 0) {
+    return assertMoveOnPinsStretched(pulses, startNanos, framesUs, { periodNanos, servos, maxStretch });
+  }
   const first = Math.min(
     ...pulses.map((servo, i) => {
       const index = servo.findIndex((pulse) => pulse.widthNanos !== startNanos[i]);
@@ -278,4 +281,41 @@ export function assertMoveOnPins(pulses, startNanos, framesUs, { periodNanos, se
     );
   }
   return first;
+}
+
+/**
+ * Like `assertMoveOnPins`, but a frame may stay on the pins for more than one period, at most
+ * `maxStretch` extra periods per move (the move took longer: never faster than planned). No
+ * frame may be skipped: each pin goes through every frame's width in order.
+ */
+function assertMoveOnPinsStretched(pulses, startNanos, framesUs, { periodNanos, servos, maxStretch }) {
+  const n = framesUs.length;
+  const near = (us, expected) => Math.abs(us - expected) <= COUNT_US + 1e-9;
+  pulses.forEach((servo, i) => {
+    const label = `servo ${i + 1}`;
+    let k = -1; // frame on the pin; -1 = still the start width
+    let extra = 0;
+    servo.forEach((pulse, j) => {
+      if (pulse.periodNanos !== null) {
+        assert.equal(pulse.periodNanos, periodNanos, `${label} period ${j}`);
+      }
+      const us = pulse.widthNanos / 1000;
+      assert.ok(us >= servos[i].min_us - COUNT_US / 2 && us <= servos[i].max_us + COUNT_US / 2, `${label} pulse ${j}: ${us} us outside its limits`);
+      if (k === -1 && pulse.widthNanos === startNanos[i]) {
+        return;
+      }
+      // The same width as the previous period and still frame k's: held (a stretch).
+      const held = k >= 0 && pulse.widthNanos === servo[j - 1].widthNanos && near(us, framesUs[k][i]);
+      if (!held && k + 1 < n && near(us, framesUs[k + 1][i])) {
+        k += 1;
+        return;
+      }
+      assert.ok(k >= 0 && near(us, framesUs[k][i]), `${label} pulse ${j}: ${us} us is neither ${k < 0 ? 'the start width' : `frame ${k + 1}`} nor frame ${k + 2} of ${n} (a skipped frame?)`);
+      if (k < n - 1) {
+        extra += 1;
+      }
+    });
+    assert.equal(k, n - 1, `${label} never reached the last frame`);
+    assert.ok(extra <= maxStretch, `${label}: ${extra} frames held longer than one period`);
+  });
 }

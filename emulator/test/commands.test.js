@@ -392,3 +392,21 @@ test('a blank line gets no reply; every other line exactly one, last', () => {
   assert.equal(lines.filter((line) => /^(ok|error:)/.test(line)).length, 1, JSON.stringify(lines));
   assert.ok(lines.slice(0, -1).every((line) => line.startsWith('# ')), JSON.stringify(lines));
 });
+
+test('line editing: ctrl-u erases the line, ctrl-c abandons it (no reply), arrow keys and other control bytes are ignored', () => {
+  const board = bootQuiet(bootrom);
+  const first = board.lines.length;
+  // "fly" erased by ctrl-u, then "status": one ok with the status lines.
+  board.sendBytes('fly\x15status\n');
+  board.waitForLine(/^(ok|error:)/);
+  // Abandoned with ctrl-c: no reply at all; then an arrow key (ESC [ A) and a bell (0x07)
+  // inside a good line change nothing.
+  board.sendBytes('pose 0 0 80 0 0 0\x03');
+  board.sendBytes('che\x1b[Ack 1 2\x07 3 0 0 0\n');
+  board.waitForLine(/^(ok|error:)/);
+  board.runMs(20);
+  const replies = board.lines.slice(first).filter((line) => !line.startsWith('# '));
+  assert.deepEqual(replies, ['ok', 'ok']);
+  assert.ok(board.lines.slice(first).some((line) => line.startsWith('# state: ')), 'the first line was status');
+  assert.ok(board.lines.slice(first).some((line) => line.startsWith('# duration_s: ')), 'the second was check');
+});
