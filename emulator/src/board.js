@@ -256,4 +256,21 @@ export class EmulatedBoard {
   onServoChange(listener) {
     this.servoMeter.onChange = () => listener(this);
   }
+
+  /**
+   * Records every complete pulse from now on, like a logic analyser capture. Returns
+   * `{ servos, stop }`: `servos[i]` (servo i + 1) is an array of `{ riseNanos, widthNanos,
+   * periodNanos }` in order (`periodNanos` = rise to the previous rise); `stop()` ends it.
+   */
+  recordPulses() {
+    const servos = this.servoMeter.pins.map(() => []);
+    const listener = (index, pulse) => servos[index].push(pulse);
+    this.servoMeter.pulseListeners.add(listener);
+    return { servos, stop: () => this.servoMeter.pulseListeners.delete(listener) };
+  }
+
+  /** The baud rate the firmware programmed into UART0 (what the paced input follows). */
+  get baud() {
+    return this.input.baud;
+  }
 }

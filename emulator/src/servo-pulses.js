@@ -21,6 +21,8 @@ export class ServoPulseMeter {
     }));
     /** Called after a pulse completes with a width different from the previous one. */
     this.onChange = null;
+    /** Called after every complete pulse: `(servoIndex, { riseNanos, widthNanos, periodNanos })`. */
+    this.pulseListeners = new Set();
     for (const pin of this.pins) {
       mcu.gpio[pin.gpio].addListener((state) => this.edge(pin, state));
     }
@@ -38,6 +40,13 @@ export class ServoPulseMeter {
       const changed = width !== pin.widthNanos;
       pin.widthNanos = width;
       pin.pulses++;
+      if (this.pulseListeners.size > 0) {
+        const pulse = { riseNanos: pin.lastRiseNanos, widthNanos: width, periodNanos: pin.periodNanos };
+        const index = this.pins.indexOf(pin);
+        for (const listener of this.pulseListeners) {
+          listener(index, pulse);
+        }
+      }
       if (changed && this.onChange) {
         this.onChange(this);
       }

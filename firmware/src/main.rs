@@ -121,7 +121,16 @@ fn main() -> ! {
             defmt::warn!("serial receive: {} line errors so far", rx_line_errors);
         }
 
-        sleep_unless(|| serial.rx_pending() || serial.tx_pending() || servos.frame_pending());
+        // A baud change waits only for the reply announcing it to be sent: once it has gone
+        // into the FIFO, the next pass switches (a host may talk at the new rate as soon as it
+        // reads `ok`; sleeping here would keep the old rate until the next frame, up to 20 ms).
+        let baud_change_pending = controller.baud() != serial.baud();
+        sleep_unless(|| {
+            serial.rx_pending()
+                || serial.tx_pending()
+                || servos.frame_pending()
+                || baud_change_pending
+        });
     }
 }
 

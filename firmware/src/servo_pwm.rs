@@ -9,7 +9,7 @@
 //! Every frame start (slice 1 wrapping) raises `PWM_IRQ_WRAP`; the handler only counts frames,
 //! so the main loop can run the motion controller once per frame and knows if it missed any.
 
-use core::sync::atomic::{AtomicU32, Ordering};
+use core::sync::atomic::{compiler_fence, AtomicU32, Ordering};
 
 use control::settings::{FRAME_HZ_MAX, FRAME_HZ_MIN};
 use embedded_hal::pwm::SetDutyCycle;
@@ -140,10 +140,19 @@ impl ServoPwm {
             }
         }
         self.write_counts(counts);
+        // Not before the register writes above.
+        compiler_fence(Ordering::SeqCst);
+        // These widths latch at the next frame start. A frame that started while they were
+        // being computed (after the caller polled) still shows the previous widths, so it
+        // counts as served: otherwise the next poll would report it and the next widths would
+        // overwrite these before any pin showed them, and the servos would skip a step.
+        self.frames_seen = FRAMES_STARTED.load(Ordering::Relaxed);
     }
 
-    /// How many frames started since the last call: 0 = none yet, 1 = the normal case,
-    /// more = the main loop missed frames.
+    /// How many frames started since the last call (or since the last
+    /// [`ServoPwm::set_pulse_widths_us`], which counts frames that started while its widths were
+    /// being computed as served): 0 = none yet, 1 = the normal case, more = the main loop
+    /// missed frames.
     pub fn frames_since_last_poll(&mut self) -> u32 {
         let started = FRAMES_STARTED.load(Ordering::Relaxed);
         let new = started.wrapping_sub(self.frames_seen);

@@ -1,0 +1,321 @@
+// Shared helpers for the end-to-end tests (kept out of test/ so `node --test test/` does not
+// run this file as a test). Everything the firmware should do is restated here from the
+// documentation (control/README.md, CONTEXT wiring), never read back from the firmware.
+
+import assert from 'node:assert/strict';
+
+import { EmulatedBoard } from './board.js';
+
+/** One PWM count: 125 MHz / divider 40. */
+export const COUNT_US = 0.32;
+export const COUNT_NANOS = 320;
+/** PWM counts per second (125 MHz / 40). */
+export const COUNTS_PER_SECOND = 3_125_000;
+/** The six servos. */
+export const SERVOS = [1, 2, 3, 4, 5, 6];
+
+/** The documented default settings (control/README.md "Settings"), in `set` names and units. */
+export function defaultSettings() {
+  return {
+    frame_hz: 50,
+    baud: 115200,
+    echo: 'on',
+    speed_mm_s: 50,
+    speed_deg_s: 60,
+    link_timeout_s: 'off',
+    layout: {
+      base_radius_mm: 75,
+      base_half_angle_deg: 20,
+      platform_radius_mm: 60,
+      platform_half_angle_deg: 20,
+      arm_mm: 20,
+      rod_mm: 120,
+    },
+    // Even servos normal, odd reversed; 1600/pi us/rad; 1100..1900 us.
+    servos: SERVOS.map((n) => ({
+      trim_us: 1500,
+      rate_us_rad: 1600 / Math.PI,
+      dir: n % 2 === 0 ? 'normal' : 'reversed',
+      min_us: 1100,
+      max_us: 1900,
+    })),
+  };
+}
+
+export function copySettings(settings) {
+  return structuredClone(settings);
+}
+
+/** A pose as six numbers: x y z (mm) roll pitch yaw (deg). */
+export const HOME = [0, 0, 0, 0, 0, 0];
+
+/** Frame period at `hz`: TOP + 1 = floor(3_125_000 / hz) counts of 320 ns. */
+export function framePeriodNanos(hz) {
+  return Math.floor(COUNTS_PER_SECOND / hz) * COUNT_NANOS;
+}
+
+/** The width the PWM produces for `us`: the nearest count (half up), in us. */
+export function quantisedUs(us) {
+  return (Math.floor(us / COUNT_US + 0.5) * COUNT_NANOS) / 1000;
+}
+
+/**
+ * Frames a straight move takes (control/README.md "Motion"): the larger of linear distance /
+ * speed_mm_s and angular distance / speed_deg_s (Euclidean, mm and degrees), times the frame
+ * rate, rounded up, at least 1. A speed of 0 / 'off' does not constrain.
+ */
+export function plannedFrames(from, to, { speed_mm_s, speed_deg_s, frame_hz }) {
+  const linear = Math.hypot(to[0] - from[0], to[1] - from[1], to[2] - from[2]);
+  const angular = Math.hypot(to[3] - from[3], to[4] - from[4], to[5] - from[5]);
+  let seconds = 0;
+  if (Number(speed_mm_s) > 0) {
+    seconds = Math.max(seconds, linear / speed_mm_s);
+  }
+  if (Number(speed_deg_s) > 0) {
+    seconds = Math.max(seconds, angular / speed_deg_s);
+  }
+  // A tiny allowance so an exact whole number of frames is not rounded up by f64 noise.
+  return Math.max(1, Math.ceil(seconds * frame_hz * (1 - 1e-9)));
+}
+
+export function lerpPose(a, b, t) {
+  return a.map((v, i) => v + (b[i] - v) * t);
+}
+
+/** The pose of frame k of n from a to b (frame n is b exactly). */
+export function framePoses(a, b, n) {
+  return Array.from({ length: n }, (_, i) => (i + 1 === n ? [...b] : lerpPose(a, b, (i + 1) / n)));
+}
+
+export function poseText(pose) {
+  return pose.join(' ');
+}
+
+/** Boots the firmware, turns echo off (as a program would) and runs until every pin pulsed. */
+export function bootQuiet(bootrom) {
+  const board = new EmulatedBoard({ bootrom });
+  board.boot();
+  assert.equal(board.request('set echo off').reply, 'ok');
+  board.runUntil(() => board.servos().every((servo) => servo.live), { timeoutMs: 100 });
+  return board;
+}
+
+/** Sends a line that must succeed; returns its data lines (`# ` removed). */
+export function ok(board, line, { timeoutMs = 2000 } = {}) {
+  const { reply, lines } = board.request(line, { timeoutMs });
+  assert.equal(reply, 'ok', `'${line}' -> ${JSON.stringify(lines)}`);
+  return lines.slice(0, -1).map((text) => {
+    assert.match(text, /^# /, `'${line}': data line without '# '`);
+    return text.slice(2);
+  });
+}
+
+/** Sends a line that must fail with `code`; returns the whole reply (checked for shape). */
+export function refused(board, line, code, { timeoutMs = 2000 } = {}) {
+  const { reply, lines } = board.request(line, { timeoutMs });
+  assert.equal(lines.length, 1, `'${line}' -> ${JSON.stringify(lines)}: the error is the only line`);
+  assert.match(reply, new RegExp(`^error:${code} \\S.*$`), `'${line}'`);
+  return reply;
+}
+
+/** Numbers in a data line's value (`key: 1.0 2.0 ...`). */
+export function numbersIn(text) {
+  return (text.match(/-?\d+(?:\.\d+)?/g) ?? []).map(Number);
+}
+
+/** `key=value` pairs of a pose line as six numbers in pose order. */
+export function poseIn(text) {
+  const values = {};
+  for (const [, key, value] of text.matchAll(/(\w+)=(-?\d+\.\d{3})\b/g)) {
+    values[key] = Number(value);
+  }
+  const pose = ['x', 'y', 'z', 'roll', 'pitch', 'yaw'].map((axis) => values[axis]);
+  assert.ok(pose.every(Number.isFinite), `not a pose with 3 decimals: ${text}`);
+  return pose;
+}
+
+/** `status` through the wire, parsed; checks every documented field is there, in format. */
+export function status(board) {
+  const lines = ok(board, 'status');
+  const field = (key) => {
+    const line = lines.find((text) => text.startsWith(`${key}: `));
+    assert.ok(line, `status has no '${key}:' line: ${JSON.stringify(lines)}`);
+    return line.slice(key.length + 2);
+  };
+  const six = (key, decimals) => {
+    const text = field(key);
+    assert.match(text, new RegExp(`^(-?\\d+\\.\\d{${decimals}} ){5}-?\\d+\\.\\d{${decimals}}$`), key);
+    return text.split(' ').map(Number);
+  };
+  return {
+    lines,
+    state: field('state'),
+    pose: poseIn(field('pose')),
+    target: poseIn(field('target')),
+    arm_deg: six('arm_deg', 3),
+    pulse_us: six('pulse_us', 2),
+  };
+}
+
+/** Asserts the pins' latest widths equal `expectedUs` within one PWM count. */
+export function assertPins(board, expectedUs, message = '') {
+  const servos = board.servos();
+  for (const servo of servos) {
+    const expected = expectedUs[servo.servo - 1];
+    assert.ok(servo.live, `servo ${servo.servo} is not pulsing ${message}`);
+    assert.ok(
+      Math.abs(servo.widthUs - expected) <= COUNT_US + 1e-9,
+      `servo ${servo.servo}: pin ${servo.widthUs} us, expected ${expected} us (+-1 count) ${message}`,
+    );
+  }
+}
+
+/** Asserts six numbers agree within `tolerance`. */
+export function assertClose(actual, expected, tolerance, message = '') {
+  assert.equal(actual.length, expected.length, message);
+  actual.forEach((value, i) => {
+    assert.ok(
+      Math.abs(value - expected[i]) <= tolerance,
+      `[${i}] ${value} vs ${expected[i]} (tolerance ${tolerance}) ${message}: ${JSON.stringify(actual)} vs ${JSON.stringify(expected)}`,
+    );
+  });
+}
+
+/** Runs `frames` frame periods of emulated time at `hz`. */
+export function runFrames(board, frames, hz = 50) {
+  board.runMs((frames * 1000) / hz);
+}
+
+/**
+ * Records every pulse on the six pins while `action()` runs and then for `frames` frames at
+ * `hz`; returns per servo the list of pulses ({ riseNanos, widthNanos, periodNanos }).
+ */
+export function capture(board, action, frames, hz = 50) {
+  const recording = board.recordPulses();
+  try {
+    action();
+    runFrames(board, frames, hz);
+  } finally {
+    recording.stop();
+  }
+  // Emulated time is a float sum: instants carry ~1e-8 ns of noise. To the nanosecond.
+  return recording.servos.map((servo) =>
+    servo.map(({ riseNanos, widthNanos, periodNanos }) => ({
+      riseNanos: Math.round(riseNanos),
+      widthNanos: Math.round(widthNanos),
+      periodNanos: periodNanos === null ? null : Math.round(periodNanos),
+    })),
+  );
+}
+
+/** Asserts that every pulse recorded has width `widthsUs[servo]` (to the nanosecond). */
+export function assertConstant(pulses, widthsNanos, message = '') {
+  pulses.forEach((servo, i) => {
+    assert.ok(servo.length > 0, `servo ${i + 1}: no pulses ${message}`);
+    for (const pulse of servo) {
+      assert.equal(pulse.widthNanos, widthsNanos[i], `servo ${i + 1} changed ${message}`);
+    }
+  });
+}
+
+/** The six current widths in ns (after at least one pulse), to the nanosecond. */
+export function widthsNanos(board) {
+  return board.servos().map((servo) => Math.round(servo.widthNanos));
+}
+
+/** The six latest frame periods in us, to the nanosecond. */
+export function periodsUs(board) {
+  return board.servos().map((servo) => Math.round(servo.periodNanos) / 1000);
+}
+
+/**
+ * Checks a captured move frame by frame, as a logic analyser would see it: every period is
+ * exactly `periodNanos`; each pin shows its start width, then frame k's expected width
+ * (`framesUs[k]`, the host core's pulses for the pose of frame k) for exactly one period each,
+ * in order, within one count, and then holds the last frame's width. So no frame is skipped,
+ * repeated or cut short, the move takes exactly `framesUs.length` frames, and every pulse lies
+ * within `[min_us, max_us]` of its servo. Returns the period index where the move began.
+ */
+export function assertMoveOnPins(pulses, startNanos, framesUs, { periodNanos, servos, maxStretch = 0 }) {
+  const n = framesUs.length;
+  if (maxStretch > 0) {
+    return assertMoveOnPinsStretched(pulses, startNanos, framesUs, { periodNanos, servos, maxStretch });
+  }
+  const first = Math.min(
+    ...pulses.map((servo, i) => {
+      const index = servo.findIndex((pulse) => pulse.widthNanos !== startNanos[i]);
+      return index < 0 ? Infinity : index;
+    }),
+  );
+  assert.ok(Number.isFinite(first), 'nothing moved');
+  pulses.forEach((servo, i) => {
+    const label = `servo ${i + 1}`;
+    assert.ok(servo.length >= first + n + 2, `${label}: only ${servo.length} pulses captured`);
+    servo.forEach((pulse, j) => {
+      if (pulse.periodNanos !== null) {
+        assert.equal(pulse.periodNanos, periodNanos, `${label} period ${j}`);
+      }
+      const us = pulse.widthNanos / 1000;
+      assert.ok(
+        us >= servos[i].min_us - COUNT_US / 2 && us <= servos[i].max_us + COUNT_US / 2,
+        `${label} pulse ${j}: ${us} us outside its limits`,
+      );
+      if (j < first) {
+        assert.equal(pulse.widthNanos, startNanos[i], `${label} changed before the move`);
+      } else if (j < first + n) {
+        const expected = framesUs[j - first][i];
+        assert.ok(
+          Math.abs(us - expected) <= COUNT_US + 1e-9,
+          `${label} frame ${j - first + 1}/${n}: ${us} us, host core ${expected} us`,
+        );
+      } else {
+        assert.equal(pulse.widthNanos, servo[first + n - 1].widthNanos, `${label} moved after the last frame`);
+      }
+    });
+  });
+  // The move was still under way one frame before its end (it did not finish early).
+  if (n >= 2) {
+    assert.ok(
+      pulses.some((servo) => servo[first + n - 2].widthNanos !== servo[first + n - 1].widthNanos),
+      `no pin changed on frame ${n}: the move ended early`,
+    );
+  }
+  return first;
+}
+
+/**
+ * Like `assertMoveOnPins`, but a frame may stay on the pins for more than one period, at most
+ * `maxStretch` extra periods per move (the move took longer: never faster than planned). No
+ * frame may be skipped: each pin goes through every frame's width in order.
+ */
+function assertMoveOnPinsStretched(pulses, startNanos, framesUs, { periodNanos, servos, maxStretch }) {
+  const n = framesUs.length;
+  const near = (us, expected) => Math.abs(us - expected) <= COUNT_US + 1e-9;
+  pulses.forEach((servo, i) => {
+    const label = `servo ${i + 1}`;
+    let k = -1; // frame on the pin; -1 = still the start width
+    let extra = 0;
+    servo.forEach((pulse, j) => {
+      if (pulse.periodNanos !== null) {
+        assert.equal(pulse.periodNanos, periodNanos, `${label} period ${j}`);
+      }
+      const us = pulse.widthNanos / 1000;
+      assert.ok(us >= servos[i].min_us - COUNT_US / 2 && us <= servos[i].max_us + COUNT_US / 2, `${label} pulse ${j}: ${us} us outside its limits`);
+      if (k === -1 && pulse.widthNanos === startNanos[i]) {
+        return;
+      }
+      // The same width as the previous period and still frame k's: held (a stretch).
+      const held = k >= 0 && pulse.widthNanos === servo[j - 1].widthNanos && near(us, framesUs[k][i]);
+      if (!held && k + 1 < n && near(us, framesUs[k + 1][i])) {
+        k += 1;
+        return;
+      }
+      assert.ok(k >= 0 && near(us, framesUs[k][i]), `${label} pulse ${j}: ${us} us is neither ${k < 0 ? 'the start width' : `frame ${k + 1}`} nor frame ${k + 2} of ${n} (a skipped frame?)`);
+      if (k < n - 1) {
+        extra += 1;
+      }
+    });
+    assert.equal(k, n - 1, `${label} never reached the last frame`);
+    assert.ok(extra <= maxStretch, `${label}: ${extra} frames held longer than one period`);
+  });
+}

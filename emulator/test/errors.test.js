@@ -1,0 +1,254 @@
+// Every error class through the real firmware binary: the reply is exactly one line
+// `error:<code> <message>` naming what is wrong, nothing moves (pins constant over the
+// following frames, status and config unchanged), and the next good line works. The codes
+// come from control/README.md; the last test checks that each documented code that can be
+// produced through the wire was produced here.
+
+import assert from 'node:assert/strict';
+import { existsSync, readFileSync } from 'node:fs';
+import { before, test } from 'node:test';
+
+import { DEFAULT_ELF } from '../src/board.js';
+import { loadBootrom } from '../src/bootrom.js';
+import {
+  assertConstant,
+  bootQuiet,
+  capture,
+  defaultSettings,
+  HOME,
+  lerpPose,
+  ok,
+  periodsUs,
+  plannedFrames,
+  poseText,
+  refused,
+  runFrames,
+  status,
+  widthsNanos,
+} from '../src/e2e-support.js';
+import { HostReference } from '../src/host-reference.js';
+
+const README = readFileSync(new URL('../../control/README.md', import.meta.url), 'utf8');
+const REPORT_RS = readFileSync(new URL('../../control/src/report.rs', import.meta.url), 'utf8');
+/** Documented as impossible from typed input (typed non-finite numbers are `not-finite`). */
+const NOT_REACHABLE_FROM_THE_WIRE = new Set(['pose-not-finite']);
+
+const observed = new Set();
+let bootrom;
+let reference;
+before(() => {
+  assert.ok(existsSync(DEFAULT_ELF), `no firmware ELF at ${DEFAULT_ELF}: build it with \`cargo fw\``);
+  bootrom = loadBootrom();
+  reference = new HostReference();
+});
+
+/**
+ * Sends `line` and expects `error:<code> <message>` with the message matching `message`;
+ * nothing may change: pins constant for 5 frames, status (pose, target, pulses) and config
+ * identical; then a good line works.
+ */
+function expectRefusal(board, line, code, message) {
+  const before = { status: status(board), config: ok(board, 'config'), widths: widthsNanos(board) };
+  let reply;
+  const pulses = capture(board, () => {
+    reply = refused(board, line, code);
+  }, 5);
+  observed.add(code);
+  assert.match(reply.slice(`error:${code} `.length), message, reply);
+  assertConstant(pulses, before.widths, `after '${line}'`);
+  const after = status(board);
+  assert.deepEqual(after.pose, before.status.pose, 'pose unchanged');
+  assert.deepEqual(after.target, before.status.target, 'target unchanged');
+  assert.deepEqual(after.pulse_us, before.status.pulse_us, 'pulses unchanged');
+  assert.deepEqual(ok(board, 'config'), before.config, 'settings unchanged');
+  assert.equal(ok(board, 'check 1 1 1 1 1 1').length, 3, 'the next good line works');
+  return reply;
+}
+
+function quietBoardAt(pose) {
+  const board = bootQuiet(bootrom);
+  if (pose) {
+    ok(board, `pose ${poseText(pose)}`);
+    runFrames(board, plannedFrames(HOME, pose, defaultSettings()) + 3);
+  }
+  return board;
+}
+
+// Words with a regexp-special character escaped.
+const esc = (text) => text.replace(/[.*+?^${}()|[\]\\]/g, '\\$&');
+
+const PARSE_CASES = [
+  ['line-too-long', `pose ${'1 '.repeat(70)}`, /^line longer than 128 characters; it was discarded$/],
+  ['bad-character', 'pose 0 0 1 0 0 0\xb0', /^byte 0xB0 is not printable ASCII; the line was discarded$/],
+  ['bad-character', 'sta\xfftus', /^byte 0xFF is not printable ASCII/],
+  ['unknown-command', 'fly', /^'fly' is not a command; type help$/],
+  ['unknown-command', 'poses 1 2 3 4 5 6', /^'poses' is not a command/],
+  ['missing-field', 'pose 1 2 3', /^missing roll; usage: pose <x> <y> <z> <roll> <pitch> <yaw>$/],
+  ['missing-field', 'check', /^missing x; usage: check /],
+  ['missing-field', 'move', /^missing axis=value; usage: move /],
+  ['missing-field', 'set echo', /^missing .*usage: set <name> <value>/],
+  ['extra-field', 'home now', /^unexpected 'now'; usage: home$/],
+  ['extra-field', 'pose 1 2 3 4 5 6 7', /^unexpected '7'; usage: pose /],
+  ['extra-field', 'status 1', /^unexpected '1'/],
+  ['extra-field', 'set echo on off', /^unexpected 'off'/],
+  ['bad-number', 'pose 1 2 three 4 5 6', /^z: 'three' is not a decimal number$/],
+  ['bad-number', 'pose 0x10 0 0 0 0 0', /^x: '0x10' is not a decimal number$/],
+  ['bad-number', 'move yaw=1_000', /^yaw: '1_000' is not a decimal number$/],
+  ['bad-number', 'set speed_mm_s fast', /^speed_mm_s: 'fast' is not a decimal number$/],
+  ['not-finite', 'pose 1 2 3 nan 5 6', /^roll: 'nan' is not a finite number$/],
+  ['not-finite', 'pose inf 0 0 0 0 0', /^x: 'inf' is not a finite number$/],
+  ['not-finite', 'nudge pitch=-Infinity', /^pitch: '-infinity' is not a finite number$/],
+  ['number-too-large', 'pose 1e39 0 0 0 0 0', /^x: '1e39' is too large$/],
+  ['unknown-axis', 'move q=1', /^'q' is not an axis; axes are x y z roll pitch yaw$/],
+  ['duplicate-axis', 'move z=1 z=2', /^z is given twice$/],
+  ['bad-assignment', 'move z 10', /^'z' should be axis=value, for example z=10$/],
+  ['unknown-setting', 'set colour red', /^'colour' is not a setting; type config for the list$/],
+  ['unknown-setting', 'set servo7.trim_us 1500', /^'servo7.trim_us' is not a setting/],
+  ['bad-value', 'set echo sometimes', /^echo: 'sometimes' is not on or off$/],
+  ['bad-value', 'set baud 100000', /^baud: '100000' is not one of 9600 19200 38400 57600 115200 230400 460800 921600$/],
+  ['bad-value', 'set servo1.dir sideways', /^servo1\.dir: 'sideways' is not normal or reversed$/],
+  ['bad-value', 'set frame_hz 60.5', /^frame_hz: '60\.5' is not a whole number$/],
+  ['out-of-range', 'set frame_hz 20', /^frame_hz 20 is outside 50\.\.333 Hz$/],
+  ['out-of-range', 'set frame_hz 334', /^frame_hz 334 is outside 50\.\.333 Hz$/],
+  ['out-of-range', 'set speed_mm_s 2000', /^speed_mm_s 2000 is outside 0\.1\.\.1000 mm\/s \(or 0\/off\)$/],
+  ['out-of-range', 'set servo2.trim_us 3000', /^servo2\.trim_us 3000 is outside 400\.\.2600 us$/],
+  ['out-of-range', 'set servos.rate_us_rad 50', /^servos\.rate_us_rad 50 is outside 100\.\.5000 us\/rad$/],
+  ['out-of-range', 'set arm_mm 0', /^arm_mm 0 is outside 1\.\.500 mm$/],
+  ['bad-servo-config', 'set servo1.trim_us 1950', /^servo1\.trim_us 1950\.00 us must lie within servo1\.min_us\.\.max_us = 1100\.00\.\.1900\.00 us; nothing changed$/],
+  ['bad-servo-config', 'set servo4.max_us 1400', /^servo4\.trim_us 1500\.00 us must lie within servo4\.min_us\.\.max_us = 1100\.00\.\.1400\.00 us; nothing changed$/],
+  ['bad-geometry', 'set rod_mm 15', /^leg \d: .*rod_mm too short.*; nothing changed$/],
+  ['angle-too-large', 'pose 0 0 0 181 0 0', /^roll 181\.000 deg is beyond \+-180 deg$/],
+  ['angle-too-large', 'check 0 0 0 0 -200 0', /^pitch -200\.000 deg is beyond \+-180 deg$/],
+];
+
+// One board for these: each refusal must leave it exactly as it was (which each checks), so
+// the next case starts from the same state. Away from home, so "nothing moved" is not just
+// "still at home".
+let parseBoard;
+for (const [code, line, message] of PARSE_CASES) {
+  test(`${code}: ${JSON.stringify(line).slice(0, 60)}`, () => {
+    parseBoard ??= quietBoardAt([3, -2, 1, 2, -1, 4]);
+    expectRefusal(parseBoard, line, code, message);
+  });
+}
+
+test('unreachable: names the leg the host core names; pose and check alike', () => {
+  const settings = defaultSettings();
+  const board = quietBoardAt(null);
+  for (const pose of [[0, 0, 80, 0, 0, 0], [60, 0, 0, 0, 0, 0], [0, -45, 10, 0, 0, 90]]) {
+    const [core] = reference.solve(settings, [pose]);
+    assert.equal(core.code, 'unreachable', `${pose}: ${JSON.stringify(core)}`);
+    const message = new RegExp(`^leg ${core.leg} cannot reach \\(arm and rod cannot meet the platform joint\\)$`);
+    expectRefusal(board, `pose ${poseText(pose)}`, 'unreachable', message);
+    expectRefusal(board, `check ${poseText(pose)}`, 'unreachable', message);
+  }
+});
+
+test('servo-limit: names the servo, the pulse it would need (as the host core computes it) and its limits', () => {
+  const settings = defaultSettings();
+  const board = quietBoardAt(null);
+  for (const pose of [[0, 0, -15, 0, 0, 0], [0, 0, 15, 0, 0, 0], [0, 0, 0, 14, 0, 0]]) {
+    const [core] = reference.solve(settings, [pose]);
+    assert.equal(core.code, 'servo-limit', `${pose}: ${JSON.stringify(core)}`);
+    const reply = expectRefusal(
+      board,
+      `pose ${poseText(pose)}`,
+      'servo-limit',
+      new RegExp(`^servo ${core.servo} would need \\d+\\.\\d{2} us, outside its limits 1100\\.00\\.\\.1900\\.00 us$`),
+    );
+    const needed = Number(reply.match(/need (\d+\.\d{2}) us/)[1]);
+    assert.ok(Math.abs(needed - core.pulse_us) <= 0.01, `${needed} vs host core ${core.pulse_us}`);
+  }
+});
+
+test('path-blocked: both ends reachable, the straight line between them not', () => {
+  const settings = defaultSettings();
+  const from = [-28, 19, -2.5, 11, 2, -20];
+  const to = [30, -12, -13.5, 5, -13, 28];
+  const answers = reference.solve(settings, Array.from({ length: 501 }, (_, i) => lerpPose(from, to, i / 500)));
+  assert.ok(answers[0].ok && answers[500].ok && answers.some((a) => !a.ok));
+  const board = quietBoardAt(from);
+  expectRefusal(board, `pose ${poseText(to)}`, 'path-blocked', /^the straight path from the current pose is blocked \d+\.\d% of the way: (servo \d would need|leg \d cannot reach).*; nothing moved$/);
+  expectRefusal(board, `move x=${to[0]} y=${to[1]} z=${to[2]} roll=${to[3]} pitch=${to[4]} yaw=${to[5]}`, 'path-blocked', /blocked/);
+});
+
+test('pose-conflict: a setting the held pose could not be driven with is refused', () => {
+  const settings = defaultSettings();
+  const pose = [0, 0, -8, 0, 0, 0];
+  const [core] = reference.solve(settings, [pose]);
+  assert.ok(core.pulse_us[0] > 1600, `servo 1 at ${pose} needs ${core.pulse_us[0]} us`);
+  const board = quietBoardAt(pose);
+  expectRefusal(
+    board,
+    'set servo1.max_us 1600',
+    'pose-conflict',
+    /^with that setting the current pose could not be held: servo 1 would need \d+\.\d{2} us, outside its limits 1100\.00\.\.1600\.00 us; send home first$/,
+  );
+  // The same setting is fine at home, where servo 1 needs 1500 us.
+  ok(board, 'home');
+  runFrames(board, 12);
+  ok(board, 'set servo1.max_us 1600');
+});
+
+test('busy: frame rate, geometry, servo settings and defaults are refused while moving; the move goes on', () => {
+  const settings = defaultSettings();
+  const board = bootQuiet(bootrom);
+  ok(board, 'set speed_mm_s 5');
+  const target = [0, 0, 10, 0, 0, 0]; // 2 s
+  const config = ok(board, 'config');
+  ok(board, `pose ${poseText(target)}`);
+  for (const line of ['set frame_hz 100', 'set rod_mm 121', 'set servo3.trim_us 1510', 'set servos.dir normal', 'defaults']) {
+    const reply = refused(board, line, 'busy');
+    observed.add('busy');
+    assert.equal(reply, 'error:busy the platform is moving; wait for it or send stop first');
+    assert.match(status(board).state, /^moving /);
+  }
+  // Speeds and echo may change while moving.
+  ok(board, 'set speed_deg_s 30');
+  ok(board, 'set speed_deg_s 60');
+  assert.deepEqual(ok(board, 'config'), config);
+  assert.deepEqual(periodsUs(board), Array(6).fill(20_000));
+  runFrames(board, plannedFrames(HOME, target, { ...settings, speed_mm_s: 5 }) + 5);
+  const s = status(board);
+  assert.equal(s.state, 'idle');
+  assert.deepEqual(s.pose, target);
+  // Afterwards the same settings are accepted.
+  ok(board, 'set frame_hz 100');
+});
+
+test('rx-overflow: bytes lost while the firmware was busy refuse the line they fell into', () => {
+  const board = bootQuiet(bootrom);
+  ok(board, 'set baud 921600');
+  board.runMs(1);
+  assert.ok(Math.abs(board.baud - 921600) / 921600 < 0.02, `baud ${board.baud}`);
+  const widths = widthsNanos(board);
+  const first = board.lines.length;
+  const pulses = capture(board, () => {
+    // A check with a long path keeps the main loop busy for tens of ms while 1,500 bytes of
+    // status lines arrive at 921600 baud: more than the 512-byte receive queue holds.
+    board.sendBytes(`check 30 -12 -13.5 5 -13 28\n${'status\n'.repeat(215)}`);
+    board.runMs(300);
+  }, 10);
+  const lines = board.lines.slice(first);
+  const warning = board.waitForLine(/^# warning: receive queue overflowed, \d+ bytes lost$/, { timeoutMs: 0 });
+  const lost = warning.match(/(\d+) bytes/)[1];
+  // Every reply so far is ok: the lines that arrived whole ran, the lost ones got nothing.
+  assert.ok(lines.filter((line) => !line.startsWith('# ')).every((line) => line === 'ok'));
+  // The line the loss fell into ends with the next LF: refused, naming the loss.
+  const reply = refused(board, 'status', 'rx-overflow');
+  observed.add('rx-overflow');
+  assert.equal(reply, `error:rx-overflow receive queue overflowed, ${lost} bytes lost; the line was discarded (wait for each reply before sending more)`);
+  assertConstant(pulses, widths, 'nothing moved');
+  assert.equal(ok(board, 'check 1 1 1 1 1 1').length, 3, 'the next good line works');
+  assert.equal(board.rxFifoDroppedBytes, 0, 'the loss was in the firmware queue, not the UART FIFO');
+});
+
+test('every documented error code exists in the firmware and was produced above through the wire', () => {
+  const documented = [...README.matchAll(/^\| `error:([a-z-]+)` \|/gm)].map((m) => m[1]);
+  const codeEnum = REPORT_RS.slice(REPORT_RS.indexOf('pub const fn as_str'));
+  const implemented = [...codeEnum.slice(0, codeEnum.indexOf('\n    }\n')).matchAll(/=> "([a-z-]+)",/g)].map((m) => m[1]);
+  assert.ok(documented.length >= 20, `found ${documented.length} codes in control/README.md`);
+  assert.deepEqual([...documented].sort(), [...implemented].sort(), 'README codes = report.rs Code');
+  const missing = documented.filter((code) => !observed.has(code) && !NOT_REACHABLE_FROM_THE_WIRE.has(code));
+  assert.deepEqual(missing, [], 'documented codes no test produced');
+});
