@@ -4,12 +4,11 @@
 //! widths per servo frame -> PWM registers. This file only wires the pieces together:
 //! clocks and watchdog, UART0 ([`serial`]), the six servo outputs ([`servo_pwm`]) and the
 //! hardware-independent [`control::Controller`], which runs on the boot ROM's float routines
-//! ([`rom_math`]).
+//! ([`firmware::rom_math`]).
 
 #![no_std]
 #![no_main]
 
-mod rom_math;
 mod serial;
 mod servo_pwm;
 
@@ -18,7 +17,7 @@ use panic_probe as _;
 use rp2040_hal::{self as hal, clocks::Clock, fugit::ExtU32, pac, Sio, Watchdog};
 
 use control::Settings;
-use rom_math::RomMath;
+use firmware::rom_math::RomMath;
 use serial::{Received, Serial};
 use servo_pwm::{PulseWindowUs, ServoPwm, SERVO_COUNT};
 

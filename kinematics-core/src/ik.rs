@@ -25,7 +25,7 @@ use core::f32::consts::PI;
 use core::fmt;
 
 use crate::geometry::{wrap_angle_rad, Geometry};
-use crate::math::Math;
+use crate::math::{Math, Real};
 use crate::pose::{Axis, Pose};
 use crate::servo::ServoSet;
 use crate::{Vec3, LEGS};
@@ -129,27 +129,55 @@ pub fn leg_vectors<M: Math>(geometry: &Geometry, pose: &Pose) -> [Vec3; LEGS] {
     core::array::from_fn(|i| q[i] - geometry.leg(i).base_mm)
 }
 
+/// Legs longer than this (squared, mm^2) are unreachable by any build; bounding `|l|^2` first
+/// keeps every later product of the hot loop finite, whatever the [`Math`] does on overflow.
+const MAX_LEG_SQ_MM2: f32 = 1e18;
+
 /// Eq. 9 for all legs without the pose checks; `Err(leg number)` if a leg cannot reach.
+///
+/// The hot loop of the firmware: per leg, `l = R p + (x, y, z) + ((0, 0, h0) - b)` (eq. 2, 3),
+/// then `L`, `M`, `N` and the half-angle root, all arithmetic through `M` ([`Real`]). With
+/// `L - N` and `L + N` at hand, the discriminant is `D = M^2 - (L - N)(L + N)`.
 pub(crate) fn arm_angles_raw<M: Math>(geometry: &Geometry, pose: &Pose) -> Result<[f32; LEGS], u8> {
-    let legs = leg_vectors::<M>(geometry, pose);
+    let r = pose.rotation::<M>();
+    let real = Real::<M>::new;
+    let row = |i: usize| [real(r[(i, 0)]), real(r[(i, 1)]), real(r[(i, 2)])];
+    let rows = [row(0), row(1), row(2)];
+    let position = [real(pose.x_mm), real(pose.y_mm), real(pose.z_mm)];
+    let rod_sq_minus_arm_sq = real(geometry.rod_sq_minus_arm_sq);
+    let two_arm = real(geometry.two_arm_mm);
     let mut alpha = [0.0f32; LEGS];
-    for (i, l) in legs.iter().enumerate() {
-        let c = &geometry.constants[i];
-        let big_l = l.dot(l) - geometry.rod_sq_minus_arm_sq;
-        let big_m = geometry.two_arm_mm * l.z;
-        let big_n = geometry.two_arm_mm * (c.cos_beta * l.x + c.sin_beta * l.y);
-        let discriminant = big_m * big_m + big_n * big_n - big_l * big_l;
-        // Rejects negative discriminants and NaN (from overflowing inputs) alike.
-        if discriminant.is_nan() || discriminant < 0.0 {
+    for (i, c) in geometry.constants.iter().enumerate() {
+        let p = c.platform_mm.map(real);
+        let l: [Real<M>; 3] = core::array::from_fn(|k| {
+            let rp = if geometry.planar_platform {
+                rows[k][0] * p[0] + rows[k][1] * p[1]
+            } else {
+                rows[k][0] * p[0] + rows[k][1] * p[1] + rows[k][2] * p[2]
+            };
+            rp + (position[k] + real(c.offset_mm[k]))
+        });
+        let leg_sq = l[0] * l[0] + l[1] * l[1] + l[2] * l[2];
+        // Also rejects NaN.
+        if !(leg_sq.0 < MAX_LEG_SQ_MM2) {
+            return Err(i as u8 + 1);
+        }
+        let big_l = leg_sq - rod_sq_minus_arm_sq;
+        let big_m = two_arm * l[2];
+        let big_n = real(c.n_x_mm) * l[0] + real(c.n_y_mm) * l[1];
+        let (l_minus_n, l_plus_n) = (big_l - big_n, big_l + big_n);
+        let discriminant = big_m * big_m - l_minus_n * l_plus_n;
+        if !(discriminant.0 >= 0.0) {
             return Err(i as u8 + 1);
         }
         // The two equal forms of the root; use the one that cannot be 0/0 (see module docs).
-        let root = M::sqrt(discriminant);
-        let a = if big_m >= 0.0 {
-            2.0 * M::atan2(big_l - big_n, big_m + root)
+        let root = real(M::sqrt(discriminant.0));
+        let half = if big_m.0 >= 0.0 {
+            M::atan2(l_minus_n.0, (big_m + root).0)
         } else {
-            2.0 * M::atan2(big_m - root, big_l + big_n)
+            M::atan2((big_m - root).0, l_plus_n.0)
         };
+        let a = 2.0 * half;
         if !a.is_finite() {
             return Err(i as u8 + 1);
         }
