@@ -34,3 +34,32 @@ export function loadSegments(elfPath) {
   }
   return segments;
 }
+
+const SHF_ALLOC = 0x2;
+
+/** Sizes of the allocated sections (`.text`, `.rodata`, `.data`, `.bss`, ...), in bytes. */
+export function sectionSizes(elfPath) {
+  const file = readFileSync(elfPath);
+  const view = new DataView(file.buffer, file.byteOffset, file.byteLength);
+  const sectionHeaderOffset = view.getUint32(0x20, true);
+  const sectionHeaderSize = view.getUint16(0x2e, true);
+  const sectionCount = view.getUint16(0x30, true);
+  const namesIndex = view.getUint16(0x32, true);
+  const header = (i) => sectionHeaderOffset + i * sectionHeaderSize;
+  const namesOffset = view.getUint32(header(namesIndex) + 0x10, true);
+  const sizes = {};
+  for (let i = 0; i < sectionCount; i++) {
+    const flags = view.getUint32(header(i) + 0x08, true);
+    const size = view.getUint32(header(i) + 0x14, true);
+    if (!(flags & SHF_ALLOC) || size === 0) {
+      continue;
+    }
+    let end = namesOffset + view.getUint32(header(i), true);
+    const start = end;
+    while (file[end] !== 0) {
+      end++;
+    }
+    sizes[file.toString('latin1', start, end)] = size;
+  }
+  return sizes;
+}

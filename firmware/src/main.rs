@@ -90,7 +90,14 @@ fn main() -> ! {
                 break;
             }
             match serial.read() {
-                Some(Received::Byte(byte)) => controller.on_byte(byte, &mut serial),
+                Some(Received::Byte(byte)) => {
+                    controller.on_byte(byte, &mut serial);
+                    // A jump (speed limits off) is written now, not at the next frame; the
+                    // compare registers latch it at the next period start, so no pulse is cut.
+                    if let Some(pulses_us) = controller.take_new_pulses() {
+                        servos.set_pulse_widths_us(&pulses_us, &pulse_windows_us(&controller));
+                    }
+                }
                 // The main loop fell behind and bytes were lost here: that line is refused.
                 Some(Received::Lost(bytes)) => {
                     defmt::warn!("serial receive queue full: {} bytes lost", bytes);

@@ -100,7 +100,9 @@ fn atan2_fn() -> BinaryFn {
 impl Math for RomMath {
     #[inline]
     fn sin_cos(x: f32) -> (f32, f32) {
-        if !(x.abs() < 128.0) {
+        // |x| < 128, NaN excluded, in integer instructions (non-negative floats order like
+        // their bit patterns; NaN's are above infinity's).
+        if x.abs().to_bits() >= 128.0f32.to_bits() {
             return (f32::NAN, f32::NAN);
         }
         let f = entry(FSIN);

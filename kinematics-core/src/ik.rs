@@ -133,6 +133,14 @@ pub fn leg_vectors<M: Math>(geometry: &Geometry, pose: &Pose) -> [Vec3; LEGS] {
 /// keeps every later product of the hot loop finite, whatever the [`Math`] does on overflow.
 const MAX_LEG_SQ_MM2: f32 = 1e18;
 
+/// `0 <= x < bound` (`bound` positive) in integer instructions: non-negative floats order like
+/// their bit patterns, while negative values, -0 and NaN (sign bit set, or all exponent bits)
+/// compare above every finite bound. Float comparisons are library calls on an FPU-less chip.
+#[inline]
+fn below(x: f32, bound: f32) -> bool {
+    x.to_bits() < bound.to_bits()
+}
+
 /// Eq. 9 for all legs without the pose checks; `Err(leg number)` if a leg cannot reach.
 ///
 /// The hot loop of the firmware: per leg, `l = R p + (x, y, z) + ((0, 0, h0) - b)` (eq. 2, 3),
@@ -158,8 +166,7 @@ pub(crate) fn arm_angles_raw<M: Math>(geometry: &Geometry, pose: &Pose) -> Resul
             rp + (position[k] + real(c.offset_mm[k]))
         });
         let leg_sq = l[0] * l[0] + l[1] * l[1] + l[2] * l[2];
-        // Also rejects NaN.
-        if !(leg_sq.0 < MAX_LEG_SQ_MM2) {
+        if !below(leg_sq.0, MAX_LEG_SQ_MM2) {
             return Err(i as u8 + 1);
         }
         let big_l = leg_sq - rod_sq_minus_arm_sq;
@@ -167,18 +174,19 @@ pub(crate) fn arm_angles_raw<M: Math>(geometry: &Geometry, pose: &Pose) -> Resul
         let big_n = real(c.n_x_mm) * l[0] + real(c.n_y_mm) * l[1];
         let (l_minus_n, l_plus_n) = (big_l - big_n, big_l + big_n);
         let discriminant = big_m * big_m - l_minus_n * l_plus_n;
-        if !(discriminant.0 >= 0.0) {
+        if !below(discriminant.0, f32::INFINITY) {
             return Err(i as u8 + 1);
         }
         // The two equal forms of the root; use the one that cannot be 0/0 (see module docs).
         let root = real(M::sqrt(discriminant.0));
-        let half = if big_m.0 >= 0.0 {
+        // (-0 may take either form: only M = 0 with D = 0 is 0/0, and only in one of them.)
+        let half = if big_m.0.is_sign_positive() {
             M::atan2(l_minus_n.0, (big_m + root).0)
         } else {
             M::atan2((big_m - root).0, l_plus_n.0)
         };
-        let a = 2.0 * half;
-        if !a.is_finite() {
+        let a = (real(half) + real(half)).0; // 2 half, exactly
+        if !below(a.abs(), f32::INFINITY) {
             return Err(i as u8 + 1);
         }
         alpha[i] = a;
