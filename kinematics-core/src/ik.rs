@@ -200,8 +200,8 @@ pub fn arm_angles<M: Math>(geometry: &Geometry, pose: &Pose) -> Result<[f32; LEG
     let mut alpha =
         arm_angles_raw::<M>(geometry, pose).map_err(|leg| IkError::Unreachable { leg })?;
     for (i, a) in alpha.iter_mut().enumerate() {
-        let alpha0 = geometry.alpha0_rad(i);
-        *a = alpha0 + wrap_angle_rad(*a - alpha0);
+        let alpha0 = Real::<M>::new(geometry.alpha0_rad(i));
+        *a = (alpha0 + Real::new(wrap_angle_rad((Real::new(*a) - alpha0).0))).0;
     }
     Ok(alpha)
 }
@@ -216,7 +216,7 @@ pub fn solve<M: Math>(
     let arm_rad = arm_angles::<M>(geometry, pose)?;
     let mut pulse_us = [0.0f32; LEGS];
     for (i, (servo, w)) in servos.0.iter().zip(pulse_us.iter_mut()).enumerate() {
-        let pulse = servo.pulse_us(arm_rad[i], geometry.alpha0_rad(i));
+        let pulse = servo.pulse_us_with::<M>(arm_rad[i], geometry.alpha0_rad(i));
         if !servo.allows(pulse) {
             return Err(IkError::ServoLimit {
                 servo: i as u8 + 1,
