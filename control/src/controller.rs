@@ -291,6 +291,12 @@ impl<M: Math> Controller<M> {
         self.silence_us = self.silence_us.saturating_add(frame_us);
         self.check_link();
 
+        if !self.motion.is_moving() {
+            // Standing still: the held pose's pulses are solved already (when it was reached or
+            // the settings changed), and the IK is deterministic. This keeps idle frames cheap,
+            // so a frame never delays a command much.
+            return self.safe_pulses();
+        }
         let next = self.motion.next_pose();
         match solve::<M>(&self.geometry, &self.settings.servos, &next) {
             Ok(solution) => {

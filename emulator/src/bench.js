@@ -17,12 +17,18 @@ import {
   measureStream,
   measureWorstCommand,
 } from './firmware-bench.js';
-import { benchPoses, runIkBench } from './ik-bench.js';
+import { benchPoses, profileIk, runIkBench } from './ik-bench.js';
 
 const REPO = join(dirname(fileURLToPath(import.meta.url)), '..', '..');
 const CLOCK_HZ = 125e6;
 const WATCHDOG_MS = 500;
 const STREAM_BAUD = 921600;
+/**
+ * The IK before the fast path (commit 2e2bad8: rp2040-hal's `float_funcs` wrappers, `fsin` and
+ * `fcos` called separately, all arithmetic through the hal's intrinsics), measured once with
+ * this harness on the same 200 poses (seed 1).
+ */
+const BEFORE = { commit: '2e2bad8', mean: 40582, min: 40325, max: 40872 };
 
 const { values: args } = parseArgs({
   options: {
@@ -60,6 +66,8 @@ const ik = runIkBench(poses);
 if (ik.failures.length > 0) {
   throw new Error(`the chip refused ${ik.failures.length} poses the host solved: ${JSON.stringify(ik.failures[0])}`);
 }
+
+const profile = profileIk(poses.slice(0, 5));
 
 // ---- latency ----
 log('latency ...');
@@ -137,10 +145,17 @@ default servo limits (seed ${args.seed}, from \`cargo run -p host-tests --exampl
 | | cycles per IK, mean | min | max | us at 125 MHz (mean) |
 |---|---:|---:|---:|---:|
 | ROM path (firmware) | ${fmt(ik.rom.mean)} | ${fmt(ik.rom.min)} | ${fmt(ik.rom.max)} | ${fmt(us(ik.rom.mean), 1)} |
+| before: ROM through rp2040-hal's wrappers (commit ${BEFORE.commit}, measured once) | ${fmt(BEFORE.mean)} | ${fmt(BEFORE.min)} | ${fmt(BEFORE.max)} | ${fmt(us(BEFORE.mean), 1)} |
 | same IK with \`libm\` (straightforward port) | ${fmt(ik.libm.mean)} | ${fmt(ik.libm.min)} | ${fmt(ik.libm.max)} | ${fmt(us(ik.libm.mean), 1)} |
 
-Speed-up over the \`libm\` build: ${fmt(ik.libm.mean / ik.rom.mean, 2)}x. (Both builds already route \`f32\` add/sub/mul/div to the boot ROM
+Speed-up: ${fmt(BEFORE.mean / ik.rom.mean, 2)}x over the firmware before, ${fmt(ik.libm.mean / ik.rom.mean, 2)}x over the \`libm\` build. (Both builds already route \`f32\` add/sub/mul/div to the boot ROM
 through rp2040-hal's intrinsics; a build without them is slower still.)
+
+Where the ROM path's cycles go (per IK, ${Math.min(5, ik.poses)} poses, instruction by instruction):
+
+| | cycles | calls |
+|---|---:|---:|
+${profile.map((row) => `| ${row.name} | ${fmt(row.cycles)} | ${row.calls ? fmt(row.calls, 1) : ''} |`).join('\n')}
 
 Accuracy, largest pulse-width difference over the ${ik.poses} poses:
 

@@ -69,7 +69,9 @@ export function measureLatency(poses, { baud = 115200, from } = {}) {
     expectOk(board, `pose ${from}`); // where the measured lines start from (not measured)
   }
   const latenciesUs = [];
-  for (const pose of poses) {
+  for (const [i, pose] of poses.entries()) {
+    // Lines land at spread-out phases of the 20 ms servo frame (a frame may coincide).
+    board.runMs((i * 7.3) % 20);
     const before = ccState(board);
     const writesBefore = ccWrites.length;
     expectOk(board, `pose ${pose}`);

@@ -110,3 +110,62 @@ export function runIkBench(poses, { elf = BENCH_ELF } = {}) {
     mathDiff,
   };
 }
+
+const ROM_END = 0x4000;
+
+/**
+ * Where the ROM-path IK's cycles go, per IK over `poses`: each boot ROM routine it calls
+ * (cycles and calls, attributed by the routine entered from flash) and the firmware's own code.
+ * Steps the emulator instruction by instruction while the marker is high: slow, use few poses.
+ */
+export function profileIk(poses, { elf = BENCH_ELF } = {}) {
+  const board = new EmulatedBoard({ elf });
+  board.waitForLine(/^bench ready/, { timeoutMs: 1000 });
+  const names = new Map(
+    board
+      .request('t', { final: /^t /, timeoutMs: 1000 })
+      .reply.split(' ')
+      .slice(1)
+      .map((kv) => kv.split('='))
+      .map(([name, address]) => [parseInt(address, 16), name]),
+  );
+  let high = false;
+  let brackets = 0;
+  board.mcu.gpio[MARKER_GPIO].addListener((state) => {
+    high = state === 1;
+    brackets += high ? 1 : 0;
+  });
+  const core = board.mcu.core;
+  const execute = core.executeInstruction.bind(core);
+  const rows = new Map();
+  let entered = 'firmware code';
+  let previousPc = ROM_END;
+  core.executeInstruction = () => {
+    const pc = core.PC;
+    const before = core.cycles;
+    const result = execute();
+    if (high && brackets % 3 === 2) {
+      let name = 'firmware code (IK, calls, loads)';
+      if (pc < ROM_END) {
+        if (previousPc >= ROM_END) {
+          entered = names.get(pc) ?? `ROM 0x${pc.toString(16)}`;
+          const row = rows.get(entered) ?? { cycles: 0, calls: 0 };
+          row.calls++;
+          rows.set(entered, row);
+        }
+        name = entered;
+      }
+      const row = rows.get(name) ?? { cycles: 0, calls: 0 };
+      row.cycles += core.cycles - before;
+      rows.set(name, row);
+    }
+    previousPc = pc;
+    return result;
+  };
+  for (const pose of poses) {
+    board.request(`p ${pose.pose_bits.join(' ')}`, { final: /^(r |error)/, timeoutMs: 1000 });
+  }
+  return [...rows]
+    .map(([name, { cycles, calls }]) => ({ name, cycles: cycles / poses.length, calls: calls / poses.length }))
+    .sort((a, b) => b.cycles - a.cycles);
+}

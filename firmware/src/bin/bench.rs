@@ -11,6 +11,7 @@
 //! nothing is lost in decimal conversion):
 //! - `p X Y Z ROLL PITCH YAW` (mm, rad) -> `r W1..W6 l W1..W6`: the six pulse widths (us)
 //!   from the ROM path and from `libm`; an IK error gives `x` in place of the six widths.
+//! - `t` -> `t fadd=ADDR ...`: the ROM addresses of the soft-float routines the IK uses.
 //! - `m` -> `m sin=E cos=E sqrt=E atan2=E`: the largest difference between [`RomMath`] and
 //!   `libm` on the chip over a grid of arguments (absolute; sqrt relative).
 
@@ -42,6 +43,15 @@ pub static BOOT2: [u8; 256] = rp2040_boot2::BOOT_LOADER_W25Q080;
 const XTAL_HZ: u32 = 12_000_000;
 const BAUD: u32 = 921_600;
 const MAX_LINE: usize = 128;
+/// Soft-float table entries the IK uses (byte offsets, datasheet table 180).
+const ROM_FUNCTIONS: [(&str, usize); 6] = [
+    ("fadd", 0x00),
+    ("fsub", 0x04),
+    ("fmul", 0x08),
+    ("fsqrt", 0x18),
+    ("fsin", 0x40),
+    ("fatan2", 0x58),
+];
 
 #[hal::entry]
 fn main() -> ! {
@@ -123,6 +133,16 @@ fn main() -> ! {
                     let _ = out.push_str("error: bad pose");
                 }
             },
+            ("t", _) => {
+                // Where the soft-float routines are, so the harness can name ROM addresses.
+                let table = hal::rom_data::soft_float_table();
+                let _ = out.push('t');
+                for (name, offset) in ROM_FUNCTIONS {
+                    // SAFETY: offsets inside the table of every ROM version with fatan2 (v2+).
+                    let address = unsafe { table.add(offset / 4).read() } & !1;
+                    let _ = write!(out, " {name}={address:x}");
+                }
+            }
             ("m", _) => {
                 let e = math_differences();
                 let _ = write!(
