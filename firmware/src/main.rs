@@ -1,7 +1,7 @@
 //! hexapod-fw: the RP2040 board layer.
 //!
 //! Data flows one way: UART0 bytes -> controller (lines, commands, motion) -> six pulse
-//! widths per servo frame -> PWM registers. This file only wires the pieces together:
+//! widths per servo frame (and right after a command that jumps) -> PWM registers. This file only wires the pieces together:
 //! clocks and watchdog, UART0 ([`serial`]), the six servo outputs ([`servo_pwm`]) and the
 //! hardware-independent [`control::Controller`], which runs on the boot ROM's float routines
 //! ([`firmware::rom_math`]).

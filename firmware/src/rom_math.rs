@@ -18,8 +18,9 @@
 //!   never on a Pico); on an older ROM `libm`'s `atan2f` is used instead;
 //! - `fsqrt` returns -inf for negative input; the trait wants NaN, so negatives are caught here;
 //! - `fadd`, `fsub`, `fmul` are correctly rounded for finite values (denormal results flush to
-//!   zero); overflow gives an infinity. Non-finite operands are not handled as IEEE says, which
-//!   the trait allows (the IK bounds its magnitudes before they could overflow).
+//!   zero, far below anything the kinematics computes). Non-finite operands and overflow are
+//!   not handled as IEEE says (rp2040-hal's wrappers exist for that), which the trait allows:
+//!   the IK checks the pose and bounds its magnitudes before they could overflow.
 
 use core::arch::asm;
 use core::sync::atomic::{AtomicUsize, Ordering};

@@ -23,8 +23,9 @@ pub trait Math {
     /// Four-quadrant arc tangent of `y / x`, in `(-pi, pi]`.
     fn atan2(y: f32, x: f32) -> f32;
 
-    /// `a + b`, correctly rounded for finite operands and results. An overflowing or
-    /// non-finite case may give any non-finite value (the IK bounds its magnitudes first).
+    /// `a + b`, correctly rounded when the operands and the result are finite. Otherwise the
+    /// result is unspecified (the boot ROM does not follow IEEE there): callers keep their
+    /// operands finite and bounded (the IK checks the pose and bounds `|l|^2` first).
     #[inline]
     fn add(a: f32, b: f32) -> f32 {
         a + b

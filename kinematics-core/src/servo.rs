@@ -84,7 +84,7 @@ impl ServoConfig {
         }
     }
 
-    /// Pulse width for an arm angle, us (eq. 13 / 14). Not limited; see [`ServoConfig::limit`].
+    /// Pulse width for an arm angle, us (eq. 13 / 14). Not limited; see [`ServoConfig::allows`].
     #[inline]
     pub fn pulse_us(&self, alpha_rad: f32, alpha0_rad: f32) -> f32 {
         self.pulse_us_with::<Libm>(alpha_rad, alpha0_rad)
@@ -92,6 +92,7 @@ impl ServoConfig {
 
     /// [`ServoConfig::pulse_us`] with `M`'s arithmetic (the IK's hot path); the same
     /// operations, so the same result. The direction's sign is applied exactly (negation).
+    /// The angles must be finite (see [`Math::add`]).
     #[inline]
     pub fn pulse_us_with<M: Math>(&self, alpha_rad: f32, alpha0_rad: f32) -> f32 {
         let offset_rad = Real::<M>::new(alpha_rad) - Real::new(alpha0_rad);
