@@ -129,9 +129,9 @@ pub fn leg_vectors<M: Math>(geometry: &Geometry, pose: &Pose) -> [Vec3; LEGS] {
     core::array::from_fn(|i| q[i] - geometry.leg(i).base_mm)
 }
 
-/// Legs longer than this (squared, mm^2) are unreachable by any build; bounding `|l|^2` first
-/// keeps every later product of the hot loop finite, whatever the [`Math`] does on overflow.
-const MAX_LEG_SQ_MM2: f32 = 1e18;
+/// Bound on `|l|^2`, `|M|` and `|N|` (mm^2): no build reaches that far, and below it no later
+/// product or sum of the hot loop can overflow, whatever the [`Math`] does on overflow.
+const MAX_TERM_MM2: f32 = 1e18;
 
 /// `0 <= x < bound` (`bound` positive) in integer instructions: non-negative floats order like
 /// their bit patterns, while negative values, -0 and NaN (sign bit set, or all exponent bits)
@@ -166,12 +166,15 @@ pub(crate) fn arm_angles_raw<M: Math>(geometry: &Geometry, pose: &Pose) -> Resul
             rp + (position[k] + real(c.offset_mm[k]))
         });
         let leg_sq = l[0] * l[0] + l[1] * l[1] + l[2] * l[2];
-        if !below(leg_sq.0, MAX_LEG_SQ_MM2) {
+        let big_m = two_arm * l[2];
+        let big_n = real(c.n_x_mm) * l[0] + real(c.n_y_mm) * l[1];
+        let bounded = below(leg_sq.0, MAX_TERM_MM2)
+            && below(big_m.0.abs(), MAX_TERM_MM2)
+            && below(big_n.0.abs(), MAX_TERM_MM2);
+        if !bounded {
             return Err(i as u8 + 1);
         }
         let big_l = leg_sq - rod_sq_minus_arm_sq;
-        let big_m = two_arm * l[2];
-        let big_n = real(c.n_x_mm) * l[0] + real(c.n_y_mm) * l[1];
         let (l_minus_n, l_plus_n) = (big_l - big_n, big_l + big_n);
         let discriminant = big_m * big_m - l_minus_n * l_plus_n;
         if !below(discriminant.0, f32::INFINITY) {
