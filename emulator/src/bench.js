@@ -10,12 +10,13 @@ import { fileURLToPath } from 'node:url';
 import { parseArgs } from 'node:util';
 
 import { DEFAULT_ELF } from './board.js';
-import { sectionSizes } from './elf.js';
+import { sectionSizes, symbolValues } from './elf.js';
 import {
   measureLatency,
   measureLockStep,
   measureStream,
   measureWorstCommand,
+  stackHighWaterBytes,
 } from './firmware-bench.js';
 import { benchPoses, profileIk, runIkBench } from './ik-bench.js';
 
@@ -104,6 +105,11 @@ const sizes = (elf) => {
   return { s, get, flash, ram };
 };
 const fw = sizes(DEFAULT_ELF);
+const symbols = symbolValues(DEFAULT_ELF, ['_stack_end', '_stack_start']);
+const stackBytes = stackHighWaterBytes(worst.board, {
+  stackEnd: symbols._stack_end,
+  stackStart: symbols._stack_start,
+});
 
 // ---- report ----
 const passing = rates.filter((r) => r.ok === r.lines);
@@ -111,8 +117,9 @@ const best = passing[passing.length - 1];
 const rateRows = rates
   .map((r) => {
     const offered = Number.isFinite(r.offered) ? `${fmt(r.offered)}/s` : `back to back (wire limit ${fmt(r.wireLinesPerSecond)}/s)`;
-    const outcome = r.ok === r.lines ? 'all `ok`' : `${r.ok} ok; ${r.droppedBytes} bytes lost in the UART FIFO; first error: \`${r.errors[0] ?? ''}\``;
-    return `| ${offered} | ${fmt(r.linesPerSecond)} | ${outcome} |`;
+    const outcome = r.ok === r.lines ? 'all `ok`' : `refused lines; ${r.droppedBytes} bytes lost in the UART FIFO; first error: \`${r.errors[0] ?? ''}\``;
+    const accepted = r.ok === r.lines ? `${fmt(r.linesPerSecond)}/s` : `${r.ok} of ${r.lines} lines`;
+    return `| ${offered} | ${accepted} | ${outcome} |`;
   })
   .join('\n');
 const stat = (values) => {
@@ -219,7 +226,8 @@ ${Object.entries(fw.s)
 | **static RAM** (data + bss + uninit) | **${fmt(fw.ram)}** of 264 KiB |
 
 The controller, the transmit buffer and the receive queue live on the stack of \`main\` (not
-in the static figure).
+in the static figure). Stack high-water mark after the worst-case command above (the deepest
+non-zero RAM word below the stack top; RAM starts zeroed): **${fmt(stackBytes)} bytes**.
 
 ## How to run
 

@@ -3,6 +3,8 @@
 
 import { EmulatedBoard } from './board.js';
 
+const RAM_START = 0x20000000;
+
 const CHANNEL_BYTES = 0x14; // one PWM slice's registers
 const CHANNEL_CC = 0x0c; // compare values (channel A low half, B high half)
 const SERVO_SLICES = [1, 2, 3]; // servo 1..6 = slices 1..3, channels A and B
@@ -170,5 +172,22 @@ export function measureWorstCommand() {
     checks: 1024,
     micros: (replyNanos - lineEnds[lineEnds.length - 1]) / 1000,
     cycles: board.cycles - cyclesBefore,
+    board,
   };
+}
+
+/**
+ * The stack's high-water mark so far, bytes: RAM starts zeroed, so the lowest non-zero word
+ * between `stackEnd` (the end of the static data) and `stackStart` (the top) bounds how deep
+ * the stack has reached (a lower bound: the deepest words might have been written as zero).
+ */
+export function stackHighWaterBytes(board, { stackEnd, stackStart }) {
+  const sram = board.mcu.sram;
+  for (let address = stackEnd; address < stackStart; address += 4) {
+    const offset = address - RAM_START;
+    if (sram[offset] | sram[offset + 1] | sram[offset + 2] | sram[offset + 3]) {
+      return stackStart - address;
+    }
+  }
+  return 0;
 }
