@@ -148,7 +148,7 @@ export function profileIk(poses, { elf = BENCH_ELF } = {}) {
       let name = 'firmware code (IK, calls, loads)';
       if (pc < ROM_END) {
         if (previousPc >= ROM_END) {
-          entered = names.get(pc) ?? `ROM 0x${pc.toString(16)}`;
+          entered = names.get(pc) ?? 'other ROM routines (first call: table look-up)';
           const row = rows.get(entered) ?? { cycles: 0, calls: 0 };
           row.calls++;
           rows.set(entered, row);
