@@ -16,6 +16,13 @@
 //! - [`Controller::on_frame`] always returns finite pulses within the servo limits: if the IK
 //!   fails on a frame, the last good pulses are held and the motion stops (a fault notice).
 //!
+//! Latency: with both speed limits off a move is a jump, and a jump is made at once: the
+//! command's reply is followed by new pulses from [`Controller::take_new_pulses`], which the
+//! board writes right away instead of at the next frame (hobby-servo PWM latches new compare
+//! values at the next period, so nothing is cut short). Streaming hosts use this mode. With a
+//! speed limit set the first step comes with the next frame (up to one frame later), because
+//! writing it early could put two steps into one frame and exceed the limit.
+//!
 //! Link loss: with `link_timeout_s` set, when that long passes without a completed non-blank
 //! line (any line, valid or not, counts as a sign of life), the platform returns home at the
 //! configured speeds (a group whose speed is off uses [`LINK_LOSS_SPEED_MM_S`] /
@@ -71,6 +78,8 @@ pub struct Controller<M: Math = Libm> {
     link_loss_handled: bool,
     /// The last fault, until the next accepted move.
     fault: Option<Fault>,
+    /// The commanded pulses changed outside a frame (see [`Controller::take_new_pulses`]).
+    new_pulses: bool,
     notices: heapless::Deque<Notice, NOTICE_QUEUE>,
     _math: PhantomData<M>,
 }
@@ -113,6 +122,7 @@ impl<M: Math> Controller<M> {
             silence_us: 0,
             link_loss_handled: false,
             fault: None,
+            new_pulses: false,
             notices: heapless::Deque::new(),
             _math: PhantomData,
         })
@@ -174,6 +184,13 @@ impl<M: Math> Controller<M> {
     /// The last fault, until the next accepted move.
     pub fn fault(&self) -> Option<&Fault> {
         self.fault.as_ref()
+    }
+
+    /// The pulses to write now if a command changed them outside a frame (a jump, or a
+    /// settings change that moves the held pose's pulses), once; `None` otherwise. Finite and
+    /// within the servo limits, like [`Controller::on_frame`]'s.
+    pub fn take_new_pulses(&mut self) -> Option<[f32; LEGS]> {
+        core::mem::take(&mut self.new_pulses).then(|| self.safe_pulses())
     }
 
     // ----- what the board calls -----
@@ -274,6 +291,12 @@ impl<M: Math> Controller<M> {
         self.silence_us = self.silence_us.saturating_add(frame_us);
         self.check_link();
 
+        if !self.motion.is_moving() {
+            // Standing still: the held pose's pulses are solved already (when it was reached or
+            // the settings changed), and the IK is deterministic. This keeps idle frames cheap,
+            // so a frame never delays a command much.
+            return self.safe_pulses();
+        }
         let next = self.motion.next_pose();
         match solve::<M>(&self.geometry, &self.settings.servos, &next) {
             Ok(solution) => {
@@ -401,7 +424,12 @@ impl<M: Math> Controller<M> {
             f32::from(self.settings.frame_hz),
         );
         segment
-            .check_path(|p| solve::<M>(&self.geometry, &self.settings.servos, p).map(|_| ()))
+            .check_path(|p| {
+                if *p == target {
+                    return Ok(()); // solved above
+                }
+                solve::<M>(&self.geometry, &self.settings.servos, p).map(|_| ())
+            })
             .map_err(|e| Error::PathBlocked {
                 percent: e.fraction * 100.0,
                 cause: e.error,
@@ -410,8 +438,18 @@ impl<M: Math> Controller<M> {
     }
 
     fn move_to(&mut self, target: Pose) -> Result<(), Error> {
-        let (_, segment) = self.plan(target, self.speed_limits())?;
-        self.start(segment);
+        let limits = self.speed_limits();
+        let (solution, segment) = self.plan(target, limits)?;
+        if limits.mm_per_s > 0.0 || limits.deg_per_s > 0.0 {
+            self.start(segment);
+        } else {
+            // No speed limit: a jump, made now (see the module docs on latency).
+            self.motion = Motion::new(target);
+            self.solution = solution;
+            self.new_pulses = true;
+            self.returning_home = false;
+            self.fault = None;
+        }
         Ok(())
     }
 
@@ -429,6 +467,7 @@ impl<M: Math> Controller<M> {
             .map_err(|cause| Error::PoseConflict { cause })?;
         self.settings = candidate;
         self.geometry = geometry;
+        self.new_pulses |= solution.pulse_us != self.solution.pulse_us;
         self.solution = solution;
         self.generation = self.generation.wrapping_add(1);
         Ok(())

@@ -93,14 +93,49 @@ fn every_frame_is_on_the_straight_line_within_the_speed_limits() {
 }
 
 #[test]
-fn speed_off_jumps_in_one_frame() {
+fn speed_off_jumps_at_once_and_hands_the_board_the_new_pulses() {
     let mut s = session("off", "off");
+    let home = s.ctl.on_frame();
+    assert_eq!(s.ctl.take_new_pulses(), None);
     s.ok("pose 5 0 -5 3 0 2");
-    assert_eq!(s.run_until_idle(), 1);
+    // Already there, before any frame: nothing left to move.
+    assert!(!s.ctl.is_moving());
     assert_eq!(
         *s.ctl.pose(),
         Pose::from_degrees(5.0, 0.0, -5.0, 3.0, 0.0, 2.0)
     );
+    let now = s
+        .ctl
+        .take_new_pulses()
+        .expect("a jump gives new pulses at once");
+    assert_ne!(now, home);
+    // Once only; the following frames command the same pulses.
+    assert_eq!(s.ctl.take_new_pulses(), None);
+    assert_eq!(s.frames(3), vec![now; 3]);
+    // A refused target changes nothing.
+    assert!(!s.err("pose 0 0 80 0 0 0").is_empty());
+    assert_eq!(s.ctl.take_new_pulses(), None);
+}
+
+#[test]
+fn with_a_speed_limit_the_first_step_waits_for_the_frame() {
+    let mut s = session("10", "off");
+    s.ok("pose 0 0 5 0 0 0");
+    assert_eq!(s.ctl.take_new_pulses(), None);
+    assert!(s.ctl.is_moving());
+    assert_eq!(s.run_until_idle(), 25);
+}
+
+#[test]
+fn a_trim_change_hands_the_board_the_new_pulses_at_once() {
+    let mut s = Session::quiet();
+    s.ok("set servo3.trim_us 1520");
+    let now = s
+        .ctl
+        .take_new_pulses()
+        .expect("the held pose's pulses changed");
+    // At home every servo gets its trim.
+    assert_eq!(now, [1500.0, 1500.0, 1520.0, 1500.0, 1500.0, 1500.0]);
 }
 
 #[test]

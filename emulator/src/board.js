@@ -9,7 +9,12 @@ import { RP2040 } from 'rp2040js';
 
 import { loadBootrom } from './bootrom.js';
 import { loadSegments } from './elf.js';
-import { onWatchdogExpiry, PacedUartInput, patchEmulatorGaps } from './rp2040js-gaps.js';
+import {
+  onWatchdogExpiry,
+  PacedUartInput,
+  patchEmulatorGaps,
+  wakeIfInterruptPending,
+} from './rp2040js-gaps.js';
 import { ServoPulseMeter } from './servo-pulses.js';
 
 const REPO = join(dirname(fileURLToPath(import.meta.url)), '..', '..');
@@ -118,7 +123,7 @@ export class EmulatedBoard {
   runSlice(endNanos, condition) {
     const { core, clock } = this.mcu;
     while (clock.nanos < endNanos) {
-      if (core.waiting) {
+      if (core.waiting && !wakeIfInterruptPending(core)) {
         // Asleep in WFI: nothing happens until the next timer event (or the end).
         const next = clock.nextAlarm;
         const toEnd = endNanos - clock.nanos;

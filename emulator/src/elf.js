@@ -34,3 +34,67 @@ export function loadSegments(elfPath) {
   }
   return segments;
 }
+
+const SHF_ALLOC = 0x2;
+
+/** Sizes of the allocated sections (`.text`, `.rodata`, `.data`, `.bss`, ...), in bytes. */
+export function sectionSizes(elfPath) {
+  const file = readFileSync(elfPath);
+  const view = new DataView(file.buffer, file.byteOffset, file.byteLength);
+  const sectionHeaderOffset = view.getUint32(0x20, true);
+  const sectionHeaderSize = view.getUint16(0x2e, true);
+  const sectionCount = view.getUint16(0x30, true);
+  const namesIndex = view.getUint16(0x32, true);
+  const header = (i) => sectionHeaderOffset + i * sectionHeaderSize;
+  const namesOffset = view.getUint32(header(namesIndex) + 0x10, true);
+  const sizes = {};
+  for (let i = 0; i < sectionCount; i++) {
+    const flags = view.getUint32(header(i) + 0x08, true);
+    const size = view.getUint32(header(i) + 0x14, true);
+    if (!(flags & SHF_ALLOC) || size === 0) {
+      continue;
+    }
+    let end = namesOffset + view.getUint32(header(i), true);
+    const start = end;
+    while (file[end] !== 0) {
+      end++;
+    }
+    sizes[file.toString('latin1', start, end)] = size;
+  }
+  return sizes;
+}
+
+const SHT_SYMTAB = 2;
+
+/** The value of each named symbol in the ELF's symbol table (those asked for that exist). */
+export function symbolValues(elfPath, names) {
+  const file = readFileSync(elfPath);
+  const view = new DataView(file.buffer, file.byteOffset, file.byteLength);
+  const sectionHeaderOffset = view.getUint32(0x20, true);
+  const sectionHeaderSize = view.getUint16(0x2e, true);
+  const sectionCount = view.getUint16(0x30, true);
+  const header = (i) => sectionHeaderOffset + i * sectionHeaderSize;
+  const wanted = new Set(names);
+  const values = {};
+  for (let i = 0; i < sectionCount; i++) {
+    if (view.getUint32(header(i) + 0x04, true) !== SHT_SYMTAB) {
+      continue;
+    }
+    const offset = view.getUint32(header(i) + 0x10, true);
+    const size = view.getUint32(header(i) + 0x14, true);
+    const entrySize = view.getUint32(header(i) + 0x24, true);
+    const strings = view.getUint32(header(view.getUint32(header(i) + 0x18, true)) + 0x10, true);
+    for (let entry = offset; entry < offset + size; entry += entrySize) {
+      let end = strings + view.getUint32(entry, true);
+      const start = end;
+      while (file[end] !== 0) {
+        end++;
+      }
+      const name = file.toString('latin1', start, end);
+      if (wanted.has(name)) {
+        values[name] = view.getUint32(entry + 4, true);
+      }
+    }
+  }
+  return values;
+}

@@ -1,15 +1,14 @@
 //! hexapod-fw: the RP2040 board layer.
 //!
 //! Data flows one way: UART0 bytes -> controller (lines, commands, motion) -> six pulse
-//! widths per servo frame -> PWM registers. This file only wires the pieces together:
+//! widths per servo frame (and right after a command that jumps) -> PWM registers. This file only wires the pieces together:
 //! clocks and watchdog, UART0 ([`serial`]), the six servo outputs ([`servo_pwm`]) and the
 //! hardware-independent [`control::Controller`], which runs on the boot ROM's float routines
-//! ([`rom_math`]).
+//! ([`firmware::rom_math`]).
 
 #![no_std]
 #![no_main]
 
-mod rom_math;
 mod serial;
 mod servo_pwm;
 
@@ -18,7 +17,7 @@ use panic_probe as _;
 use rp2040_hal::{self as hal, clocks::Clock, fugit::ExtU32, pac, Sio, Watchdog};
 
 use control::Settings;
-use rom_math::RomMath;
+use firmware::rom_math::RomMath;
 use serial::{Received, Serial};
 use servo_pwm::{PulseWindowUs, ServoPwm, SERVO_COUNT};
 
@@ -91,7 +90,14 @@ fn main() -> ! {
                 break;
             }
             match serial.read() {
-                Some(Received::Byte(byte)) => controller.on_byte(byte, &mut serial),
+                Some(Received::Byte(byte)) => {
+                    controller.on_byte(byte, &mut serial);
+                    // A jump (speed limits off) is written now, not at the next frame; the
+                    // compare registers latch it at the next period start, so no pulse is cut.
+                    if let Some(pulses_us) = controller.take_new_pulses() {
+                        servos.set_pulse_widths_us(&pulses_us, &pulse_windows_us(&controller));
+                    }
+                }
                 // The main loop fell behind and bytes were lost here: that line is refused.
                 Some(Received::Lost(bytes)) => {
                     defmt::warn!("serial receive queue full: {} bytes lost", bytes);

@@ -1,33 +1,135 @@
-//! [`Math`] for the RP2040: the boot ROM's float routines (`fsin`, `fcos`, `fsqrt`, `fatan2`).
+//! [`Math`] for the RP2040: the boot ROM's float routines, called directly.
 //!
-//! The M0+ has no FPU; `libm`'s `sinf`/`cosf` compute in f64 and cost thousands of cycles per
-//! call, while the ROM routines are accurate to about 1e-7 and several times faster. The ROM
-//! wants `|x| < 128` rad for sin/cos (the kinematics keeps angles within `2 pi`) and needs
-//! boot ROM version 2 or later for `fatan2` (every RP2040 sold as B1 or later; B0 was never on
-//! a Pico). All angles in radians.
+//! The M0+ has no FPU. `libm`'s `sinf`/`cosf` compute in f64 and cost thousands of cycles per
+//! call; the ROM routines are accurate to about 1e-7 and several times faster. rp2040-hal's
+//! wrappers (and the `__aeabi_f*` intrinsics the compiler calls for `+ - *`) add a table look-up
+//! and finiteness checks around every ROM call, about 40 cycles on top of a 55-70 cycle `fadd`
+//! or `fmul`. The IK's hot loop calls the ROM through [`Math`] instead, as the Pico SDK does:
+//! the soft-float table's address is looked up once and kept in RAM ([`table`]).
+//!
+//! ABI facts relied on (RP2040 datasheet, section 2.8.3 "Floating point"; checked on the
+//! emulated chip by `emulator/test/rom-math.test.js`):
+//! - every soft-float table entry is an AAPCS function (arguments in r0, r1; result in r0;
+//!   r0-r3, r12 and lr clobbered; r4-r11 and sp preserved), Thumb address with bit 0 set;
+//! - `fsin` (offset 0x40) also leaves `cos(x)` in r1, so one call gives both (the SDK's
+//!   `sincosf` relies on the same);
+//! - `fsin`/`fcos` want `|x| < 128` rad (the kinematics keeps angles within `2 pi`);
+//! - `fatan2` (offset 0x58) exists from ROM version 2 (every RP2040 sold, B1 and later; B0 was
+//!   never on a Pico); on an older ROM `libm`'s `atan2f` is used instead;
+//! - `fsqrt` returns -inf for negative input; the trait wants NaN, so negatives are caught here;
+//! - `fadd`, `fsub`, `fmul` are correctly rounded for finite values (denormal results flush to
+//!   zero, far below anything the kinematics computes). Non-finite operands and overflow are
+//!   not handled as IEEE says (rp2040-hal's wrappers exist for that), which the trait allows:
+//!   the IK checks the pose and bounds its magnitudes before they could overflow.
+
+use core::arch::asm;
+use core::sync::atomic::{AtomicUsize, Ordering};
 
 use kinematics_core::Math;
-use rp2040_hal::rom_data::float_funcs;
+use rp2040_hal::rom_data;
 
-/// The boot ROM's float library.
+/// Byte offsets in the soft-float table (datasheet table 180).
+const FADD: usize = 0x00;
+const FSUB: usize = 0x04;
+const FMUL: usize = 0x08;
+const FSQRT: usize = 0x18;
+const FSIN: usize = 0x40;
+const FATAN2: usize = 0x58;
+
+/// The soft-float table's address (0 until first looked up).
+static TABLE: AtomicUsize = AtomicUsize::new(0);
+/// `fatan2`, or `libm`'s on a ROM without it (0 until first looked up).
+static ATAN2: AtomicUsize = AtomicUsize::new(0);
+
+type BinaryFn = extern "C" fn(f32, f32) -> f32;
+type UnaryFn = extern "C" fn(f32) -> f32;
+
+/// The boot ROM's float library, called directly.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct RomMath;
+
+/// The soft-float table, looked up in the ROM the first time (the look-up always gives the
+/// same address, so a race could only repeat it).
+#[inline]
+fn table() -> *const usize {
+    match TABLE.load(Ordering::Relaxed) {
+        0 => {
+            let table = rom_data::soft_float_table();
+            TABLE.store(table as usize, Ordering::Relaxed);
+            table
+        }
+        table => table as *const usize,
+    }
+}
+
+/// The table entry at byte offset `offset`: a Thumb function address.
+#[inline]
+fn entry(offset: usize) -> usize {
+    // SAFETY: `offset` is one of the offsets above, all inside the table of every ROM version;
+    // the table lives in ROM, which is always readable.
+    unsafe { table().add(offset / 4).read() }
+}
+
+#[inline]
+fn binary(offset: usize, a: f32, b: f32) -> f32 {
+    // SAFETY: the entries used with this are `extern "C" fn(f32, f32) -> f32` (see module docs).
+    let f: BinaryFn = unsafe { core::mem::transmute::<usize, BinaryFn>(entry(offset)) };
+    f(a, b)
+}
+
+extern "C" fn libm_atan2(y: f32, x: f32) -> f32 {
+    libm::atan2f(y, x)
+}
+
+fn atan2_fn() -> BinaryFn {
+    let f = match ATAN2.load(Ordering::Relaxed) {
+        0 => {
+            let f = if rom_data::rom_version_number() >= 2 {
+                entry(FATAN2)
+            } else {
+                libm_atan2 as BinaryFn as usize
+            };
+            ATAN2.store(f, Ordering::Relaxed);
+            f
+        }
+        f => f,
+    };
+    // SAFETY: either the ROM's `fatan2` or `libm_atan2`, both `extern "C" fn(f32, f32) -> f32`.
+    unsafe { core::mem::transmute::<usize, BinaryFn>(f) }
+}
 
 impl Math for RomMath {
     #[inline]
     fn sin_cos(x: f32) -> (f32, f32) {
-        if x.is_finite() && x.abs() < 128.0 {
-            (float_funcs::fsin(x), float_funcs::fcos(x))
-        } else {
-            (f32::NAN, f32::NAN)
+        // |x| < 128, NaN excluded, in integer instructions (non-negative floats order like
+        // their bit patterns; NaN's are above infinity's).
+        if x.abs().to_bits() >= 128.0f32.to_bits() {
+            return (f32::NAN, f32::NAN);
         }
+        let f = entry(FSIN);
+        let (sin, cos): (u32, u32);
+        // SAFETY: `f` is the ROM's `fsin`, an AAPCS function taking x in r0 and returning
+        // sin(x) in r0 and cos(x) in r1 (module docs); `clobber_abi("C")` tells the compiler
+        // everything else such a call may change (r2, r3, r12, lr, flags).
+        unsafe {
+            asm!(
+                "blx {f}",
+                f = in(reg) f,
+                inlateout("r0") x.to_bits() => sin,
+                lateout("r1") cos,
+                clobber_abi("C"),
+            );
+        }
+        (f32::from_bits(sin), f32::from_bits(cos))
     }
 
     #[inline]
     fn sqrt(x: f32) -> f32 {
         // The ROM returns -inf for negative input; the trait promises NaN.
         if x >= 0.0 {
-            float_funcs::fsqrt(x)
+            // SAFETY: `fsqrt` is `extern "C" fn(f32) -> f32`.
+            let f: UnaryFn = unsafe { core::mem::transmute::<usize, UnaryFn>(entry(FSQRT)) };
+            f(x)
         } else {
             f32::NAN
         }
@@ -35,6 +137,21 @@ impl Math for RomMath {
 
     #[inline]
     fn atan2(y: f32, x: f32) -> f32 {
-        float_funcs::fatan2(y, x)
+        atan2_fn()(y, x)
+    }
+
+    #[inline]
+    fn add(a: f32, b: f32) -> f32 {
+        binary(FADD, a, b)
+    }
+
+    #[inline]
+    fn sub(a: f32, b: f32) -> f32 {
+        binary(FSUB, a, b)
+    }
+
+    #[inline]
+    fn mul(a: f32, b: f32) -> f32 {
+        binary(FMUL, a, b)
     }
 }

@@ -47,6 +47,13 @@ pub struct Leg {
 pub(crate) struct LegConstants {
     pub cos_beta: f32,
     pub sin_beta: f32,
+    /// `p_i`, mm.
+    pub platform_mm: [f32; 3],
+    /// `(0, 0, h0) - b_i`: the leg vector is `l_i = R p_i + (x, y, z) + offset`, mm.
+    pub offset_mm: [f32; 3],
+    /// `2a cos(beta)`, `2a sin(beta)`: `N = n_x l_x + n_y l_y` (eq. 9), mm.
+    pub n_x_mm: f32,
+    pub n_y_mm: f32,
     /// Home arm angle alpha0, rad.
     pub alpha0_rad: f32,
 }
@@ -63,6 +70,8 @@ pub struct Geometry {
     /// `2a`, mm (the factor in `M` and `N` of eq. 9).
     pub(crate) two_arm_mm: f32,
     pub(crate) constants: [LegConstants; LEGS],
+    /// Every platform joint has `z = 0` (true of every circular layout): `R p` skips a column.
+    pub(crate) planar_platform: bool,
 }
 
 /// Which length of a geometry a [`GeometryError`] is about.
@@ -213,11 +222,21 @@ impl Geometry {
             rod_sq_minus_arm_sq: rod_mm * rod_mm - arm_mm * arm_mm,
             two_arm_mm: 2.0 * arm_mm,
             constants: [LegConstants::default(); LEGS],
+            planar_platform: legs.iter().all(|leg| leg.platform_mm.z == 0.0),
         };
+        let two_arm_mm = geometry.two_arm_mm;
         for (c, leg) in geometry.constants.iter_mut().zip(legs.iter()) {
             let (sin_beta, cos_beta) = libm::sincosf(leg.beta_rad);
             c.sin_beta = sin_beta;
             c.cos_beta = cos_beta;
+            c.platform_mm = leg.platform_mm.into();
+            c.offset_mm = [
+                -leg.base_mm.x,
+                -leg.base_mm.y,
+                home_height_mm - leg.base_mm.z,
+            ];
+            c.n_x_mm = two_arm_mm * cos_beta;
+            c.n_y_mm = two_arm_mm * sin_beta;
         }
         // Eq. 12 is eq. 9 at the home pose (with eq. 9's naming: M0 = 2a(h0 + z_p - z_b),
         // N0 = 2a[cos(beta)(x_p - x_b) + sin(beta)(y_p - y_b)], L0 = 2a^2 when the legs agree

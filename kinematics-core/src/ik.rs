@@ -25,7 +25,7 @@ use core::f32::consts::PI;
 use core::fmt;
 
 use crate::geometry::{wrap_angle_rad, Geometry};
-use crate::math::Math;
+use crate::math::{Math, Real};
 use crate::pose::{Axis, Pose};
 use crate::servo::ServoSet;
 use crate::{Vec3, LEGS};
@@ -129,28 +129,67 @@ pub fn leg_vectors<M: Math>(geometry: &Geometry, pose: &Pose) -> [Vec3; LEGS] {
     core::array::from_fn(|i| q[i] - geometry.leg(i).base_mm)
 }
 
+/// Bound on `|l|^2`, `|M|` and `|N|` (mm^2): no build reaches that far, and below it no later
+/// product or sum of the hot loop can overflow, whatever the [`Math`] does on overflow.
+const MAX_TERM_MM2: f32 = 1e18;
+
+/// `0 <= x < bound` (`bound` positive) in integer instructions: non-negative floats order like
+/// their bit patterns, while negative values, -0 and NaN (sign bit set, or all exponent bits)
+/// compare above every finite bound. Float comparisons are library calls on an FPU-less chip.
+#[inline]
+fn below(x: f32, bound: f32) -> bool {
+    x.to_bits() < bound.to_bits()
+}
+
 /// Eq. 9 for all legs without the pose checks; `Err(leg number)` if a leg cannot reach.
+///
+/// The hot loop of the firmware: per leg, `l = R p + (x, y, z) + ((0, 0, h0) - b)` (eq. 2, 3),
+/// then `L`, `M`, `N` and the half-angle root, all arithmetic through `M` ([`Real`]). With
+/// `L - N` and `L + N` at hand, the discriminant is `D = M^2 - (L - N)(L + N)`.
 pub(crate) fn arm_angles_raw<M: Math>(geometry: &Geometry, pose: &Pose) -> Result<[f32; LEGS], u8> {
-    let legs = leg_vectors::<M>(geometry, pose);
+    let r = pose.rotation::<M>();
+    let real = Real::<M>::new;
+    let row = |i: usize| [real(r[(i, 0)]), real(r[(i, 1)]), real(r[(i, 2)])];
+    let rows = [row(0), row(1), row(2)];
+    let position = [real(pose.x_mm), real(pose.y_mm), real(pose.z_mm)];
+    let rod_sq_minus_arm_sq = real(geometry.rod_sq_minus_arm_sq);
+    let two_arm = real(geometry.two_arm_mm);
     let mut alpha = [0.0f32; LEGS];
-    for (i, l) in legs.iter().enumerate() {
-        let c = &geometry.constants[i];
-        let big_l = l.dot(l) - geometry.rod_sq_minus_arm_sq;
-        let big_m = geometry.two_arm_mm * l.z;
-        let big_n = geometry.two_arm_mm * (c.cos_beta * l.x + c.sin_beta * l.y);
-        let discriminant = big_m * big_m + big_n * big_n - big_l * big_l;
-        // Rejects negative discriminants and NaN (from overflowing inputs) alike.
-        if discriminant.is_nan() || discriminant < 0.0 {
+    for (i, c) in geometry.constants.iter().enumerate() {
+        let p = c.platform_mm.map(real);
+        let l: [Real<M>; 3] = core::array::from_fn(|k| {
+            let rp = if geometry.planar_platform {
+                rows[k][0] * p[0] + rows[k][1] * p[1]
+            } else {
+                rows[k][0] * p[0] + rows[k][1] * p[1] + rows[k][2] * p[2]
+            };
+            rp + (position[k] + real(c.offset_mm[k]))
+        });
+        let leg_sq = l[0] * l[0] + l[1] * l[1] + l[2] * l[2];
+        let big_m = two_arm * l[2];
+        let big_n = real(c.n_x_mm) * l[0] + real(c.n_y_mm) * l[1];
+        let bounded = below(leg_sq.0, MAX_TERM_MM2)
+            && below(big_m.0.abs(), MAX_TERM_MM2)
+            && below(big_n.0.abs(), MAX_TERM_MM2);
+        if !bounded {
+            return Err(i as u8 + 1);
+        }
+        let big_l = leg_sq - rod_sq_minus_arm_sq;
+        let (l_minus_n, l_plus_n) = (big_l - big_n, big_l + big_n);
+        let discriminant = big_m * big_m - l_minus_n * l_plus_n;
+        if !below(discriminant.0, f32::INFINITY) {
             return Err(i as u8 + 1);
         }
         // The two equal forms of the root; use the one that cannot be 0/0 (see module docs).
-        let root = M::sqrt(discriminant);
-        let a = if big_m >= 0.0 {
-            2.0 * M::atan2(big_l - big_n, big_m + root)
+        let root = real(M::sqrt(discriminant.0));
+        // (-0 may take either form: only M = 0 with D = 0 is 0/0, and only in one of them.)
+        let half = if big_m.0.is_sign_positive() {
+            M::atan2(l_minus_n.0, (big_m + root).0)
         } else {
-            2.0 * M::atan2(big_m - root, big_l + big_n)
+            M::atan2((big_m - root).0, l_plus_n.0)
         };
-        if !a.is_finite() {
+        let a = (real(half) + real(half)).0; // 2 half, exactly
+        if !below(a.abs(), f32::INFINITY) {
             return Err(i as u8 + 1);
         }
         alpha[i] = a;
@@ -164,8 +203,8 @@ pub fn arm_angles<M: Math>(geometry: &Geometry, pose: &Pose) -> Result<[f32; LEG
     let mut alpha =
         arm_angles_raw::<M>(geometry, pose).map_err(|leg| IkError::Unreachable { leg })?;
     for (i, a) in alpha.iter_mut().enumerate() {
-        let alpha0 = geometry.alpha0_rad(i);
-        *a = alpha0 + wrap_angle_rad(*a - alpha0);
+        let alpha0 = Real::<M>::new(geometry.alpha0_rad(i));
+        *a = (alpha0 + Real::new(wrap_angle_rad((Real::new(*a) - alpha0).0))).0;
     }
     Ok(alpha)
 }
@@ -180,7 +219,7 @@ pub fn solve<M: Math>(
     let arm_rad = arm_angles::<M>(geometry, pose)?;
     let mut pulse_us = [0.0f32; LEGS];
     for (i, (servo, w)) in servos.0.iter().zip(pulse_us.iter_mut()).enumerate() {
-        let pulse = servo.pulse_us(arm_rad[i], geometry.alpha0_rad(i));
+        let pulse = servo.pulse_us_with::<M>(arm_rad[i], geometry.alpha0_rad(i));
         if !servo.allows(pulse) {
             return Err(IkError::ServoLimit {
                 servo: i as u8 + 1,

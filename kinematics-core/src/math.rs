@@ -3,6 +3,15 @@
 //! The core is generic over [`Math`] so that the same algorithm runs with `libm` on the host (and
 //! in host tests) and with the RP2040 boot ROM's faster float routines in the firmware. All
 //! angles are in radians.
+//!
+//! The IK's hot loop also does its arithmetic through the trait ([`Math::add`], [`Math::sub`],
+//! [`Math::mul`], via [`Real`]): by default that is plain `f32` arithmetic, but a board whose
+//! compiler-inserted float routines are slow (the RP2040's add finiteness checks around each
+//! boot ROM call) may call its float routines directly. The operations and their order are the
+//! same either way, so the host runs the very algorithm the board runs.
+
+use core::marker::PhantomData;
+use core::ops::{Add, Mul, Neg, Sub};
 
 /// Scalar functions used by the kinematics. Implementations must return NaN (never panic) for
 /// inputs outside their domain; callers check results for finiteness.
@@ -13,6 +22,80 @@ pub trait Math {
     fn sqrt(x: f32) -> f32;
     /// Four-quadrant arc tangent of `y / x`, in `(-pi, pi]`.
     fn atan2(y: f32, x: f32) -> f32;
+
+    /// `a + b`, correctly rounded when the operands and the result are finite. Otherwise the
+    /// result is unspecified (the boot ROM does not follow IEEE there): callers keep their
+    /// operands finite and bounded (the IK checks the pose and bounds `|l|^2` first).
+    #[inline]
+    fn add(a: f32, b: f32) -> f32 {
+        a + b
+    }
+
+    /// `a - b`, as [`Math::add`].
+    #[inline]
+    fn sub(a: f32, b: f32) -> f32 {
+        a - b
+    }
+
+    /// `a * b`, as [`Math::add`].
+    #[inline]
+    fn mul(a: f32, b: f32) -> f32 {
+        a * b
+    }
+}
+
+/// An `f32` whose `+`, `-` and `*` go through [`Math`], so formulas read as written.
+#[derive(Debug)]
+pub struct Real<M>(pub f32, PhantomData<M>);
+
+impl<M> Real<M> {
+    /// Wraps a value.
+    #[inline]
+    pub const fn new(x: f32) -> Self {
+        Real(x, PhantomData)
+    }
+}
+
+impl<M> Clone for Real<M> {
+    #[inline]
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+
+impl<M> Copy for Real<M> {}
+
+impl<M: Math> Add for Real<M> {
+    type Output = Self;
+    #[inline]
+    fn add(self, rhs: Self) -> Self {
+        Real::new(M::add(self.0, rhs.0))
+    }
+}
+
+impl<M: Math> Sub for Real<M> {
+    type Output = Self;
+    #[inline]
+    fn sub(self, rhs: Self) -> Self {
+        Real::new(M::sub(self.0, rhs.0))
+    }
+}
+
+impl<M: Math> Mul for Real<M> {
+    type Output = Self;
+    #[inline]
+    fn mul(self, rhs: Self) -> Self {
+        Real::new(M::mul(self.0, rhs.0))
+    }
+}
+
+impl<M> Neg for Real<M> {
+    type Output = Self;
+    /// Exact (flips the sign bit), so no [`Math`] routine is needed.
+    #[inline]
+    fn neg(self) -> Self {
+        Real::new(-self.0)
+    }
 }
 
 /// [`Math`] backed by the portable `libm` crate (correctly rounded or nearly so).

@@ -4,7 +4,7 @@
 //! `R = Rz(yaw) * Ry(pitch) * Rx(roll)` (seed 001, eq. 1): yaw about z, then pitch about the new
 //! y, then roll about the new x.
 
-use crate::math::Math;
+use crate::math::{Math, Real};
 use crate::Mat3;
 
 /// A platform pose relative to home.
@@ -144,19 +144,25 @@ impl Pose {
     /// The rotation matrix `R = Rz(yaw) Ry(pitch) Rx(roll)`, written out as in seed 001 eq. 1.
     /// Angles must be finite; keep them within +-2*pi (the boot ROM's sin/cos need |x| < 128).
     pub fn rotation<M: Math>(&self) -> Mat3 {
-        let (s_phi, c_phi) = M::sin_cos(self.roll_rad);
-        let (s_theta, c_theta) = M::sin_cos(self.pitch_rad);
-        let (s_psi, c_psi) = M::sin_cos(self.yaw_rad);
+        let sin_cos = |x: f32| {
+            let (s, c) = M::sin_cos(x);
+            (Real::<M>::new(s), Real::<M>::new(c))
+        };
+        let (s_phi, c_phi) = sin_cos(self.roll_rad);
+        let (s_theta, c_theta) = sin_cos(self.pitch_rad);
+        let (s_psi, c_psi) = sin_cos(self.yaw_rad);
+        // Shared products, so each entry costs at most two multiplications.
+        let (cs, ss) = (c_psi * s_theta, s_psi * s_theta);
         Mat3::new(
-            c_psi * c_theta,
-            -s_psi * c_phi + c_psi * s_theta * s_phi,
-            s_psi * s_phi + c_psi * s_theta * c_phi,
-            s_psi * c_theta,
-            c_psi * c_phi + s_psi * s_theta * s_phi,
-            -c_psi * s_phi + s_psi * s_theta * c_phi,
-            -s_theta,
-            c_theta * s_phi,
-            c_theta * c_phi,
+            (c_psi * c_theta).0,
+            (cs * s_phi - s_psi * c_phi).0,
+            (s_psi * s_phi + cs * c_phi).0,
+            (s_psi * c_theta).0,
+            (c_psi * c_phi + ss * s_phi).0,
+            (ss * c_phi - c_psi * s_phi).0,
+            -s_theta.0,
+            (c_theta * s_phi).0,
+            (c_theta * c_phi).0,
         )
     }
 }

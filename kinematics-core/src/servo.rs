@@ -8,6 +8,7 @@
 use core::f32::consts::PI;
 use core::fmt;
 
+use crate::math::{Libm, Math, Real};
 use crate::LEGS;
 
 /// Default home pulse `W0`, us (seed 001: nominally 1500 us).
@@ -86,7 +87,20 @@ impl ServoConfig {
     /// Pulse width for an arm angle, us (eq. 13 / 14). Not limited; see [`ServoConfig::allows`].
     #[inline]
     pub fn pulse_us(&self, alpha_rad: f32, alpha0_rad: f32) -> f32 {
-        self.home_us + self.direction.sign() * (alpha_rad - alpha0_rad) * self.rate_us_per_rad
+        self.pulse_us_with::<Libm>(alpha_rad, alpha0_rad)
+    }
+
+    /// [`ServoConfig::pulse_us`] with `M`'s arithmetic (the IK's hot path); the same
+    /// operations, so the same result. The direction's sign is applied exactly (negation).
+    /// The angles must be finite (see [`Math::add`]).
+    #[inline]
+    pub fn pulse_us_with<M: Math>(&self, alpha_rad: f32, alpha0_rad: f32) -> f32 {
+        let offset_rad = Real::<M>::new(alpha_rad) - Real::new(alpha0_rad);
+        let signed_rad = match self.direction {
+            Direction::Normal => offset_rad,
+            Direction::Reversed => -offset_rad,
+        };
+        (Real::new(self.home_us) + signed_rad * Real::new(self.rate_us_per_rad)).0
     }
 
     /// Arm angle for a pulse width, rad (the inverse of [`ServoConfig::pulse_us`]).

@@ -1,0 +1,246 @@
+// `./dev bench`: the IK and firmware benchmarks in the emulator; writes BENCHMARKS.md.
+//
+//   node src/bench.js [--poses N] [--seed S] [--lines N] [--out PATH]
+//
+// Expects `cargo fw` to have built the firmware and the benchmark firmware (./dev bench does).
+
+import { writeFileSync } from 'node:fs';
+import { dirname, join, relative } from 'node:path';
+import { fileURLToPath } from 'node:url';
+import { parseArgs } from 'node:util';
+
+import { DEFAULT_ELF } from './board.js';
+import { sectionSizes, symbolValues } from './elf.js';
+import {
+  measureLatency,
+  measureLockStep,
+  measureStream,
+  measureWorstCommand,
+  stackHighWaterBytes,
+} from './firmware-bench.js';
+import { benchPoses, profileIk, runIkBench } from './ik-bench.js';
+
+const REPO = join(dirname(fileURLToPath(import.meta.url)), '..', '..');
+const CLOCK_HZ = 125e6;
+const WATCHDOG_MS = 500;
+const STREAM_BAUD = 921600;
+/**
+ * The IK before the fast path (commit 2e2bad8: rp2040-hal's `float_funcs` wrappers, `fsin` and
+ * `fcos` called separately, all arithmetic through the hal's intrinsics), measured once with
+ * this harness on the same 200 poses (seed 1).
+ */
+const BEFORE = { commit: '2e2bad8', mean: 40582, min: 40325, max: 40872 };
+
+const { values: args } = parseArgs({
+  options: {
+    poses: { type: 'string', default: '200' },
+    seed: { type: 'string', default: '1' },
+    lines: { type: 'string', default: '2000' },
+    out: { type: 'string', default: join(REPO, 'BENCHMARKS.md') },
+  },
+});
+
+const log = (text) => process.stderr.write(`${text}\n`);
+const us = (cycles) => (cycles / CLOCK_HZ) * 1e6;
+const fmt = (x, digits = 0) => x.toLocaleString('en-US', { maximumFractionDigits: digits, minimumFractionDigits: digits });
+
+/** A smooth streaming path: small steps in all six coordinates (mm, degrees). */
+function streamLines(count) {
+  return Array.from({ length: count }, (_, i) => {
+    const a = i * 0.01;
+    const v = [
+      10 * Math.cos(a),
+      10 * Math.sin(a),
+      2 * Math.sin(3 * a),
+      3 * Math.sin(a),
+      3 * Math.cos(2 * a),
+      5 * Math.sin(a / 2),
+    ];
+    return `pose ${v.map((x) => x.toFixed(3)).join(' ')}`;
+  });
+}
+
+// ---- IK ----
+log(`IK: ${args.poses} random reachable poses (seed ${args.seed}) ...`);
+const poses = benchPoses(Number(args.poses), Number(args.seed));
+const ik = runIkBench(poses);
+if (ik.failures.length > 0) {
+  throw new Error(`the chip refused ${ik.failures.length} poses the host solved: ${JSON.stringify(ik.failures[0])}`);
+}
+
+const profile = profileIk(poses.slice(0, 5));
+
+// ---- latency ----
+log('latency ...');
+const steps = streamLines(41).map((line) => line.slice('pose '.length));
+const latencySmall = measureLatency(steps.slice(1), { from: steps[0] });
+const latencyJump = measureLatency(['5 0 0 0 0 0', '0 0 0 0 0 0', '0 0 5 0 0 0']);
+const latencySmallFast = measureLatency(steps.slice(1), { baud: STREAM_BAUD, from: steps[0] });
+
+// ---- sustained ----
+const lines = streamLines(Number(args.lines));
+const bytesPerLine = lines.reduce((n, line) => n + line.length + 1, 0) / lines.length;
+log(`sustained: ${lines.length} lines at ${STREAM_BAUD} baud ...`);
+const rates = [];
+for (const linesPerSecond of [1000, 1200, 1400, 1600, 1800, Infinity]) {
+  const result = measureStream(lines, { baud: STREAM_BAUD, linesPerSecond });
+  rates.push({ offered: linesPerSecond, ...result });
+  log(`  offered ${linesPerSecond}/s: ${result.ok}/${result.lines} ok, ${fmt(result.linesPerSecond)} lines/s`);
+  if (result.ok !== result.lines) {
+    break;
+  }
+}
+const lockStep = measureLockStep(lines.slice(0, 500), { baud: STREAM_BAUD });
+
+// ---- worst case ----
+log('worst-case command ...');
+const worst = measureWorstCommand();
+
+// ---- sizes ----
+const sizes = (elf) => {
+  const s = sectionSizes(elf);
+  const get = (name) => s[name] ?? 0;
+  const flash = get('.vector_table') + get('.boot2') + get('.text') + get('.rodata') + get('.data');
+  const ram = get('.data') + get('.bss') + get('.uninit');
+  return { s, get, flash, ram };
+};
+const fw = sizes(DEFAULT_ELF);
+const symbols = symbolValues(DEFAULT_ELF, ['_stack_end', '_stack_start']);
+const stackBytes = stackHighWaterBytes(worst.board, {
+  stackEnd: symbols._stack_end,
+  stackStart: symbols._stack_start,
+});
+
+// ---- report ----
+const passing = rates.filter((r) => r.ok === r.lines);
+const best = passing[passing.length - 1];
+const rateRows = rates
+  .map((r) => {
+    const offered = Number.isFinite(r.offered) ? `${fmt(r.offered)}/s` : `back to back (wire limit ${fmt(r.wireLinesPerSecond)}/s)`;
+    const outcome = r.ok === r.lines ? 'all `ok`' : `refused lines; ${r.droppedBytes} bytes lost in the UART FIFO; first error: \`${r.errors[0] ?? ''}\``;
+    const accepted = r.ok === r.lines ? `${fmt(r.linesPerSecond)}/s` : `${r.ok} of ${r.lines} lines`;
+    return `| ${offered} | ${accepted} | ${outcome} |`;
+  })
+  .join('\n');
+const stat = (values) => {
+  const sum = values.reduce((a, b) => a + b, 0);
+  return { mean: sum / values.length, min: Math.min(...values), max: Math.max(...values) };
+};
+const small = stat(latencySmall);
+const smallFast = stat(latencySmallFast);
+const jump = stat(latencyJump);
+const rel = (path) => relative(REPO, path);
+
+const report = `# Benchmarks
+
+Written by \`./dev bench\` (${new Date().toISOString().slice(0, 10)}). Everything is measured in the rp2040js emulator (1.4.1, boot ROM B1)
+running the release ELFs \`cargo fw\` builds: cycle counts and emulated time are those of the
+emulated Cortex-M0+ at 125 MHz, so **they are the same on every machine and every run** (the
+wall-clock time the run takes is irrelevant). The emulator counts documented M0+ instruction
+timings; it has no flash/XIP cache model (a real Pico running from flash through its cache can
+be slower on a cache miss; code in the cache or in RAM matches).
+
+## IK: pose -> six pulse widths
+
+The firmware's own IK (\`kinematics_core::ik::solve\` with \`firmware::rom_math::RomMath\`, the code
+path \`control::Controller\` runs for every pose: rotation, six legs, six pulse widths, limits)
+in a benchmark firmware (\`firmware/src/bin/bench.rs\`) that shares the same code. GP16 is high
+exactly while one IK runs; the harness reads the emulator's cycle counter at its edges and
+subtracts an empty bracket (the marker's own cost). ${ik.poses} random poses reachable within the
+default servo limits (seed ${args.seed}, from \`cargo run -p host-tests --example bench_poses\`).
+
+| | cycles per IK, mean | min | max | us at 125 MHz (mean) |
+|---|---:|---:|---:|---:|
+| ROM path (firmware) | ${fmt(ik.rom.mean)} | ${fmt(ik.rom.min)} | ${fmt(ik.rom.max)} | ${fmt(us(ik.rom.mean), 1)} |
+| before: ROM through rp2040-hal's wrappers (commit ${BEFORE.commit}, measured once) | ${fmt(BEFORE.mean)} | ${fmt(BEFORE.min)} | ${fmt(BEFORE.max)} | ${fmt(us(BEFORE.mean), 1)} |
+| same IK with \`libm\` (straightforward port) | ${fmt(ik.libm.mean)} | ${fmt(ik.libm.min)} | ${fmt(ik.libm.max)} | ${fmt(us(ik.libm.mean), 1)} |
+
+Speed-up: ${fmt(BEFORE.mean / ik.rom.mean, 2)}x over the firmware before, ${fmt(ik.libm.mean / ik.rom.mean, 2)}x over the \`libm\` build. (Both builds already route \`f32\` add/sub/mul/div to the boot ROM
+through rp2040-hal's intrinsics; a build without them is slower still.)
+
+Where the ROM path's cycles go (per IK, ${Math.min(5, ik.poses)} poses, instruction by instruction):
+
+| | cycles | calls |
+|---|---:|---:|
+${profile.map((row) => `| ${row.name} | ${fmt(row.cycles)} | ${row.calls ? fmt(row.calls, 1) : ''} |`).join('\n')}
+
+Accuracy, largest pulse-width difference over the ${ik.poses} poses:
+
+| | max error |
+|---|---:|
+| ROM path on the chip vs independent f64 reference (\`host-tests/src/reference.rs\`, numeric) | ${ik.worst.romVsRef.toExponential(2)} us |
+| \`libm\` path on the chip vs the f64 reference | ${ik.worst.libmVsRef.toExponential(2)} us |
+| ROM path on the chip vs the host's f32 \`libm\` IK (same algorithm) | ${ik.worst.romVsHost.toExponential(2)} us |
+
+Target: at most 0.01 us (one PWM count is 0.32 us). The ROM's routines against \`libm\` on the
+chip: sin ${ik.mathDiff.sin.toExponential(1)}, cos (left in r1 by \`fsin\`) ${ik.mathDiff.cos.toExponential(1)}, sqrt ${ik.mathDiff.sqrt.toExponential(1)} (relative), atan2 ${ik.mathDiff.atan2.toExponential(1)} rad.
+
+## Command to output
+
+The real firmware (\`target/thumbv6m-none-eabi/release/firmware\`), echo off, speed limits off
+(jumps, the streaming mode). Latency is from the last byte (LF) of a \`pose\` line entering the
+UART to the moment all six new compare values have been written to the PWM registers
+(parse, validation, IK of the target and its path check, reply, write); the harness hooks the
+emulator's PWM register writes. The registers are double-buffered: the pulses change at the
+next PWM period start (at most one frame, 20 ms at 50 Hz, later; no pulse is cut short).
+
+| pose lines | latency mean | min | max |
+|---|---:|---:|---:|
+| streaming steps (${latencySmall.length} lines, <= 0.5 mm / 0.25 deg apart: one IK) at 115,200 baud | ${fmt(small.mean)} us | ${fmt(small.min)} us | ${fmt(small.max)} us |
+| the same at 921,600 baud | ${fmt(smallFast.mean)} us | ${fmt(smallFast.min)} us | ${fmt(smallFast.max)} us |
+| 5 mm jumps (path checked every 0.5 mm: 10 IKs) | ${fmt(jump.mean)} us | ${fmt(jump.min)} us | ${fmt(jump.max)} us |
+
+Target: under 500 us. With a speed limit set, the first step of a move comes with the next
+servo frame instead (up to one frame later), so that no frame moves more than the limit.
+
+## Sustained pose lines per second
+
+${lines.length} \`pose\` lines of a smooth path (${fmt(bytesPerLine, 1)} bytes each on average), echo off, speeds off, at ${fmt(STREAM_BAUD)}
+baud, sent evenly spaced at the offered rate without waiting for replies; every line must get
+\`ok\` (and no byte may be lost).
+
+| offered | accepted and applied | outcome |
+|---|---:|---|
+${rateRows}
+
+Highest rate with every line accepted: **${best ? fmt(best.linesPerSecond) : 'none'} lines/s**. A host that waits for each \`ok\` before
+sending the next line gets ${fmt(lockStep.linesPerSecond)} lines/s (${lockStep.ok}/${lockStep.lines} ok). Target: at least 1,000 lines/s.
+
+## Worst-case command vs the watchdog
+
+The longest a command can keep the main loop: a move whose path check solves the IK at every
+one of ${worst.checks} frames (the budget, \`control::motion::MAX_PATH_CHECKS\`): 20.48 mm at 1 mm/s,
+50 Hz. From its line end to its reply: **${fmt(worst.micros / 1000, 1)} ms** (${fmt(worst.cycles)} cycles), against the
+${WATCHDOG_MS} ms watchdog. Frames due meanwhile are reported as missed; the pulses hold.
+
+## Firmware size
+
+From the ELF sections of \`${rel(DEFAULT_ELF)}\` (release, LTO):
+
+| section | bytes |
+|---|---:|
+${Object.entries(fw.s)
+  .map(([name, size]) => `| \`${name}\` | ${fmt(size)} |`)
+  .join('\n')}
+| **flash** (vector table + boot2 + text + rodata + data) | **${fmt(fw.flash)}** of 2,097,152 |
+| **static RAM** (data + bss + uninit) | **${fmt(fw.ram)}** of 264 KiB |
+
+The controller, the transmit buffer and the receive queue live on the stack of \`main\` (not
+in the static figure). Stack high-water mark after the worst-case command above (the deepest
+non-zero RAM word below the stack top; RAM starts zeroed): **${fmt(stackBytes)} bytes**.
+
+## How to run
+
+\`\`\`sh
+./dev bench                  # builds, runs everything above, rewrites BENCHMARKS.md (a few minutes)
+node emulator/src/bench.js --poses 1000 --seed 7   # more poses, another seed
+\`\`\`
+
+Files: \`firmware/src/bin/bench.rs\` (IK benchmark firmware), \`host-tests/examples/bench_poses.rs\`
+(poses and f64 reference pulses), \`emulator/src/ik-bench.js\`, \`emulator/src/firmware-bench.js\`,
+\`emulator/src/bench.js\` (this report). \`emulator/test/rom-math.test.js\` runs a small IK
+comparison in \`./dev test\` (no timing assertions).
+`;
+writeFileSync(args.out, report);
+log(`wrote ${rel(args.out)}`);
+log(`IK ${fmt(ik.rom.mean)} cycles (libm ${fmt(ik.libm.mean)}), max error ${ik.worst.romVsRef.toExponential(2)} us; latency ${fmt(small.mean)} us; sustained ${best ? fmt(best.linesPerSecond) : 'none'} lines/s; worst command ${fmt(worst.micros / 1000, 1)} ms`);

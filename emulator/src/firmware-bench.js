@@ -1,0 +1,193 @@
+// Timing of the real firmware in the emulator (emulated time): command-to-output latency,
+// sustained pose lines per second, the worst-case command against the watchdog.
+
+import { EmulatedBoard } from './board.js';
+
+const RAM_START = 0x20000000;
+
+const CHANNEL_BYTES = 0x14; // one PWM slice's registers
+const CHANNEL_CC = 0x0c; // compare values (channel A low half, B high half)
+const SERVO_SLICES = [1, 2, 3]; // servo 1..6 = slices 1..3, channels A and B
+const LF = 0x0a;
+
+/**
+ * The real firmware, booted, echo off, speed limits off (jumps), at `baud`, with the
+ * emulator's PWM compare-register writes and UART RX deliveries time-stamped.
+ */
+export function streamingBoard({ baud = 115200, elf } = {}) {
+  const board = new EmulatedBoard(elf ? { elf } : {});
+  const ccWrites = [];
+  const pwm = board.mcu.pwm;
+  const writeRegister = pwm.writeUint32.bind(pwm);
+  pwm.writeUint32 = (offset, value) => {
+    const slice = Math.floor(offset / CHANNEL_BYTES);
+    if (offset < 8 * CHANNEL_BYTES && offset % CHANNEL_BYTES === CHANNEL_CC) {
+      ccWrites.push({ nanos: board.nanos, slice, value: value >>> 0 });
+    }
+    writeRegister(offset, value);
+  };
+  const lineEnds = [];
+  const uart = board.mcu.uart[0];
+  const feedByte = uart.feedByte.bind(uart);
+  uart.feedByte = (byte) => {
+    if (byte === LF) {
+      lineEnds.push(board.nanos);
+    }
+    feedByte(byte);
+  };
+  board.boot();
+  for (const line of ['set echo off', 'set speed_mm_s off', 'set speed_deg_s off']) {
+    expectOk(board, line);
+  }
+  if (baud !== 115200) {
+    expectOk(board, `set baud ${baud}`);
+    board.runMs(5); // the reply goes out at the old rate, then the UART switches
+  }
+  return { board, ccWrites, lineEnds };
+}
+
+function expectOk(board, line, options) {
+  const { reply } = board.request(line, options);
+  if (reply !== 'ok') {
+    throw new Error(`${line}: ${reply}`);
+  }
+}
+
+/** The compare registers of the servo slices as they stand, `{ slice: value }`. */
+function ccState(board) {
+  return Object.fromEntries(
+    SERVO_SLICES.map((slice) => [slice, board.mcu.pwm.channels[slice].readRegister(CHANNEL_CC)]),
+  );
+}
+
+/**
+ * Latency of `pose` lines: from the line's last byte (LF) reaching the UART to the moment the
+ * compare registers all hold the new pose's values (they latch at the next PWM period).
+ * Starts at pose `from` (mm, degrees as typed; default home). Returns microseconds per pose.
+ */
+export function measureLatency(poses, { baud = 115200, from } = {}) {
+  const { board, ccWrites, lineEnds } = streamingBoard({ baud });
+  if (from) {
+    expectOk(board, `pose ${from}`); // where the measured lines start from (not measured)
+  }
+  const latenciesUs = [];
+  for (const [i, pose] of poses.entries()) {
+    // Lines land at spread-out phases of the 20 ms servo frame (a frame may coincide).
+    board.runMs((i * 7.3) % 20);
+    const before = ccState(board);
+    const writesBefore = ccWrites.length;
+    expectOk(board, `pose ${pose}`);
+    const lineEnd = lineEnds[lineEnds.length - 1];
+    board.runMs(1);
+    const final = ccState(board);
+    if (SERVO_SLICES.every((s) => final[s] === before[s])) {
+      throw new Error(`pose ${pose} did not change the compare registers`);
+    }
+    // Replay the writes since the line ended: when did the registers first all hold `final`?
+    const state = { ...before };
+    let doneNanos = null;
+    for (const write of ccWrites.slice(writesBefore)) {
+      state[write.slice] = write.value;
+      if (write.nanos >= lineEnd && SERVO_SLICES.every((s) => state[s] === final[s])) {
+        doneNanos = write.nanos;
+        break;
+      }
+    }
+    if (doneNanos === null) {
+      throw new Error(`pose ${pose}: new compare values not seen`);
+    }
+    latenciesUs.push((doneNanos - lineEnd) / 1000);
+  }
+  return latenciesUs;
+}
+
+/**
+ * Streams `lines` at `baud`, `linesPerSecond` evenly spaced (`Infinity`: back to back, as fast
+ * as the wire allows), without waiting for replies, and counts the replies.
+ * Returns { lines, ok, errors, droppedBytes, seconds, linesPerSecond, wireLinesPerSecond }.
+ */
+export function measureStream(lines, { baud = 921600, linesPerSecond = Infinity } = {}) {
+  const { board } = streamingBoard({ baud });
+  const first = board.lines.length;
+  const startNanos = board.nanos;
+  const bytes = lines.reduce((n, line) => n + line.length + 1, 0);
+  const wireSeconds = (bytes * 10) / baud;
+  if (Number.isFinite(linesPerSecond)) {
+    const periodNanos = 1e9 / linesPerSecond;
+    for (const [i, line] of lines.entries()) {
+      board.runUntil(() => board.nanos >= startNanos + i * periodNanos, { timeoutMs: 1000 });
+      board.sendLine(line);
+    }
+  } else {
+    board.sendBytes(lines.map((line) => `${line}\n`).join(''));
+  }
+  const replies = () => board.lines.length - first;
+  board.runUntil(() => replies() >= lines.length, { timeoutMs: 2000 });
+  const seconds = (board.nanos - startNanos) / 1e9;
+  const got = board.lines.slice(first);
+  const ok = got.filter((line) => line === 'ok').length;
+  return {
+    lines: lines.length,
+    ok,
+    errors: got.filter((line) => line !== 'ok').slice(0, 3),
+    droppedBytes: board.rxFifoDroppedBytes,
+    seconds,
+    linesPerSecond: ok / seconds,
+    wireLinesPerSecond: lines.length / wireSeconds,
+  };
+}
+
+/** Sends each line when the previous reply has arrived (a host that waits for `ok`). */
+export function measureLockStep(lines, { baud = 921600 } = {}) {
+  const { board } = streamingBoard({ baud });
+  const startNanos = board.nanos;
+  let ok = 0;
+  for (const line of lines) {
+    if (board.request(line).reply === 'ok') {
+      ok++;
+    }
+  }
+  const seconds = (board.nanos - startNanos) / 1e9;
+  return { lines: lines.length, ok, seconds, linesPerSecond: ok / seconds };
+}
+
+/**
+ * The longest command: a move whose path check solves the IK for the most poses (one per
+ * frame of a 1024-frame move, the budget), timed from its line end to its reply.
+ * Returns { checks, micros, cycles }.
+ */
+export function measureWorstCommand() {
+  const { board, lineEnds } = streamingBoard();
+  expectOk(board, 'pose 0 0 -10 0 0 0');
+  board.runMs(50);
+  // 20.48 mm at 1 mm/s and 50 Hz: 1024 frames, each checked.
+  expectOk(board, 'set speed_mm_s 1');
+  const cyclesBefore = board.cycles;
+  const { reply } = board.request('pose 0 0 10.48 0 0 0', { timeoutMs: 2000 });
+  if (reply !== 'ok') {
+    throw new Error(`worst-case move refused: ${reply}`);
+  }
+  const replyNanos = board.nanos;
+  return {
+    checks: 1024,
+    micros: (replyNanos - lineEnds[lineEnds.length - 1]) / 1000,
+    cycles: board.cycles - cyclesBefore,
+    board,
+  };
+}
+
+/**
+ * The stack's high-water mark so far, bytes: RAM starts zeroed, so the lowest non-zero word
+ * between `stackEnd` (the end of the static data) and `stackStart` (the top) bounds how deep
+ * the stack has reached (a lower bound: the deepest words might have been written as zero).
+ */
+export function stackHighWaterBytes(board, { stackEnd, stackStart }) {
+  const sram = board.mcu.sram;
+  for (let address = stackEnd; address < stackStart; address += 4) {
+    const offset = address - RAM_START;
+    if (sram[offset] | sram[offset + 1] | sram[offset + 2] | sram[offset + 3]) {
+      return stackStart - address;
+    }
+  }
+  return 0;
+}
