@@ -1,6 +1,6 @@
 // Every command through the real firmware binary: the exact reply shape, the data lines, and
 // the servo pins. Expected pulses come from the host build of kinematics-core
-// (src/host-reference.js), expected formats and defaults from control/README.md.
+// (src/host-reference.js), expected formats and defaults from README.md.
 
 import assert from 'node:assert/strict';
 import { existsSync, readFileSync } from 'node:fs';
@@ -227,7 +227,7 @@ test('stop mid-move freezes where it is: pins constant, pose on the line between
 });
 
 /**
- * The default paired layout (control/README.md: three pairs of servos 120 degrees apart;
+ * The default paired layout (README.md: three pairs of servos 120 degrees apart;
  * kinematics-core PairedLayout), computed here in f64: servo 2k+1 at 120k - 20 deg, 2k+2 at
  * 120k + 20 deg on r = 75 mm, their joints at 120k - 60 + 20 and 120k + 60 - 20 deg on
  * r = 60 mm, arms tangential pointing away from the pair centre (beta = angle -+ 90 deg);

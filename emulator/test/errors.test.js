@@ -1,7 +1,7 @@
 // Every error class through the real firmware binary: the reply is exactly one line
 // `error:<code> <message>` naming what is wrong, nothing moves (pins constant over the
 // following frames, status and config unchanged), and the next good line works. The codes
-// come from control/README.md; the last test checks that each documented code that can be
+// come from README.md; the last test checks that each documented code that can be
 // produced through the wire was produced here.
 
 import assert from 'node:assert/strict';
@@ -28,7 +28,7 @@ import {
 } from '../src/e2e-support.js';
 import { HostReference } from '../src/host-reference.js';
 
-const README = readFileSync(new URL('../../control/README.md', import.meta.url), 'utf8');
+const README = readFileSync(new URL('../../README.md', import.meta.url), 'utf8');
 const REPORT_RS = readFileSync(new URL('../../control/src/report.rs', import.meta.url), 'utf8');
 /** Documented as impossible from typed input (typed non-finite numbers are `not-finite`). */
 const NOT_REACHABLE_FROM_THE_WIRE = new Set(['pose-not-finite']);
@@ -247,7 +247,7 @@ test('every documented error code exists in the firmware and was produced above 
   const documented = [...README.matchAll(/^\| `error:([a-z-]+)` \|/gm)].map((m) => m[1]);
   const codeEnum = REPORT_RS.slice(REPORT_RS.indexOf('pub const fn as_str'));
   const implemented = [...codeEnum.slice(0, codeEnum.indexOf('\n    }\n')).matchAll(/=> "([a-z-]+)",/g)].map((m) => m[1]);
-  assert.ok(documented.length >= 20, `found ${documented.length} codes in control/README.md`);
+  assert.ok(documented.length >= 20, `found ${documented.length} codes in README.md`);
   assert.deepEqual([...documented].sort(), [...implemented].sort(), 'README codes = report.rs Code');
   const missing = documented.filter((code) => !observed.has(code) && !NOT_REACHABLE_FROM_THE_WIRE.has(code));
   assert.deepEqual(missing, [], 'documented codes no test produced');

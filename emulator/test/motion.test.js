@@ -1,7 +1,7 @@
 // Smooth motion measured on the pins of the real firmware: straight lines in pose space at the
 // configured speeds, one IK per servo frame, no glitches, and paths that leave the workspace
 // refused before anything moves. Frame counts are computed here from the documented rule
-// (control/README.md "Motion"); per-frame pulses come from the host core (src/host-reference.js).
+// (README.md "Motion"); per-frame pulses come from the host core (src/host-reference.js).
 
 import assert from 'node:assert/strict';
 import { existsSync } from 'node:fs';
@@ -123,7 +123,7 @@ test('at 200 Hz a move takes its duration in 5 ms frames, IK on every frame', ()
 });
 
 /**
- * Two reachable poses whose straight line is not (control/README.md's example), verified with
+ * Two reachable poses whose straight line is not (README.md's example), verified with
  * the host core: both ends solve, some pose between them does not. Returns the first failing
  * fraction of a dense sampling and the core's error there.
  */

@@ -95,7 +95,7 @@ fn main() -> ! {
                     // A jump (speed limits off) is written now, not at the next frame; the
                     // compare registers latch it at the next period start, so no pulse is cut.
                     if let Some(pulses_us) = controller.take_new_pulses() {
-                        servos.set_pulse_widths_us(&pulses_us, &pulse_windows_us(&controller));
+                        servos.set_pulse_widths_us_now(&pulses_us, &pulse_windows_us(&controller));
                     }
                 }
                 // The main loop fell behind and bytes were lost here: that line is refused.
@@ -111,7 +111,7 @@ fn main() -> ! {
         let frames = servos.frames_since_last_poll();
         if frames > 0 {
             let pulses_us = controller.on_frame();
-            servos.set_pulse_widths_us(&pulses_us, &pulse_windows_us(&controller));
+            servos.set_frame_pulse_widths_us(&pulses_us, &pulse_windows_us(&controller));
             controller.write_notices(&mut serial);
             if frames > 1 {
                 defmt::warn!("missed {} servo frames", frames - 1);

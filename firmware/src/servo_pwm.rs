@@ -124,10 +124,29 @@ impl ServoPwm {
         Ok(())
     }
 
-    /// Sets the six pulse widths for the next frame. A non-finite width keeps that servo's
-    /// previous pulse; finite widths are clamped into the servo's window (and into the frame)
-    /// and rounded to the nearest count, so no NaN or out-of-window value reaches a register.
-    pub fn set_pulse_widths_us(
+    /// Sets the six pulse widths computed for the frame that [`ServoPwm::frames_since_last_poll`]
+    /// reported (see [`ServoPwm::set_pulse_widths_us_now`] for the rules on widths).
+    pub fn set_frame_pulse_widths_us(
+        &mut self,
+        widths_us: &[f32; SERVO_COUNT],
+        windows: &[PulseWindowUs; SERVO_COUNT],
+    ) {
+        self.set_pulse_widths_us_now(widths_us, windows);
+        // Not before the register writes above.
+        compiler_fence(Ordering::SeqCst);
+        // These widths latch at the next frame start. A frame that started while they were
+        // being computed (after the caller polled) still shows the previous widths, so it
+        // counts as served: otherwise the next poll would report it and the next widths would
+        // overwrite these before any pin showed them, and the servos would skip a step.
+        self.frames_seen = FRAMES_STARTED.load(Ordering::Relaxed);
+    }
+
+    /// Sets the six pulse widths from the next frame start on, outside the frame rhythm (a
+    /// jump commanded just now); frames still to be served stay pending. A non-finite width
+    /// keeps that servo's previous pulse; finite widths are clamped into the servo's window
+    /// (and into the frame) and rounded to the nearest count, so no NaN or out-of-window value
+    /// reaches a register.
+    pub fn set_pulse_widths_us_now(
         &mut self,
         widths_us: &[f32; SERVO_COUNT],
         windows: &[PulseWindowUs; SERVO_COUNT],
@@ -140,17 +159,10 @@ impl ServoPwm {
             }
         }
         self.write_counts(counts);
-        // Not before the register writes above.
-        compiler_fence(Ordering::SeqCst);
-        // These widths latch at the next frame start. A frame that started while they were
-        // being computed (after the caller polled) still shows the previous widths, so it
-        // counts as served: otherwise the next poll would report it and the next widths would
-        // overwrite these before any pin showed them, and the servos would skip a step.
-        self.frames_seen = FRAMES_STARTED.load(Ordering::Relaxed);
     }
 
     /// How many frames started since the last call (or since the last
-    /// [`ServoPwm::set_pulse_widths_us`], which counts frames that started while its widths were
+    /// [`ServoPwm::set_frame_pulse_widths_us`], which counts frames that started while its widths were
     /// being computed as served): 0 = none yet, 1 = the normal case, more = the main loop
     /// missed frames.
     pub fn frames_since_last_poll(&mut self) -> u32 {
