@@ -325,6 +325,8 @@ test('commands are case-insensitive', () => {
   assertPins(board, solve(moved).pulse_us);
   assert.equal(status(board).state, 'idle');
   assert.equal(board.request('STATUS').reply, 'ok');
+  // `?` is status.
+  assert.deepEqual(ok(board, '?'), ok(board, 'status'));
   assert.equal(board.request('Set Speed_MM_S 40').reply, 'ok');
   assert.ok(ok(board, 'CONFIG').includes('speed_mm_s: 40.000'));
   assert.equal(board.request('HoMe').reply, 'ok');

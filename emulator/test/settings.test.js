@@ -21,6 +21,7 @@ import {
   periodsUs,
   plannedFrames,
   poseText,
+  quantisedUs,
   refused,
   runFrames,
   status,
@@ -242,4 +243,17 @@ test('defaults restores every setting except baud and echo, and the pins follow'
   runFrames(board, plannedFrames(HOME, pose, settings) + 2);
   assert.equal(status(board).state, 'idle');
   assertPins(board, solve(settings, pose));
+});
+
+test('sub-microsecond resolution: trims a third of a microsecond apart give widths one 320 ns count apart', () => {
+  const board = bootQuiet(bootrom);
+  const widths = [];
+  for (const trim of [1500.5, 1500.82, 1501.14]) {
+    ok(board, `set servo1.trim_us ${trim}`);
+    runFrames(board, 3);
+    const width = board.servos()[0].widthNanos;
+    assert.equal(Math.round(width), Math.round(quantisedUs(trim) * 1000), `trim ${trim}`);
+    widths.push(Math.round(width));
+  }
+  assert.deepEqual([widths[1] - widths[0], widths[2] - widths[1]], [COUNT_NANOS, COUNT_NANOS]);
 });
