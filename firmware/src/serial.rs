@@ -4,7 +4,9 @@
 //! the 32-byte hardware FIFO into a lock-free queue that the main loop reads. It never waits:
 //! when the queue is full it drops the byte and counts it, and the main loop is told where in
 //! the byte stream the loss happened ([`Received::Lost`]), so exactly the damaged line can be
-//! refused.
+//! refused. After a loss, bytes are dropped until the main loop has reached it, so a loss is
+//! always one contiguous gap. A byte with a line error (framing, parity, break, overrun) counts
+//! as lost the same way.
 //!
 //! Transmit: the main loop writes replies into a software buffer (`core::fmt::Write`) and calls
 //! [`Serial::send_some`] each pass, which moves only what fits into the 32-byte TX FIFO.
@@ -291,8 +293,11 @@ impl Shared {
                 Err(nb::Error::WouldBlock) => break,
                 Err(nb::Error::Other(error)) => {
                     self.rx.line_errors = self.rx.line_errors.wrapping_add(1);
-                    // `discarded` holds the good bytes read before the bad one.
+                    // `discarded` holds the good bytes read before the bad one. The bad one
+                    // (framing, parity, break) or the ones the hardware FIFO could not take
+                    // (overrun) are lost: the line they belong to must be refused too.
                     self.rx.enqueue(error.discarded);
+                    self.rx.lose(1);
                 }
             }
         }
@@ -302,19 +307,25 @@ impl Shared {
 impl Receiver {
     fn enqueue(&mut self, bytes: &[u8]) {
         for &byte in bytes {
-            if self.queue.enqueue(byte).is_ok() {
+            // Once a byte is lost, every byte is dropped until the main loop has reached the
+            // gap (the queue is then empty) and taken the loss: the gap stays one contiguous
+            // stretch at one known position, so the line it cuts is refused and no line is
+            // ever pieced together from fragments around a gap the main loop was not told of.
+            if self.loss.is_none() && self.queue.enqueue(byte).is_ok() {
                 self.enqueued = self.enqueued.wrapping_add(1);
                 continue;
             }
-            // Losses not yet reported merge into the first one (conservative: the earlier
-            // line is refused).
-            let loss = self.loss.get_or_insert(Loss {
-                after: self.enqueued,
-                bytes: 0,
-            });
-            loss.bytes = loss.bytes.wrapping_add(1);
-            RX_LOSS_PENDING.store(true, Ordering::Relaxed);
+            self.lose(1);
         }
+    }
+
+    fn lose(&mut self, bytes: u32) {
+        let loss = self.loss.get_or_insert(Loss {
+            after: self.enqueued,
+            bytes: 0,
+        });
+        loss.bytes = loss.bytes.wrapping_add(bytes);
+        RX_LOSS_PENDING.store(true, Ordering::Relaxed);
     }
 }
 
