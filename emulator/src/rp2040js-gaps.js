@@ -17,7 +17,8 @@
 // 4. Watchdog expiry: rp2040js calls `onWatchdogTrigger`, then re-arms the alarm of a counter
 //    that sits at 0, so it fires again at the same instant forever and emulated time stops.
 //    `onWatchdogExpiry` stops the watchdog timer when it fires and reports it once (a real
-//    chip would reset; a reset through the boot ROM is not possible here anyway).
+//    chip would reset; a reset through the boot ROM is not possible here, so board.js either
+//    fails the run or, with `onWatchdog: 'reset'`, emulates the reset with a fresh chip).
 
 import { ConsoleLogger, LogLevel } from 'rp2040js';
 
