@@ -26,7 +26,7 @@ use rp2040_hal::{
     fugit::{HertzU32, RateExtU32},
     gpio::{bank0, DefaultTypeState, FunctionUart, Pin, PullNone, PullUp},
     pac::{self, interrupt},
-    uart::{DataBits, Enabled, FifoWatermark, StopBits, UartConfig, UartPeripheral},
+    uart::{DataBits, Enabled, FifoWatermark, ReadErrorType, StopBits, UartConfig, UartPeripheral},
 };
 
 /// Receive queue size; holds `RX_QUEUE_BYTES - 1` bytes (~44 ms of input at 115,200 baud).
@@ -293,11 +293,20 @@ impl Shared {
                 Err(nb::Error::WouldBlock) => break,
                 Err(nb::Error::Other(error)) => {
                     self.rx.line_errors = self.rx.line_errors.wrapping_add(1);
-                    // `discarded` holds the good bytes read before the bad one. The bad one
-                    // (framing, parity, break) or the ones the hardware FIFO could not take
-                    // (overrun) are lost: the line they belong to must be refused too.
-                    self.rx.enqueue(error.discarded);
+                    // `discarded` holds the good bytes read before the error. A framing,
+                    // parity or break error loses the byte after them. An overrun flags a
+                    // good byte (the last one in `discarded`, if any): the bytes the full
+                    // hardware FIFO could not take were lost just before it. Either way the
+                    // line they belong to must be refused, so the loss goes in at its place.
+                    let (before, after) = match error.err_type {
+                        ReadErrorType::Overrun if !error.discarded.is_empty() => {
+                            error.discarded.split_at(error.discarded.len() - 1)
+                        }
+                        _ => (error.discarded, &[][..]),
+                    };
+                    self.rx.enqueue(before);
                     self.rx.lose(1);
+                    self.rx.enqueue(after);
                 }
             }
         }
