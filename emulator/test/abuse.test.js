@@ -119,6 +119,76 @@ function randomBytes(seed, n, { exclude = [] } = {}) {
   return Buffer.from(out);
 }
 
+/**
+ * Accounts for every sent line in the output that followed it: each reply is preceded by its
+ * echo ("> " + the line as the firmware kept it). A line the firmware ran must be exactly a
+ * line that was sent, in order, with the reply `expectedReply(line)`. Whenever sent lines
+ * were skipped, the loss must have been reported in between: by an rx-overflow refusal, or,
+ * for a gap that swallowed the rest of the input (no line end followed yet), by the overflow
+ * notice, written the moment the loss was seen; that cut line is then refused as soon as a
+ * line end arrives. Returns the last line that ran.
+ */
+/** The last `pose` line that ran (its echo followed by `ok`) in the output from `from` on. */
+function lastPoseRun(board, from) {
+  return board.lines
+    .slice(from)
+    .filter((l, k, all) => l.startsWith('> pose') && all[k + 1] === 'ok')
+    .at(-1)
+    .slice(2);
+}
+
+function accountForEveryLine(board, from, sent, expectedReply) {
+  const out = board.lines.slice(from);
+  let next = 0; // index in `sent` of the next line not yet accounted for
+  let refusedSinceLastRun = false;
+  let noticeSinceLastRun = false;
+  let lastRun = null;
+  let overflowErrors = 0;
+  out.forEach((line, k) => {
+    if (line.startsWith('# warning: receive queue overflowed')) {
+      noticeSinceLastRun = true;
+      return;
+    }
+    if (!FINAL_REPLY.test(line)) {
+      return;
+    }
+    if (codeOf(line) === 'rx-overflow') {
+      overflowErrors++;
+      refusedSinceLastRun = true;
+      return;
+    }
+    const echo = out[k - 1];
+    assert.ok(echo.startsWith('> '), `no echo before ${line}: ${echo}`);
+    const text = echo.slice(2);
+    const index = sent.indexOf(text, next);
+    assert.ok(index >= 0, `ran a line that was never sent (or out of order): ${JSON.stringify(text)}`);
+    if (index > next) {
+      assert.ok(refusedSinceLastRun, `lines ${next}..${index - 1} vanished without an rx-overflow`);
+    }
+    assert.ok(line.startsWith(expectedReply(text)), `${text}: ${line}`);
+    lastRun = text;
+    next = index + 1;
+    refusedSinceLastRun = false;
+    noticeSinceLastRun = false;
+  });
+  assert.ok(next < sent.length || overflowErrors > 0, 'nothing was lost: the test did not test');
+  if (next < sent.length) {
+    assert.ok(
+      refusedSinceLastRun || noticeSinceLastRun,
+      `the last ${sent.length - next} lines vanished silently`,
+    );
+  }
+  if (!refusedSinceLastRun && next < sent.length) {
+    // The line cut by the gap is refused as soon as a line end arrives.
+    board.lineCursor = board.lines.length;
+    const { reply } = board.request('');
+    assert.equal(codeOf(reply), 'rx-overflow', reply);
+    overflowErrors++;
+  }
+  assert.ok(overflowErrors > 0, 'bytes were lost but no line was refused');
+  return lastRun;
+}
+
 test('lines ten times the buffer get one line-too-long each and nothing moves', () => {
   const board = bootedBoard();
   const held = steadyPulses(board);
@@ -239,64 +309,49 @@ test('faster than the firmware can act: lost bytes are reported, never lost sile
   const lostReported = notices.reduce((n, l) => n + Number(/(\d+) bytes/.exec(l)[1]), 0);
   assert.ok(notices.length > 0, 'no overflow notice');
 
-  // Walk the output: each reply is preceded by its echo ("> " + the line as the firmware kept
-  // it). A line the firmware ran must be exactly a line that was sent, in order. Whenever sent
-  // lines were skipped, the loss must have been reported in between: by an rx-overflow
-  // refusal, or, for a gap that swallowed the rest of the burst (no line end followed yet),
-  // by the overflow notice, written the moment the bytes were lost.
-  let next = 0; // index in `sent` of the next line not yet accounted for
-  let refusedSinceLastRun = false;
-  let noticeSinceLastRun = false;
-  let lastRun = null;
-  let overflowErrors = 0;
-  out.forEach((line, k) => {
-    if (line.startsWith('# warning: receive queue overflowed')) {
-      noticeSinceLastRun = true;
-      return;
-    }
-    if (!FINAL_REPLY.test(line)) {
-      return;
-    }
-    if (codeOf(line) === 'rx-overflow') {
-      overflowErrors++;
-      refusedSinceLastRun = true;
-      return;
-    }
-    const echo = out[k - 1];
-    assert.ok(echo.startsWith('> '), `no echo before ${line}: ${echo}`);
-    const text = echo.slice(2);
-    const index = sent.indexOf(text, next);
-    assert.ok(index >= 0, `ran a line that was never sent (or out of order): ${JSON.stringify(text)}`);
-    if (index > next) {
-      assert.ok(refusedSinceLastRun, `lines ${next}..${index - 1} vanished without an rx-overflow`);
-    }
-    const want = text.startsWith('pose') ? 'ok' : 'error:unknown-command';
-    assert.ok(line.startsWith(want), `${text}: ${line}`);
-    if (text.startsWith('pose')) {
-      lastRun = text;
-    }
-    next = index + 1;
-    refusedSinceLastRun = false;
-    noticeSinceLastRun = false;
-  });
-  assert.ok(next < sent.length, 'nothing was lost: the burst was not fast enough to test this');
-  assert.ok(
-    refusedSinceLastRun || noticeSinceLastRun,
-    `the last ${sent.length - next} lines vanished silently`,
+  accountForEveryLine(board, from, sent, (text) =>
+    text.startsWith('pose') ? 'ok' : 'error:unknown-command',
   );
+  const lastPose = lastPoseRun(board, from);
   assert.ok(lostReported > 0 && lostReported < totalBytes, `${lostReported} bytes reported lost`);
-  if (!refusedSinceLastRun) {
-    // The line cut by the gap is refused as soon as a line end arrives.
-    board.lineCursor = board.lines.length;
-    const { reply } = board.request('');
-    assert.equal(codeOf(reply), 'rx-overflow', reply);
-    overflowErrors++;
-  }
-  assert.ok(overflowErrors > 0, 'bytes were lost but no line was refused');
 
-  // The platform is where the last line that ran put it.
-  assert.deepEqual(settle(board), referencePulses(lastRun), `not at ${lastRun}`);
-  goodCommandWorks(board, referencePulses(lastRun));
+  // The platform is where the last pose that ran put it.
+  assert.deepEqual(settle(board), referencePulses(lastPose), `not at ${lastPose}`);
+  goodCommandWorks(board, referencePulses(lastPose));
+});
+
+test('bytes the hardware FIFO could not take (interrupts held off) are reported', () => {
+  const board = bootedBoard();
+  const sent = [];
+  for (let i = 1; i <= 12; i++) {
+    sent.push(`pose 0 0 ${i} 0 0 0`);
+  }
+  const from = board.lines.length;
+  board.sendBytes(sent.map((line) => `${line}\n`).join(''));
+  // Part way into the third line, hold every interrupt off for 10 ms (as a long critical
+  // section would): the 32-byte RX FIFO fills and the UART loses the bytes after that (an
+  // overrun), which only the OE flag on the next byte tells the firmware.
+  board.runMs(40 * BYTE_MS);
+  const { core } = board.mcu;
+  const enabled = core.enabledInterrupts;
+  core.enabledInterrupts = 0;
+  board.runMs(10);
+  core.enabledInterrupts = enabled;
+  core.interruptsUpdated = true;
+  core.waiting = false;
+  board.runMs(sent.length * 20 * BYTE_MS + 500);
+  assert.ok(board.rxFifoDroppedBytes > 32, `${board.rxFifoDroppedBytes} bytes lost in the FIFO`);
+  assert.ok(
+    board.lines.slice(from).some((l) => l.startsWith('# warning: receive queue overflowed')),
+    'no notice',
+  );
+  // The lines before the gap ran; the one it cut was refused; after the loss the firmware
+  // drops input until it has caught up with the gap (so a gap is never skipped over).
+  accountForEveryLine(board, from, sent, () => 'ok');
+  const lastPose = lastPoseRun(board, from);
+  assert.ok(sent.indexOf(lastPose) >= 2, `only ${lastPose} ran`);
+  assert.deepEqual(settle(board), referencePulses(lastPose));
+  goodCommandWorks(board, referencePulses(lastPose));
 });
 
 test('a line split across long pauses is one line', () => {
