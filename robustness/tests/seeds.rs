@@ -5,6 +5,8 @@
 use std::fs;
 use std::path::PathBuf;
 
+/// The committed seeds of `target`, plus, if `FUZZ_CORPUS` names a directory, the inputs in
+/// its `<target>/` (e.g. `fuzz/corpus`, for `fuzz/coverage.sh`).
 fn seeds(target: &str) -> Vec<(String, Vec<u8>)> {
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("../fuzz/seeds")
@@ -15,6 +17,12 @@ fn seeds(target: &str) -> Vec<(String, Vec<u8>)> {
         .collect();
     files.sort();
     assert!(!files.is_empty(), "no seeds in {}", dir.display());
+    if let Some(corpus) = std::env::var_os("FUZZ_CORPUS") {
+        let dir = PathBuf::from(corpus).join(target);
+        if let Ok(entries) = fs::read_dir(&dir) {
+            files.extend(entries.map(|entry| entry.expect("readable corpus").path()));
+        }
+    }
     files
         .into_iter()
         .map(|p| {
