@@ -20,7 +20,7 @@ mkdir -p "$out/profiles"
 
 export CARGO_TARGET_DIR=$out/build
 # --target keeps the instrumentation off build scripts (they would leave .profraw files here).
-RUSTFLAGS="-Cinstrument-coverage" cargo test -p robustness --release --test seeds --no-run --target "$host" \
+RUSTFLAGS="-Cinstrument-coverage" cargo test -p robustness --test seeds --no-run --target "$host" \
     --message-format=json 2>/dev/null |
     sed -n 's/.*"executable":"\([^"]*\)".*/\1/p' | tail -n 1 >"$out/binary"
 binary=$(cat "$out/binary")

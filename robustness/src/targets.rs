@@ -19,25 +19,14 @@ const MAX_OPS: usize = 64;
 
 // ----- line assembly -----
 
-#[derive(Debug, Arbitrary)]
-enum ProtoOp {
-    Byte(u8),
-    Text(Vec<u8>),
-    Lost,
-}
-
 /// Line assembly ([`LineBuffer`]) against the reference [`LineModel`]: the same line ends,
-/// the same kept text, the same refusal reasons. Input: raw received bytes, or, after a
-/// leading `0xFE`, structured operations that also include receive-queue losses.
+/// the same kept text, the same refusal reasons. Input: raw received bytes; or, after a
+/// leading `0xFE`, bytes in which `0xFF` stands for "the receive queue lost bytes here"
+/// (every other non-ASCII byte behaves like `0xFF` would as data).
 pub fn protocol(data: &[u8]) {
-    let ops = match data.split_first() {
-        Some((0xFE, rest)) => {
-            let Ok(ops) = Vec::<ProtoOp>::arbitrary_take_rest(Unstructured::new(rest)) else {
-                return;
-            };
-            ops
-        }
-        _ => vec![ProtoOp::Text(data.to_vec())],
+    let (with_losses, bytes) = match data.split_first() {
+        Some((0xFE, rest)) => (true, rest),
+        _ => (false, data),
     };
     let mut lb = LineBuffer::new();
     let mut model = LineModel::new();
@@ -67,18 +56,12 @@ pub fn protocol(data: &[u8]) {
             (e, f) => panic!("byte {b:#04x}: model {e:?}, line buffer {f:?}"),
         }
     };
-    for op in ops {
-        match op {
-            ProtoOp::Byte(b) => feed_byte(b, &mut lb, &mut model),
-            ProtoOp::Text(bytes) => {
-                for b in bytes {
-                    feed_byte(b, &mut lb, &mut model);
-                }
-            }
-            ProtoOp::Lost => {
-                lb.rx_overflow(1);
-                model.lost();
-            }
+    for &b in bytes {
+        if with_losses && b == 0xFF {
+            lb.rx_overflow(1);
+            model.lost();
+        } else {
+            feed_byte(b, &mut lb, &mut model);
         }
     }
 }
