@@ -5,7 +5,9 @@
 //!   line; Ctrl-C (0x03) and Ctrl-X (0x18) abandon the line (no reply: it never completed).
 //! - Tab counts as a space. Other control characters are ignored, and so are terminal escape
 //!   sequences (arrow and function keys: ESC, then `[` or `O` and parameters, then a final
-//!   byte), so a stray arrow key does not put garbage into the line.
+//!   byte; Alt-key: ESC and one printable byte), so a stray arrow key does not put garbage
+//!   into the line. Any byte other than printable ASCII ends an escape sequence and then
+//!   counts on its own: a line end always ends the line.
 //! - At most [`MAX_LINE`] characters are kept. A longer line is discarded up to its end and
 //!   then reported once as too long. A byte outside printable ASCII, or bytes lost by the UART
 //!   queue, spoil the line the same way.
@@ -129,12 +131,17 @@ impl LineBuffer {
         let after_cr = core::mem::replace(&mut self.after_cr, byte == b'\r');
         match self.escape {
             Escape::Started => {
-                self.escape = if byte == b'[' || byte == b'O' {
-                    Escape::Sequence
-                } else {
-                    Escape::None
-                };
-                return Feed::Nothing;
+                if (0x20..=0x7E).contains(&byte) {
+                    self.escape = if byte == b'[' || byte == b'O' {
+                        Escape::Sequence
+                    } else {
+                        Escape::None // ESC + key (Alt-key): both ignored
+                    };
+                    return Feed::Nothing;
+                }
+                // Any other byte (a line end above all) ends the escape and counts on its own,
+                // so Esc then Enter still ends the line.
+                self.escape = Escape::None;
             }
             Escape::Sequence => {
                 if (0x40..=0x7E).contains(&byte) {
@@ -294,6 +301,19 @@ mod tests {
         );
         // A line end inside a sequence still ends the line.
         assert_eq!(lines(b"stop\x1b[\n"), [Ok("stop".into())]);
+        // So does one right after ESC (Esc, then Enter): it is not swallowed as an Alt-key,
+        // and the LF of CRLF after it stays part of the same line end.
+        assert_eq!(
+            lines(b"home\x1b\r\nstop\n"),
+            [Ok("home".into()), Ok("stop".into())]
+        );
+        // A non-ASCII byte after ESC is not hidden by it either.
+        assert_eq!(
+            lines(b"home\x1b\x9b\n"),
+            [Err(Feed::Spoiled(Spoiled::BadByte(0x9b)))]
+        );
+        // ESC ESC: the second starts a new sequence.
+        assert_eq!(lines(b"ho\x1b\x1b[Ame\n"), [Ok("home".into())]);
     }
 
     #[test]

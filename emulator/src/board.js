@@ -31,25 +31,65 @@ export const BANNER = /hexapod\b.*\bhelp\b/;
 /** How often `runUntil` looks at its condition, besides on every received line. */
 const CHECK_EVERY_NANOS = 100_000;
 
+/**
+ * PSM WDSEL bits a watchdog reset must select to restart the chip like a power-on (every
+ * domain except the oscillators ROSC and XOSC: clocks, resets, bus fabric, ROM, SRAM, XIP,
+ * chip reset, SIO, both processors).
+ */
+export const WDSEL_FULL_RESET = 0x1fffc;
+const PSM_BASE = 0x40010;
+
 export class EmulatedBoard {
   /**
    * @param {object} [options]
    * @param {string} [options.elf] firmware ELF (default: the `cargo fw` output)
    * @param {Uint32Array} [options.bootrom] boot ROM words (default: `loadBootrom()`)
+   * @param {'fail'|'reset'} [options.onWatchdog] what a watchdog expiry does: `'fail'`
+   *   (default) stops the run with an error; `'reset'` restarts the chip as the watchdog
+   *   reset would (see `watchdogReset`).
    */
-  constructor({ elf = DEFAULT_ELF, bootrom = loadBootrom() } = {}) {
+  constructor({ elf = DEFAULT_ELF, bootrom = loadBootrom(), onWatchdog = 'fail' } = {}) {
+    this.elf = elf;
+    this.segments = loadSegments(elf);
+    this.bootrom = bootrom;
+    this.onWatchdog = onWatchdog;
+    /** Watchdog resets so far: `{ nanos, wdsel }` each. */
+    this.resets = [];
+    this.resetPending = false;
+
+    this.fault = null;
+    this.eventPending = false;
+
+    // UART0 output survives resets (it is what the host saw).
+    this.outputBytes = [];
+    this.lines = [];
+    this.partialLine = '';
+    this.lineCursor = 0;
+    this.outputListeners = new Set();
+    this.servoChangeListener = null;
+
+    this.powerOn(0);
+  }
+
+  /**
+   * A fresh chip with the firmware in flash, starting in boot2 at emulated time `startNanos`,
+   * with the host on UART0 and the logic analyser on the servo pins.
+   */
+  powerOn(startNanos) {
     const mcu = new RP2040();
     this.mcu = mcu;
     patchEmulatorGaps(mcu);
     // loadBootrom resets the chip and wipes flash: the firmware goes in after it.
-    mcu.loadBootrom(bootrom);
-    for (const { address, bytes } of loadSegments(elf)) {
+    mcu.loadBootrom(this.bootrom);
+    for (const { address, bytes } of this.segments) {
       const offset = address - FLASH_START;
       if (offset < 0 || offset + bytes.length > FLASH_BYTES) {
-        throw new Error(`${elf}: segment at 0x${address.toString(16)} is not in flash`);
+        throw new Error(`${this.elf}: segment at 0x${address.toString(16)} is not in flash`);
       }
       mcu.flash.set(bytes, offset);
     }
+    // Emulated time runs on across a reset (nothing is scheduled on a fresh chip yet).
+    mcu.clock.tick(startNanos);
     // Start in boot2, as the boot ROM would after finding it valid (a reset through the ROM
     // needs a flash interface rp2040js does not model).
     mcu.core.PC = FLASH_START;
@@ -59,23 +99,51 @@ export class EmulatedBoard {
       this.nanosPerCycle = 1e9 / clkSys;
     });
 
-    this.fault = null;
-    this.eventPending = false;
     mcu.onBreak = (code) => {
       this.fail(`firmware stopped: breakpoint/UDF #${code} at PC 0x${mcu.core.PC.toString(16)} (a panic?)`);
     };
-    onWatchdogExpiry(mcu, () => this.fail('watchdog expired: the firmware main loop stalled'));
+    onWatchdogExpiry(mcu, () => {
+      if (this.onWatchdog === 'reset') {
+        this.resetPending = true;
+        this.eventPending = true;
+      } else {
+        this.fail('watchdog expired: the firmware main loop stalled');
+      }
+    });
 
     // UART0: what the firmware sends, split into lines; what we send, paced.
-    this.outputBytes = [];
-    this.lines = [];
-    this.partialLine = '';
-    this.lineCursor = 0;
-    this.outputListeners = new Set();
     mcu.uart[0].onByte = (byte) => this.received(byte);
     this.input = new PacedUartInput(mcu, mcu.uart[0]);
 
     this.servoMeter = new ServoPulseMeter(mcu);
+    if (this.servoChangeListener) {
+      this.servoMeter.onChange = this.servoChangeListener;
+    }
+  }
+
+  /**
+   * What the watchdog's reset does to the chip, emulated: rp2040js cannot reset through the
+   * boot ROM (no flash interface model), and its own `reset()` resets only the core and PWM.
+   * The firmware programs PSM WDSEL to choose what a watchdog reset resets; if it selects the
+   * whole chip (`WDSEL_FULL_RESET`: all but the oscillators), that is a restart from boot2
+   * with every peripheral at its reset state, which is what this does: a fresh emulated chip
+   * with the same flash image, at the same emulated time. Bytes still on their way from the
+   * host are lost (the UART is reset), as they would be. Anything less than a full reset
+   * fails the run: the harness cannot say what a partial reset would leave.
+   */
+  watchdogReset() {
+    this.resetPending = false;
+    const wdsel = this.mcu.peripherals[PSM_BASE].wdsel;
+    const nanos = this.mcu.clock.nanos;
+    this.resets.push({ nanos, wdsel });
+    if ((wdsel & WDSEL_FULL_RESET) !== WDSEL_FULL_RESET) {
+      this.fail(
+        `watchdog expired, but PSM WDSEL 0x${wdsel.toString(16)} does not select a full ` +
+          `chip reset (0x${WDSEL_FULL_RESET.toString(16)})`,
+      );
+      return;
+    }
+    this.powerOn(nanos);
   }
 
   // ---- time ----
@@ -121,7 +189,7 @@ export class EmulatedBoard {
 
   /** Executes instructions (or skips sleep to the next timer event) until `endNanos`. */
   runSlice(endNanos, condition) {
-    const { core, clock } = this.mcu;
+    let { core, clock } = this.mcu;
     while (clock.nanos < endNanos) {
       if (core.waiting && !wakeIfInterruptPending(core)) {
         // Asleep in WFI: nothing happens until the next timer event (or the end).
@@ -133,6 +201,10 @@ export class EmulatedBoard {
       }
       if (this.eventPending) {
         this.eventPending = false;
+        if (this.resetPending) {
+          this.watchdogReset();
+          ({ core, clock } = this.mcu);
+        }
         if (this.fault) {
           throw this.fault;
         }
@@ -259,7 +331,8 @@ export class EmulatedBoard {
 
   /** Calls `listener(board)` whenever a servo's measured pulse width changes. */
   onServoChange(listener) {
-    this.servoMeter.onChange = () => listener(this);
+    this.servoChangeListener = () => listener(this);
+    this.servoMeter.onChange = this.servoChangeListener;
   }
 
   /**

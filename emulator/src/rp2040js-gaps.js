@@ -14,10 +14,15 @@
 //    (following run-time changes), in emulated time, as a real serial line would; a byte that
 //    finds the FIFO full is lost, as on hardware (an overrun), and counted.
 //    (Transmit has no timing in rp2040js: TX bytes appear the instant they are written.)
+//    rp2040js has no overrun flag either; the PL011 marks the first byte that enters the FIFO
+//    after a loss with OE (UARTDR bit 11), which is how firmware learns of the lost bytes:
+//    `PacedUartInput` records that flag per byte and UARTDR reads return it. (UARTRSR's OE
+//    bit stays 0: see 2.)
 // 4. Watchdog expiry: rp2040js calls `onWatchdogTrigger`, then re-arms the alarm of a counter
 //    that sits at 0, so it fires again at the same instant forever and emulated time stops.
 //    `onWatchdogExpiry` stops the watchdog timer when it fires and reports it once (a real
-//    chip would reset; a reset through the boot ROM is not possible here anyway).
+//    chip would reset; a reset through the boot ROM is not possible here, so board.js either
+//    fails the run or, with `onWatchdog: 'reset'`, emulates the reset with a fresh chip).
 // 5. WFI with an interrupt already pending: the ARM wakes at once (also with PRIMASK set, which
 //    is how firmware closes the check-then-sleep race: `cpsid; if idle { wfi }; cpsie`).
 //    rp2040js only wakes a waiting core when an interrupt *becomes* pending, so an interrupt
@@ -27,7 +32,9 @@
 
 import { ConsoleLogger, LogLevel } from 'rp2040js';
 
+const UARTDR = 0x00;
 const UARTRSR = 0x04;
+const UARTDR_OE = 1 << 11;
 const WATCHDOG_BASE = 0x40058;
 const BITS_PER_BYTE_8N1 = 10;
 const DEFAULT_BAUD = 115200;
@@ -38,7 +45,23 @@ export function patchEmulatorGaps(mcu) {
   for (const uart of mcu.uart) {
     const readRegister = uart.readUint32.bind(uart);
     const writeRegister = uart.writeUint32.bind(uart);
-    uart.readUint32 = (offset) => (offset === UARTRSR ? 0 : readRegister(offset));
+    // Error flags of the bytes in the RX FIFO, oldest first (see gap 3).
+    uart.rxFifoFlags = [];
+    uart.readUint32 = (offset) => {
+      if (offset === UARTRSR) {
+        return 0;
+      }
+      if (offset === UARTDR) {
+        // Keep the flags in step should the FIFO have been emptied some other way.
+        const flags = uart.rxFifoFlags;
+        while (flags.length > uart.rxFIFO.itemCount) {
+          flags.shift();
+        }
+        const flag = uart.rxFIFO.empty ? 0 : (flags.shift() ?? 0);
+        return readRegister(offset) | flag;
+      }
+      return readRegister(offset);
+    };
     uart.writeUint32 = (offset, value) => {
       if (offset !== UARTRSR) {
         writeRegister(offset, value);
@@ -66,6 +89,8 @@ export class PacedUartInput {
     this.queueHead = 0;
     /** Bytes that arrived while the RX FIFO was full (lost, like a hardware overrun). */
     this.droppedBytes = 0;
+    /** Bytes were lost since the last one that entered the FIFO: flag the next with OE. */
+    this.overrun = false;
     this.lastDeliveryNanos = -Infinity;
     this.alarm = mcu.clock.createAlarm(() => this.deliverOne());
     this.scheduled = false;
@@ -107,7 +132,10 @@ export class PacedUartInput {
     }
     if (this.uart.rxFIFO.full) {
       this.droppedBytes++;
+      this.overrun = true;
     } else {
+      this.uart.rxFifoFlags?.push(this.overrun ? UARTDR_OE : 0);
+      this.overrun = false;
       this.uart.feedByte(byte);
     }
     this.lastDeliveryNanos = this.clock.nanos;

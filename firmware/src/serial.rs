@@ -4,7 +4,9 @@
 //! the 32-byte hardware FIFO into a lock-free queue that the main loop reads. It never waits:
 //! when the queue is full it drops the byte and counts it, and the main loop is told where in
 //! the byte stream the loss happened ([`Received::Lost`]), so exactly the damaged line can be
-//! refused.
+//! refused. After a loss, bytes are dropped until the main loop has reached it, so a loss is
+//! always one contiguous gap. A byte with a line error (framing, parity, break, overrun) counts
+//! as lost the same way.
 //!
 //! Transmit: the main loop writes replies into a software buffer (`core::fmt::Write`) and calls
 //! [`Serial::send_some`] each pass, which moves only what fits into the 32-byte TX FIFO.
@@ -24,7 +26,7 @@ use rp2040_hal::{
     fugit::{HertzU32, RateExtU32},
     gpio::{bank0, DefaultTypeState, FunctionUart, Pin, PullNone, PullUp},
     pac::{self, interrupt},
-    uart::{DataBits, Enabled, FifoWatermark, StopBits, UartConfig, UartPeripheral},
+    uart::{DataBits, Enabled, FifoWatermark, ReadErrorType, StopBits, UartConfig, UartPeripheral},
 };
 
 /// Receive queue size; holds `RX_QUEUE_BYTES - 1` bytes (~44 ms of input at 115,200 baud).
@@ -291,8 +293,20 @@ impl Shared {
                 Err(nb::Error::WouldBlock) => break,
                 Err(nb::Error::Other(error)) => {
                     self.rx.line_errors = self.rx.line_errors.wrapping_add(1);
-                    // `discarded` holds the good bytes read before the bad one.
-                    self.rx.enqueue(error.discarded);
+                    // `discarded` holds the good bytes read before the error. A framing,
+                    // parity or break error loses the byte after them. An overrun flags a
+                    // good byte (the last one in `discarded`, if any): the bytes the full
+                    // hardware FIFO could not take were lost just before it. Either way the
+                    // line they belong to must be refused, so the loss goes in at its place.
+                    let (before, after) = match error.err_type {
+                        ReadErrorType::Overrun if !error.discarded.is_empty() => {
+                            error.discarded.split_at(error.discarded.len() - 1)
+                        }
+                        _ => (error.discarded, &[][..]),
+                    };
+                    self.rx.enqueue(before);
+                    self.rx.lose(1);
+                    self.rx.enqueue(after);
                 }
             }
         }
@@ -302,19 +316,25 @@ impl Shared {
 impl Receiver {
     fn enqueue(&mut self, bytes: &[u8]) {
         for &byte in bytes {
-            if self.queue.enqueue(byte).is_ok() {
+            // Once a byte is lost, every byte is dropped until the main loop has reached the
+            // gap (the queue is then empty) and taken the loss: the gap stays one contiguous
+            // stretch at one known position, so the line it cuts is refused and no line is
+            // ever pieced together from fragments around a gap the main loop was not told of.
+            if self.loss.is_none() && self.queue.enqueue(byte).is_ok() {
                 self.enqueued = self.enqueued.wrapping_add(1);
                 continue;
             }
-            // Losses not yet reported merge into the first one (conservative: the earlier
-            // line is refused).
-            let loss = self.loss.get_or_insert(Loss {
-                after: self.enqueued,
-                bytes: 0,
-            });
-            loss.bytes = loss.bytes.wrapping_add(1);
-            RX_LOSS_PENDING.store(true, Ordering::Relaxed);
+            self.lose(1);
         }
+    }
+
+    fn lose(&mut self, bytes: u32) {
+        let loss = self.loss.get_or_insert(Loss {
+            after: self.enqueued,
+            bytes: 0,
+        });
+        loss.bytes = loss.bytes.wrapping_add(bytes);
+        RX_LOSS_PENDING.store(true, Ordering::Relaxed);
     }
 }
 

@@ -1,0 +1,254 @@
+//! A reference model of the documented line protocol (`control::protocol` module docs and
+//! `control/README.md`), written independently of its implementation: it says, for every
+//! received byte, whether a line ends there and what that line is, so the checkers can demand
+//! exactly one final reply where one is due and none elsewhere.
+//!
+//! The rules modelled:
+//! - CR, LF and CRLF each end a line (an LF right after a CR belongs to it);
+//! - BS / DEL erase the last character, Ctrl-U the whole line (not on a refused line);
+//!   Ctrl-C / Ctrl-X abandon the line (no reply);
+//! - tab is a space; other control bytes are ignored;
+//! - ESC starts an escape sequence: ESC + one printable byte (Alt-key), or ESC `[` / ESC `O`,
+//!   parameters (0x20..=0x3F) and a final byte (0x40..=0x7E). Printable bytes inside are
+//!   swallowed; any other byte ends the sequence and then counts on its own;
+//! - at most 128 characters are kept; a longer line is refused (`line-too-long`) once it ends;
+//! - a byte outside printable ASCII refuses the line (`bad-character`);
+//! - bytes lost by the receive queue refuse the line (`rx-overflow`, which wins over the
+//!   other reasons, since the lost bytes may have been anything);
+//! - a line of nothing but spaces is blank: no reply.
+
+/// The longest line kept, in characters (documented: 128).
+pub const MAX_LINE: usize = 128;
+
+/// Why the model expects a line to be refused.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Refusal {
+    /// More than [`MAX_LINE`] characters.
+    TooLong,
+    /// A byte outside printable ASCII.
+    BadCharacter,
+    /// The receive queue lost bytes.
+    RxOverflow,
+}
+
+impl Refusal {
+    /// The documented error code.
+    pub fn code(self) -> &'static str {
+        match self {
+            Refusal::TooLong => "line-too-long",
+            Refusal::BadCharacter => "bad-character",
+            Refusal::RxOverflow => "rx-overflow",
+        }
+    }
+}
+
+/// What a byte completed, if anything.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum LineEnd {
+    /// No line ended here.
+    None,
+    /// A blank line ended (no reply).
+    Blank,
+    /// A line ended; it gets exactly one final reply. The text as kept.
+    Line(String),
+    /// A refused line ended; it gets exactly one `error:` reply with this reason.
+    Refused(Refusal),
+}
+
+impl LineEnd {
+    /// True if exactly one final reply is due.
+    pub fn wants_reply(&self) -> bool {
+        matches!(self, LineEnd::Line(_) | LineEnd::Refused(_))
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Esc {
+    Off,
+    /// Just after ESC.
+    Start,
+    /// Inside ESC [ ... or ESC O ...
+    Params,
+}
+
+/// The model's state.
+#[derive(Debug, Clone)]
+pub struct LineModel {
+    text: Vec<u8>,
+    too_long: bool,
+    bad_character: bool,
+    lost: bool,
+    previous_was_cr: bool,
+    esc: Esc,
+}
+
+impl Default for LineModel {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl LineModel {
+    /// Nothing received yet.
+    pub fn new() -> Self {
+        LineModel {
+            text: Vec::new(),
+            too_long: false,
+            bad_character: false,
+            lost: false,
+            previous_was_cr: false,
+            esc: Esc::Off,
+        }
+    }
+
+    /// The characters kept so far on the current line.
+    pub fn pending(&self) -> &[u8] {
+        &self.text
+    }
+
+    /// The receive queue lost bytes here.
+    pub fn lost(&mut self) {
+        self.lost = true;
+    }
+
+    /// One received byte.
+    pub fn byte(&mut self, b: u8) -> LineEnd {
+        let previous_was_cr = self.previous_was_cr;
+        self.previous_was_cr = b == b'\r';
+        let printable = (0x20..=0x7E).contains(&b);
+        match self.esc {
+            Esc::Start if printable => {
+                self.esc = if b == b'[' || b == b'O' {
+                    Esc::Params
+                } else {
+                    Esc::Off
+                };
+                return LineEnd::None;
+            }
+            Esc::Params if printable => {
+                if (0x40..=0x7E).contains(&b) {
+                    self.esc = Esc::Off;
+                }
+                return LineEnd::None;
+            }
+            _ => self.esc = Esc::Off,
+        }
+        match b {
+            b'\n' if previous_was_cr => LineEnd::None,
+            b'\r' | b'\n' => self.end(),
+            0x08 | 0x7F => {
+                if !self.refused() {
+                    self.text.pop();
+                }
+                LineEnd::None
+            }
+            0x15 => {
+                if !self.refused() {
+                    self.text.clear();
+                }
+                LineEnd::None
+            }
+            0x03 | 0x18 => {
+                self.reset();
+                LineEnd::None
+            }
+            0x1B => {
+                self.esc = Esc::Start;
+                LineEnd::None
+            }
+            b'\t' => {
+                self.add(b' ');
+                LineEnd::None
+            }
+            0x20..=0x7E => {
+                self.add(b);
+                LineEnd::None
+            }
+            0x80..=0xFF => {
+                if !self.refused() {
+                    self.bad_character = true;
+                }
+                LineEnd::None
+            }
+            _ => LineEnd::None,
+        }
+    }
+
+    fn refused(&self) -> bool {
+        self.too_long || self.bad_character || self.lost
+    }
+
+    fn add(&mut self, b: u8) {
+        if self.refused() {
+            return;
+        }
+        if self.text.len() == MAX_LINE {
+            self.too_long = true;
+        } else {
+            self.text.push(b);
+        }
+    }
+
+    fn reset(&mut self) {
+        self.text.clear();
+        self.too_long = false;
+        self.bad_character = false;
+        self.lost = false;
+    }
+
+    fn end(&mut self) -> LineEnd {
+        // At most one of `too_long` / `bad_character` is ever set (the first one refuses the
+        // line); a loss wins over both.
+        let end = if self.lost {
+            LineEnd::Refused(Refusal::RxOverflow)
+        } else if self.too_long {
+            LineEnd::Refused(Refusal::TooLong)
+        } else if self.bad_character {
+            LineEnd::Refused(Refusal::BadCharacter)
+        } else if self.text.iter().all(|&c| c == b' ') {
+            LineEnd::Blank
+        } else {
+            LineEnd::Line(String::from_utf8(self.text.clone()).expect("printable ASCII"))
+        };
+        self.reset();
+        end
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ends(bytes: &[u8]) -> Vec<LineEnd> {
+        let mut m = LineModel::new();
+        bytes
+            .iter()
+            .map(|&b| m.byte(b))
+            .filter(|e| *e != LineEnd::None)
+            .collect()
+    }
+
+    #[test]
+    fn the_model_follows_the_documented_examples() {
+        let line = |s: &str| LineEnd::Line(s.into());
+        assert_eq!(
+            ends(b"a\r\nb\rc\n\n"),
+            [line("a"), line("b"), line("c"), LineEnd::Blank]
+        );
+        assert_eq!(ends(b"hoxx\x08\x7fme\r"), [line("home")]);
+        assert_eq!(ends(b"junk\x15stop\n"), [line("stop")]);
+        assert_eq!(ends(b"pose\x03\n"), [LineEnd::Blank]);
+        assert_eq!(ends(b"ho\x1b[Ame\x1bOP\x1b[3~\x1bx\n"), [line("home")]);
+        assert_eq!(ends(b"\x1b\r"), [LineEnd::Blank]);
+        let long = [b'x'; 129];
+        assert_eq!(ends(&long), []);
+        assert_eq!(
+            ends(&[&long[..], b"\n"].concat()),
+            [LineEnd::Refused(Refusal::TooLong)]
+        );
+        assert_eq!(
+            ends("5\u{b0}\n".as_bytes()),
+            [LineEnd::Refused(Refusal::BadCharacter)]
+        );
+    }
+}

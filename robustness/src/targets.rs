@@ -1,0 +1,409 @@
+//! One function per fuzz target. Each takes the fuzzer's raw bytes, never panics on its own
+//! account, and panics (with a description) only when a guarantee breaks.
+
+use arbitrary::{Arbitrary, Unstructured};
+use control::command::{self, Command};
+use control::number::{parse_f32, parse_u32, NumberError};
+use control::protocol::{Feed, LineBuffer, Spoiled};
+use control::report;
+use control::settings::{SettingId, Settings, ENCODED_LEN};
+
+use crate::checked::{check_output_bytes, check_pulses, code_of, Checked};
+use crate::line_model::{LineEnd, LineModel, Refusal};
+use crate::ops::{Op, Session, Value};
+
+/// Frames `Op::Settle` runs at most (20 s at 50 Hz).
+const SETTLE_FRAMES: u32 = 1000;
+/// Operations per session at most (keeps one input's run time bounded).
+const MAX_OPS: usize = 64;
+
+// ----- line assembly -----
+
+/// Line assembly ([`LineBuffer`]) against the reference [`LineModel`]: the same line ends,
+/// the same kept text, the same refusal reasons. Input: raw received bytes; or, after a
+/// leading `0xFE`, bytes in which `0xFF` stands for "the receive queue lost bytes here"
+/// (every other non-ASCII byte behaves like `0xFF` would as data).
+pub fn protocol(data: &[u8]) {
+    let (with_losses, bytes) = match data.split_first() {
+        Some((0xFE, rest)) => (true, rest),
+        _ => (false, data),
+    };
+    let mut lb = LineBuffer::new();
+    let mut model = LineModel::new();
+    let feed_byte = |b: u8, lb: &mut LineBuffer, model: &mut LineModel| {
+        let feed = lb.feed(b);
+        let expected = model.byte(b);
+        match (&expected, feed) {
+            (LineEnd::None, Feed::Added(_) | Feed::Erased | Feed::ErasedLine(_)) => {
+                assert_eq!(lb.line().as_bytes(), model.pending(), "after byte {b:#04x}");
+            }
+            (LineEnd::None, Feed::Nothing | Feed::Cancelled | Feed::Overflowed) => {}
+            (LineEnd::Blank, Feed::Empty) => {}
+            (LineEnd::Line(text), Feed::Line) => {
+                assert_eq!(lb.line(), text, "line text");
+                assert!(lb.line().len() <= control::protocol::MAX_LINE);
+                lb.clear();
+            }
+            (LineEnd::Refused(r), Feed::Spoiled(why)) => {
+                let matches = matches!(
+                    (r, why),
+                    (Refusal::TooLong, Spoiled::TooLong)
+                        | (Refusal::BadCharacter, Spoiled::BadByte(_))
+                        | (Refusal::RxOverflow, Spoiled::RxOverflow(_))
+                );
+                assert!(matches, "byte {b:#04x}: model {r:?}, line buffer {why:?}");
+            }
+            (e, f) => panic!("byte {b:#04x}: model {e:?}, line buffer {f:?}"),
+        }
+    };
+    for &b in bytes {
+        if with_losses && b == 0xFF {
+            lb.rx_overflow(1);
+            model.lost();
+        } else {
+            feed_byte(b, &mut lb, &mut model);
+        }
+    }
+}
+
+// ----- command parsing -----
+
+/// Parses arbitrary text as a command line: results are finite and range-checked, parsing
+/// is case-insensitive and treats `,` and tab like spaces, and every error prints as one
+/// well-formed `error:<code> ...` line.
+pub fn command(data: &[u8]) {
+    let text = String::from_utf8_lossy(data);
+    let line: &str = &text;
+    let result = command::parse(line);
+    match &result {
+        Ok(Command::Pose(p) | Command::Check(p)) => {
+            assert!(p.first_non_finite().is_none(), "{line:?} -> {p:?}");
+        }
+        Ok(Command::Move(v) | Command::Nudge(v)) => {
+            assert!(v.0.iter().any(Option::is_some), "{line:?}: no axis");
+            assert!(
+                v.0.iter().flatten().all(|x| x.is_finite()),
+                "{line:?} -> {v:?}"
+            );
+        }
+        Ok(Command::Set(id, value)) => {
+            assert!(
+                id.check(*value).is_ok(),
+                "{line:?}: unchecked value {value:?}"
+            );
+        }
+        Ok(_) => {}
+        Err(e) => {
+            let mut out = String::new();
+            report::write_error(&mut out, e);
+            check_output_bytes(&out);
+            assert!(out.ends_with("\r\n"), "{out:?}");
+            let body = &out[..out.len() - 2];
+            assert!(!body.contains(['\r', '\n']), "error spans lines: {out:?}");
+            let code = code_of(body).unwrap_or_else(|| panic!("not an error line: {out:?}"));
+            assert_eq!(code, e.code().as_str());
+        }
+    }
+    if line.is_ascii() {
+        assert_eq!(
+            result,
+            command::parse(&line.to_ascii_uppercase()),
+            "case matters in {line:?}"
+        );
+        let spaced = line.replace([',', '\t'], " ");
+        assert_eq!(
+            result,
+            command::parse(&spaced),
+            "separators matter in {line:?}"
+        );
+    }
+}
+
+// ----- numbers -----
+
+/// The documented decimal grammar, checked independently of `control::number`:
+/// `[sign] (digits [. digits*] | . digits) [(e|E) [sign] digits]`.
+pub fn is_documented_decimal(text: &str) -> bool {
+    let b = text.as_bytes();
+    let mut i = 0;
+    let digits_from = |i: &mut usize| {
+        let start = *i;
+        while *i < b.len() && b[*i].is_ascii_digit() {
+            *i += 1;
+        }
+        *i - start
+    };
+    if i < b.len() && (b[i] == b'+' || b[i] == b'-') {
+        i += 1;
+    }
+    let mut mantissa = digits_from(&mut i);
+    if i < b.len() && b[i] == b'.' {
+        i += 1;
+        mantissa += digits_from(&mut i);
+    }
+    if mantissa == 0 {
+        return false;
+    }
+    if i < b.len() && (b[i] == b'e' || b[i] == b'E') {
+        i += 1;
+        if i < b.len() && (b[i] == b'+' || b[i] == b'-') {
+            i += 1;
+        }
+        if digits_from(&mut i) == 0 {
+            return false;
+        }
+    }
+    i == b.len()
+}
+
+fn is_nan_or_inf_word(text: &str) -> bool {
+    let t = text
+        .strip_prefix(['+', '-'])
+        .unwrap_or(text)
+        .to_ascii_lowercase();
+    t == "nan" || t == "inf" || t == "infinity"
+}
+
+/// Number parsing against the documented grammar and the standard library's correctly
+/// rounded parser.
+pub fn number(data: &[u8]) {
+    let text = String::from_utf8_lossy(data);
+    let text: &str = &text;
+    let got = parse_f32(text);
+    let want = if is_nan_or_inf_word(text) {
+        Err(NumberError::NotFinite)
+    } else if is_documented_decimal(text) {
+        let v: f32 = text.parse().expect("the grammar is a subset of Rust's");
+        if v.is_finite() {
+            Ok(v)
+        } else {
+            Err(NumberError::TooLarge)
+        }
+    } else {
+        Err(NumberError::Syntax)
+    };
+    match (got, want) {
+        (Ok(a), Ok(b)) => assert_eq!(a.to_bits(), b.to_bits(), "{text:?}"),
+        (a, b) => assert_eq!(a, b, "parse_f32({text:?})"),
+    }
+
+    let got = parse_u32(text);
+    let all_digits = !text.is_empty() && text.bytes().all(|c| c.is_ascii_digit());
+    let want = if all_digits {
+        let trimmed = text.trim_start_matches('0');
+        if trimmed.len() > 10 {
+            Err(NumberError::TooLarge)
+        } else {
+            let v: u64 = if trimmed.is_empty() {
+                0
+            } else {
+                trimmed.parse().expect("at most 10 digits")
+            };
+            u32::try_from(v).map_err(|_| NumberError::TooLarge)
+        }
+    } else {
+        match parse_f32(text) {
+            Ok(_) => Err(NumberError::NotWhole),
+            Err(e) => Err(e),
+        }
+    };
+    assert_eq!(got, want, "parse_u32({text:?})");
+}
+
+// ----- settings -----
+
+#[derive(Debug, Arbitrary)]
+enum SettingsInput {
+    /// Stored bytes as they are.
+    Raw(Vec<u8>),
+    /// The default record with some bytes changed, checksum fixed (or not).
+    Patched {
+        patches: Vec<(u8, u8)>,
+        fix_checksum: bool,
+    },
+    /// `set` lines a user might type, applied one after another like the controller does.
+    Set(Vec<(SetName, SetValue)>),
+}
+
+#[derive(Debug, Arbitrary)]
+enum SetName {
+    Known(u8),
+    Text(String),
+}
+
+#[derive(Debug, Arbitrary)]
+enum SetValue {
+    Typed(Value),
+    Text(String),
+}
+
+/// A decoded record: valid, re-encodes to the same bytes, and a controller starts on it at
+/// its home pulses.
+fn check_decoded(bytes: &[u8]) {
+    if let Ok(s) = Settings::decode(bytes) {
+        if let Err(e) = s.validate() {
+            panic!("decoded settings do not validate: {e:?}");
+        }
+        assert_eq!(
+            &s.encode()[..],
+            &bytes[..ENCODED_LEN],
+            "decode/encode is not the identity"
+        );
+        let mut c = Checked::new(s);
+        c.frames(2);
+        c.line("status", b"\r");
+    }
+}
+
+/// Settings: binary decoding of anything (damaged, patched with a valid checksum) and `set`
+/// name/value parsing applied like the controller applies it.
+///
+/// Input: a stored record (starts with the magic `HXPS`), `set` lines as typed (starts with
+/// `set `: each line goes through the command parser and is applied if the result validates,
+/// like the controller does), or anything else: structured (damaged records, patched records
+/// with a fixed checksum, `set` name/value pairs).
+pub fn settings(data: &[u8]) {
+    if data.starts_with(b"HXPS") {
+        check_decoded(data);
+        return;
+    }
+    if data.starts_with(b"set ") {
+        let text = String::from_utf8_lossy(data);
+        let mut s = Settings::default();
+        for line in text.split(['\r', '\n']) {
+            if let Ok(Command::Set(id, v)) = command::parse(line) {
+                let candidate = s.with(id, v);
+                if candidate.validate().is_ok() {
+                    s = candidate;
+                    assert_eq!(Settings::decode(&s.encode()), Ok(s), "round trip of {s:?}");
+                }
+            }
+        }
+        let mut c = Checked::new(s);
+        c.frames(2);
+        return;
+    }
+    let u = Unstructured::new(data);
+    let Ok(input) = SettingsInput::arbitrary_take_rest(u) else {
+        return;
+    };
+    match input {
+        SettingsInput::Raw(bytes) => check_decoded(&bytes),
+        SettingsInput::Patched {
+            patches,
+            fix_checksum,
+        } => {
+            let mut bytes = Settings::default().encode();
+            for (at, v) in patches {
+                bytes[usize::from(at) % ENCODED_LEN] = v;
+            }
+            if fix_checksum {
+                let end = ENCODED_LEN - 4;
+                let crc = control::settings::crc32(&bytes[..end]);
+                bytes[end..].copy_from_slice(&crc.to_le_bytes());
+            }
+            check_decoded(&bytes);
+        }
+        SettingsInput::Set(changes) => {
+            let mut s = Settings::default();
+            for (name, value) in changes {
+                let name = match name {
+                    SetName::Known(i) => crate::ops::SETTING_NAMES
+                        [usize::from(i) % crate::ops::SETTING_NAMES.len()]
+                    .to_owned(),
+                    SetName::Text(t) => t.to_ascii_lowercase(),
+                };
+                let value = match value {
+                    SetValue::Typed(v) => match v {
+                        Value::Num(n) => n.text(),
+                        Value::Word(i) => {
+                            crate::ops::WORDS[usize::from(i) % crate::ops::WORDS.len()].to_owned()
+                        }
+                    },
+                    SetValue::Text(t) => t.to_ascii_lowercase(),
+                };
+                let Some(id) = SettingId::parse(&name) else {
+                    continue;
+                };
+                let Ok(v) = id.parse_value(&value) else {
+                    continue;
+                };
+                assert!(
+                    id.check(v).is_ok(),
+                    "{name} {value}: parsed but out of range"
+                );
+                let candidate = s.with(id, v);
+                if candidate.validate().is_ok() {
+                    s = candidate;
+                    let bytes = s.encode();
+                    assert_eq!(Settings::decode(&bytes), Ok(s), "round trip of {s:?}");
+                }
+            }
+            let c = Checked::new(s);
+            check_pulses(c.ctl.settings(), &c.ctl.pulses_us(), "start-up");
+        }
+    }
+}
+
+// ----- the whole controller -----
+
+/// Runs one structured session through a [`Checked`] controller.
+pub fn run_session(session: &Session) {
+    let mut c = Checked::new(Settings {
+        echo: session.echo,
+        ..Settings::default()
+    });
+    for op in session.ops.iter().take(MAX_OPS) {
+        match op {
+            Op::Line(cmd, sep, upper, end) => c.line(&cmd.text(*sep, *upper), end.bytes()),
+            Op::Bytes(bytes) => c.bytes(bytes),
+            Op::Frames(n) => c.frames(1 + u32::from(*n)),
+            Op::Settle => {
+                c.settle(SETTLE_FRAMES);
+            }
+            Op::Lost(n) => c.rx_overflow(1 + u32::from(*n)),
+            Op::Execute(cmd, sep) => c.execute(&cmd.text(*sep, false)),
+        }
+    }
+    // Whatever happened, a fresh line is understood: cancel any partial line, then `stop`.
+    let replies = c.replies;
+    c.bytes(b"\x03");
+    c.line("stop", b"\r\n");
+    assert_eq!(c.replies, replies + 1);
+    assert!(
+        c.log.trim_end_matches("> ").ends_with("ok\r\n"),
+        "stop after the session was not ok: {:?}",
+        c.log
+    );
+}
+
+/// The whole command interpreter with the kinematics behind it.
+///
+/// Input: a script of real command lines (starts with a printable byte, CR or LF): fed byte
+/// by byte with echo on, the motion run to its end after every line end; or anything else:
+/// a structured [`Session`] (bytes, command lines, frames, losses and `execute_line` calls
+/// interleaved, echo on or off).
+pub fn controller(data: &[u8]) {
+    match data.first() {
+        Some(&b) if (0x20..=0x7E).contains(&b) || b == b'\r' || b == b'\n' => script(data),
+        _ => {
+            if let Ok(session) = Session::arbitrary_take_rest(Unstructured::new(data)) {
+                run_session(&session);
+            }
+        }
+    }
+}
+
+/// Feeds a script of lines, running the motion to its end after each line end.
+pub fn script(data: &[u8]) {
+    let mut c = Checked::new(Settings::default());
+    for &b in data {
+        c.byte(b);
+        if b == b'\r' || b == b'\n' {
+            c.settle(SETTLE_FRAMES);
+            c.frames(1);
+        }
+    }
+    c.bytes(b"\x03");
+    c.line("stop", b"\n");
+}
