@@ -3,8 +3,35 @@
 // documentation (README.md), never read back from the firmware.
 
 import assert from 'node:assert/strict';
+import { existsSync } from 'node:fs';
 
-import { EmulatedBoard } from './board.js';
+import { DEFAULT_ELF, EmulatedBoard } from './board.js';
+import { loadBootrom } from './bootrom.js';
+
+/** The boot ROM words for a test file, after checking that the firmware ELF has been built. */
+export function firmwareBootrom() {
+  assert.ok(existsSync(DEFAULT_ELF), `no firmware ELF at ${DEFAULT_ELF}: build it with \`cargo fw\``);
+  return loadBootrom();
+}
+
+/** One servo frame at the default 50 Hz, ms. */
+export const FRAME_MS = 20;
+
+/**
+ * Runs `frames` frames asserting that the pins hold still and keep pulsing; returns their
+ * widths, us.
+ */
+export function steadyPulses(board, frames = 3) {
+  const first = board.pulseWidthsUs();
+  for (let i = 0; i < frames; i++) {
+    board.runMs(FRAME_MS);
+    assert.deepEqual(board.pulseWidthsUs(), first, `pins moved at ${board.millis} ms`);
+  }
+  for (const servo of board.servos()) {
+    assert.ok(servo.live, `servo ${servo.servo} stopped pulsing`);
+  }
+  return first;
+}
 
 /** One PWM count: 125 MHz / divider 40. */
 export const COUNT_US = 0.32;

@@ -9,20 +9,17 @@
 // reference board that was only ever sent the good command.
 
 import assert from 'node:assert/strict';
-import { existsSync } from 'node:fs';
 import { before, test } from 'node:test';
 
-import { DEFAULT_ELF, EmulatedBoard, FINAL_REPLY } from '../src/board.js';
-import { loadBootrom } from '../src/bootrom.js';
+import { EmulatedBoard, FINAL_REPLY } from '../src/board.js';
+import { firmwareBootrom, FRAME_MS, steadyPulses } from '../src/e2e-support.js';
 
-const FRAME_MS = 20; // 50 Hz default frame rate
 const MAX_LINE = 128; // documented line buffer
 const BYTE_MS = (10 / 115_200) * 1000; // 8N1 at the default baud rate
 
 let bootrom;
 before(() => {
-  assert.ok(existsSync(DEFAULT_ELF), `no firmware ELF at ${DEFAULT_ELF}: build it with \`cargo fw\``);
-  bootrom = loadBootrom();
+  bootrom = firmwareBootrom();
 });
 
 function bootedBoard() {
@@ -30,19 +27,6 @@ function bootedBoard() {
   board.boot();
   board.runMs(3 * FRAME_MS);
   return board;
-}
-
-/** Measures the pins over `frames` whole frames; they must hold still and keep pulsing. */
-function steadyPulses(board, frames = 3) {
-  const first = board.pulseWidthsUs();
-  for (let i = 0; i < frames; i++) {
-    board.runMs(FRAME_MS);
-    assert.deepEqual(board.pulseWidthsUs(), first, `pins moved at ${board.millis} ms`);
-  }
-  for (const servo of board.servos()) {
-    assert.ok(servo.live, `servo ${servo.servo} stopped pulsing`);
-  }
-  return first;
 }
 
 /** Runs until the pins have held still for five frames (a move has ended); returns them. */

@@ -3,11 +3,10 @@
 // (src/host-reference.js), expected formats and defaults from README.md.
 
 import assert from 'node:assert/strict';
-import { existsSync, readFileSync } from 'node:fs';
+import { readFileSync } from 'node:fs';
 import { before, test } from 'node:test';
 
-import { DEFAULT_ELF, EmulatedBoard } from '../src/board.js';
-import { loadBootrom } from '../src/bootrom.js';
+import { EmulatedBoard } from '../src/board.js';
 import {
   assertClose,
   assertConstant,
@@ -16,6 +15,7 @@ import {
   capture,
   COUNT_US,
   defaultSettings,
+  firmwareBootrom,
   HOME,
   lerpPose,
   ok,
@@ -38,8 +38,7 @@ const DEFAULTS = defaultSettings();
 let bootrom;
 let reference;
 before(() => {
-  assert.ok(existsSync(DEFAULT_ELF), `no firmware ELF at ${DEFAULT_ELF}: build it with \`cargo fw\``);
-  bootrom = loadBootrom();
+  bootrom = firmwareBootrom();
   reference = new HostReference();
 });
 

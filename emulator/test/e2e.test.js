@@ -2,11 +2,10 @@
 // and servo pin edges), in emulated time.
 
 import assert from 'node:assert/strict';
-import { existsSync } from 'node:fs';
 import { before, test } from 'node:test';
 
-import { DEFAULT_ELF, EmulatedBoard, FINAL_REPLY } from '../src/board.js';
-import { loadBootrom } from '../src/bootrom.js';
+import { EmulatedBoard, FINAL_REPLY } from '../src/board.js';
+import { firmwareBootrom } from '../src/e2e-support.js';
 
 // The wiring and timing the firmware promises (docs: CONTEXT "Wiring"), restated here from
 // the spec rather than taken from the firmware: 125 MHz / divider 40 -> 320 ns per count.
@@ -17,8 +16,7 @@ const DEFAULT_FRAME_HZ = 50;
 
 let bootrom;
 before(() => {
-  assert.ok(existsSync(DEFAULT_ELF), `no firmware ELF at ${DEFAULT_ELF}: build it with \`cargo fw\``);
-  bootrom = loadBootrom();
+  bootrom = firmwareBootrom();
 });
 
 function bootedBoard() {

@@ -5,16 +5,15 @@
 // produced through the wire was produced here.
 
 import assert from 'node:assert/strict';
-import { existsSync, readFileSync } from 'node:fs';
+import { readFileSync } from 'node:fs';
 import { before, test } from 'node:test';
 
-import { DEFAULT_ELF } from '../src/board.js';
-import { loadBootrom } from '../src/bootrom.js';
 import {
   assertConstant,
   bootQuiet,
   capture,
   defaultSettings,
+  firmwareBootrom,
   HOME,
   lerpPose,
   ok,
@@ -37,8 +36,7 @@ const observed = new Set();
 let bootrom;
 let reference;
 before(() => {
-  assert.ok(existsSync(DEFAULT_ELF), `no firmware ELF at ${DEFAULT_ELF}: build it with \`cargo fw\``);
-  bootrom = loadBootrom();
+  bootrom = firmwareBootrom();
   reference = new HostReference();
 });
 

@@ -3,16 +3,14 @@
 // order (a frame overwritten before it was latched would make the servos jump two steps).
 
 import assert from 'node:assert/strict';
-import { existsSync } from 'node:fs';
 import { before, test } from 'node:test';
 
-import { DEFAULT_ELF } from '../src/board.js';
-import { loadBootrom } from '../src/bootrom.js';
 import {
   assertMoveOnPins,
   bootQuiet,
   capture,
   defaultSettings,
+  firmwareBootrom,
   framePeriodNanos,
   framePoses,
   HOME,
@@ -26,8 +24,7 @@ import { HostReference } from '../src/host-reference.js';
 let bootrom;
 let reference;
 before(() => {
-  assert.ok(existsSync(DEFAULT_ELF), `no firmware ELF at ${DEFAULT_ELF}: build it with \`cargo fw\``);
-  bootrom = loadBootrom();
+  bootrom = firmwareBootrom();
   reference = new HostReference();
 });
 

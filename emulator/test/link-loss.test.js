@@ -4,29 +4,18 @@
 // measurement (the power-on pulses are home).
 
 import assert from 'node:assert/strict';
-import { existsSync } from 'node:fs';
 import { before, test } from 'node:test';
 
-import { DEFAULT_ELF, EmulatedBoard } from '../src/board.js';
-import { loadBootrom } from '../src/bootrom.js';
+import { EmulatedBoard } from '../src/board.js';
+import { firmwareBootrom, FRAME_MS, steadyPulses } from '../src/e2e-support.js';
 
-const FRAME_MS = 20; // 50 Hz
 const COUNT_US = 0.32; // one PWM count
 
 let bootrom;
 before(() => {
-  assert.ok(existsSync(DEFAULT_ELF), `no firmware ELF at ${DEFAULT_ELF}: build it with \`cargo fw\``);
-  bootrom = loadBootrom();
+  bootrom = firmwareBootrom();
 });
 
-function steadyPulses(board, frames = 3) {
-  const first = board.pulseWidthsUs();
-  for (let i = 0; i < frames; i++) {
-    board.runMs(FRAME_MS);
-    assert.deepEqual(board.pulseWidthsUs(), first, `pins moved at ${board.millis} ms`);
-  }
-  return first;
-}
 
 function bootedBoard() {
   const board = new EmulatedBoard({ bootrom });

@@ -4,11 +4,8 @@
 // (README.md "Motion"); per-frame pulses come from the host core (src/host-reference.js).
 
 import assert from 'node:assert/strict';
-import { existsSync } from 'node:fs';
 import { before, test } from 'node:test';
 
-import { DEFAULT_ELF } from '../src/board.js';
-import { loadBootrom } from '../src/bootrom.js';
 import {
   assertConstant,
   assertMoveOnPins,
@@ -16,6 +13,7 @@ import {
   bootQuiet,
   capture,
   defaultSettings,
+  firmwareBootrom,
   framePeriodNanos,
   framePoses,
   HOME,
@@ -34,8 +32,7 @@ import { HostReference } from '../src/host-reference.js';
 let bootrom;
 let reference;
 before(() => {
-  assert.ok(existsSync(DEFAULT_ELF), `no firmware ELF at ${DEFAULT_ELF}: build it with \`cargo fw\``);
-  bootrom = loadBootrom();
+  bootrom = firmwareBootrom();
   reference = new HostReference();
 });
 

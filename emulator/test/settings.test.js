@@ -3,11 +3,8 @@
 // cut pulse, baud rate on the line), `defaults` restores them. Refusals are in errors.test.js.
 
 import assert from 'node:assert/strict';
-import { existsSync } from 'node:fs';
 import { before, test } from 'node:test';
 
-import { DEFAULT_ELF } from '../src/board.js';
-import { loadBootrom } from '../src/bootrom.js';
 import {
   assertConstant,
   assertPins,
@@ -15,6 +12,7 @@ import {
   capture,
   COUNT_NANOS,
   defaultSettings,
+  firmwareBootrom,
   framePeriodNanos,
   HOME,
   ok,
@@ -32,8 +30,7 @@ import { HostReference } from '../src/host-reference.js';
 let bootrom;
 let reference;
 before(() => {
-  assert.ok(existsSync(DEFAULT_ELF), `no firmware ELF at ${DEFAULT_ELF}: build it with \`cargo fw\``);
-  bootrom = loadBootrom();
+  bootrom = firmwareBootrom();
   reference = new HostReference();
 });
 

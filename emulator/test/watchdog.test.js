@@ -13,31 +13,20 @@
 // masked.
 
 import assert from 'node:assert/strict';
-import { existsSync } from 'node:fs';
 import { before, test } from 'node:test';
 
-import { BANNER, DEFAULT_ELF, EmulatedBoard, WDSEL_FULL_RESET } from '../src/board.js';
-import { loadBootrom } from '../src/bootrom.js';
+import { BANNER, EmulatedBoard, WDSEL_FULL_RESET } from '../src/board.js';
+import { firmwareBootrom, FRAME_MS, steadyPulses } from '../src/e2e-support.js';
 
-const FRAME_MS = 20;
 const WATCHDOG_MS = 500; // the firmware's documented watchdog period
 const HANG_ADDRESS = 0x20041000; // SRAM bank 5: outside the firmware's 256 KiB RAM region
 const BRANCH_TO_SELF = 0xe7fe; // Thumb `b .`
 
 let bootrom;
 before(() => {
-  assert.ok(existsSync(DEFAULT_ELF), `no firmware ELF at ${DEFAULT_ELF}: build it with \`cargo fw\``);
-  bootrom = loadBootrom();
+  bootrom = firmwareBootrom();
 });
 
-function steadyPulses(board, frames = 3) {
-  const first = board.pulseWidthsUs();
-  for (let i = 0; i < frames; i++) {
-    board.runMs(FRAME_MS);
-    assert.deepEqual(board.pulseWidthsUs(), first, `pins moved at ${board.millis} ms`);
-  }
-  return first;
-}
 
 /** Boots with resets enabled, measures the power-on pulses, then moves away from home. */
 function movedBoard() {
