@@ -28,7 +28,6 @@ type Controller = control::Controller<RomMath>;
 #[used]
 pub static BOOT2: [u8; 256] = rp2040_boot2::BOOT_LOADER_W25Q080;
 
-const XTAL_HZ: u32 = 12_000_000;
 /// Reset the chip if the main loop stalls this long (a pass normally takes well under a frame).
 const WATCHDOG_TIMEOUT_MS: u32 = 500;
 /// Received bytes handed to the controller per pass, so servo frames are never kept waiting.
@@ -38,18 +37,14 @@ const RX_BYTES_PER_PASS: usize = 64;
 fn main() -> ! {
     let mut p = pac::Peripherals::take().expect("peripherals are taken once, here");
     let mut watchdog = Watchdog::new(p.WATCHDOG);
-    // 12 MHz crystal -> PLL -> 125 MHz clk_sys and clk_peri.
-    let Ok(clocks) = hal::clocks::init_clocks_and_plls(
-        XTAL_HZ,
+    let clocks = firmware::init_clocks(
         p.XOSC,
         p.CLOCKS,
         p.PLL_SYS,
         p.PLL_USB,
         &mut p.RESETS,
         &mut watchdog,
-    ) else {
-        panic!("clock setup failed");
-    };
+    );
     let sio = Sio::new(p.SIO);
     let pins = hal::gpio::Pins::new(p.IO_BANK0, p.PADS_BANK0, sio.gpio_bank0, &mut p.RESETS);
 

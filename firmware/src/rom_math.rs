@@ -36,6 +36,17 @@ const FSQRT: usize = 0x18;
 const FSIN: usize = 0x40;
 const FATAN2: usize = 0x58;
 
+/// The soft-float routines the IK calls, by name, with their table offsets (for the benchmark,
+/// which attributes cycles to them).
+pub const IK_ROUTINES: [(&str, usize); 6] = [
+    ("fadd", FADD),
+    ("fsub", FSUB),
+    ("fmul", FMUL),
+    ("fsqrt", FSQRT),
+    ("fsin", FSIN),
+    ("fatan2", FATAN2),
+];
+
 /// The soft-float table's address (0 until first looked up).
 static TABLE: AtomicUsize = AtomicUsize::new(0);
 /// `fatan2`, or `libm`'s on a ROM without it (0 until first looked up).

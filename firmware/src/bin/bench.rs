@@ -40,34 +40,21 @@ use rp2040_hal::{
 #[used]
 pub static BOOT2: [u8; 256] = rp2040_boot2::BOOT_LOADER_W25Q080;
 
-const XTAL_HZ: u32 = 12_000_000;
 const BAUD: u32 = 921_600;
 const MAX_LINE: usize = 128;
-/// Soft-float table entries the IK uses (byte offsets, datasheet table 180).
-const ROM_FUNCTIONS: [(&str, usize); 6] = [
-    ("fadd", 0x00),
-    ("fsub", 0x04),
-    ("fmul", 0x08),
-    ("fsqrt", 0x18),
-    ("fsin", 0x40),
-    ("fatan2", 0x58),
-];
 
 #[hal::entry]
 fn main() -> ! {
     let mut p = pac::Peripherals::take().expect("peripherals are taken once, here");
     let mut watchdog = Watchdog::new(p.WATCHDOG);
-    let Ok(clocks) = hal::clocks::init_clocks_and_plls(
-        XTAL_HZ,
+    let clocks = firmware::init_clocks(
         p.XOSC,
         p.CLOCKS,
         p.PLL_SYS,
         p.PLL_USB,
         &mut p.RESETS,
         &mut watchdog,
-    ) else {
-        panic!("clock setup failed");
-    };
+    );
     let sio = Sio::new(p.SIO);
     let pins = hal::gpio::Pins::new(p.IO_BANK0, p.PADS_BANK0, sio.gpio_bank0, &mut p.RESETS);
     let uart_pins = (pins.gpio0.into_function(), pins.gpio1.into_function());
@@ -137,7 +124,7 @@ fn main() -> ! {
                 // Where the soft-float routines are, so the harness can name ROM addresses.
                 let table = hal::rom_data::soft_float_table();
                 let _ = out.push('t');
-                for (name, offset) in ROM_FUNCTIONS {
+                for (name, offset) in firmware::rom_math::IK_ROUTINES {
                     // SAFETY: offsets inside the table of every ROM version with fatan2 (v2+).
                     let address = unsafe { table.add(offset / 4).read() } & !1;
                     let _ = write!(out, " {name}={address:x}");
