@@ -5,7 +5,9 @@
 //! wrappers (and the `__aeabi_f*` intrinsics the compiler calls for `+ - *`) add a table look-up
 //! and finiteness checks around every ROM call, about 40 cycles on top of a 55-70 cycle `fadd`
 //! or `fmul`. The IK's hot loop calls the ROM through [`Math`] instead, as the Pico SDK does:
-//! the soft-float table's address is looked up once and kept in RAM ([`table`]).
+//! the soft-float table's address is looked up once and kept in RAM ([`table`]), and the
+//! addresses of `fadd`, `fsub` and `fmul` (about 240 calls per IK) are kept in RAM themselves
+//! ([`ADD`], [`SUB`], [`MUL`]), so each call is two loads and a `blx`.
 //!
 //! ABI facts relied on (RP2040 datasheet, section 2.8.3 "Floating point"; checked on the
 //! emulated chip by `emulator/test/rom-math.test.js`):
@@ -23,7 +25,7 @@
 //!   the IK checks the pose and bounds its magnitudes before they could overflow.
 
 use core::arch::asm;
-use core::sync::atomic::{AtomicUsize, Ordering};
+use core::sync::atomic::{AtomicPtr, AtomicUsize, Ordering};
 
 use kinematics_core::Math;
 use rp2040_hal::rom_data;
@@ -53,6 +55,48 @@ static TABLE: AtomicUsize = AtomicUsize::new(0);
 static ATAN2: AtomicUsize = AtomicUsize::new(0);
 
 type BinaryFn = extern "C" fn(f32, f32) -> f32;
+
+/// `fadd`, `fsub`, `fmul`: until the first call, a stand-in ([`first_add`] ...) that stores the
+/// ROM routines' addresses here and then calls the ROM. Always an `extern "C" fn(f32, f32) ->
+/// f32`.
+static ADD: AtomicPtr<()> = AtomicPtr::new(first_add as BinaryFn as *mut ());
+/// See [`ADD`].
+static SUB: AtomicPtr<()> = AtomicPtr::new(first_sub as BinaryFn as *mut ());
+/// See [`ADD`].
+static MUL: AtomicPtr<()> = AtomicPtr::new(first_mul as BinaryFn as *mut ());
+
+/// Stores the ROM's `fadd`, `fsub` and `fmul` in [`ADD`], [`SUB`], [`MUL`] (the same addresses
+/// whoever does it, so a race could only repeat it).
+fn resolve_arithmetic() {
+    ADD.store(entry(FADD) as *mut (), Ordering::Relaxed);
+    SUB.store(entry(FSUB) as *mut (), Ordering::Relaxed);
+    MUL.store(entry(FMUL) as *mut (), Ordering::Relaxed);
+}
+
+extern "C" fn first_add(a: f32, b: f32) -> f32 {
+    resolve_arithmetic();
+    binary(FADD, a, b)
+}
+
+extern "C" fn first_sub(a: f32, b: f32) -> f32 {
+    resolve_arithmetic();
+    binary(FSUB, a, b)
+}
+
+extern "C" fn first_mul(a: f32, b: f32) -> f32 {
+    resolve_arithmetic();
+    binary(FMUL, a, b)
+}
+
+/// Calls the routine in `slot` ([`ADD`], [`SUB`] or [`MUL`]).
+#[inline]
+fn call(slot: &AtomicPtr<()>, a: f32, b: f32) -> f32 {
+    // SAFETY: the slots only ever hold `extern "C" fn(f32, f32) -> f32`s: a stand-in above or
+    // the ROM routine it stores (see module docs).
+    let f: BinaryFn =
+        unsafe { core::mem::transmute::<*mut (), BinaryFn>(slot.load(Ordering::Relaxed)) };
+    f(a, b)
+}
 type UnaryFn = extern "C" fn(f32) -> f32;
 
 /// The boot ROM's float library, called directly.
@@ -136,8 +180,9 @@ impl Math for RomMath {
 
     #[inline]
     fn sqrt(x: f32) -> f32 {
-        // The ROM returns -inf for negative input; the trait promises NaN.
-        if x >= 0.0 {
+        // The ROM returns -inf for negative input; the trait promises NaN. `x >= 0.0` in
+        // integer instructions (a float comparison is a library call): +0 up to +inf, or -0.
+        if x.to_bits() <= f32::INFINITY.to_bits() || x.to_bits() == (-0.0f32).to_bits() {
             // SAFETY: `fsqrt` is `extern "C" fn(f32) -> f32`.
             let f: UnaryFn = unsafe { core::mem::transmute::<usize, UnaryFn>(entry(FSQRT)) };
             f(x)
@@ -153,16 +198,16 @@ impl Math for RomMath {
 
     #[inline]
     fn add(a: f32, b: f32) -> f32 {
-        binary(FADD, a, b)
+        call(&ADD, a, b)
     }
 
     #[inline]
     fn sub(a: f32, b: f32) -> f32 {
-        binary(FSUB, a, b)
+        call(&SUB, a, b)
     }
 
     #[inline]
     fn mul(a: f32, b: f32) -> f32 {
-        binary(FMUL, a, b)
+        call(&MUL, a, b)
     }
 }

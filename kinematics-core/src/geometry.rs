@@ -22,7 +22,7 @@ use core::f32::consts::PI;
 use core::fmt;
 
 use crate::ik;
-use crate::math::Libm;
+use crate::math::{Libm, Math, Real};
 use crate::pose::Pose;
 use crate::{Vec3, LEGS};
 
@@ -412,14 +412,21 @@ impl PairedLayout {
     }
 }
 
-/// Wraps an angle into `(-pi, pi]`, rad.
-pub(crate) fn wrap_angle_rad(mut a: f32) -> f32 {
-    if a > PI {
-        a -= 2.0 * PI;
-    } else if a <= -PI {
-        a += 2.0 * PI;
+/// Wraps an angle into `(-pi, pi]`, rad, with `M`'s arithmetic (the IK's hot path). The angle
+/// must be finite (see [`Math::add`]).
+pub(crate) fn wrap_angle_rad<M: Math>(a: f32) -> f32 {
+    // Integer comparisons (`math::lt`, `math::le`): float ones are library calls on the chip.
+    // The correction goes through `M` too: a plain `a - 2 pi` would be computed on every call
+    // (the compiler evaluates cheap-looking float operations ahead of the branch, but on the
+    // chip it is a library call of about 100 cycles).
+    let two_pi = Real::<M>::new(2.0 * PI);
+    if crate::math::lt(PI, a) {
+        (Real::new(a) - two_pi).0
+    } else if crate::math::le(a, -PI) {
+        (Real::new(a) + two_pi).0
+    } else {
+        a
     }
-    a
 }
 
 #[cfg(test)]
@@ -535,8 +542,8 @@ mod tests {
 
     #[test]
     fn wrap_angle_stays_in_range() {
-        assert!((wrap_angle_rad(3.0 * PI / 2.0) + PI / 2.0).abs() < 1e-6);
-        assert!((wrap_angle_rad(-3.0 * PI / 2.0) - PI / 2.0).abs() < 1e-6);
-        assert_eq!(wrap_angle_rad(0.5), 0.5);
+        assert!((wrap_angle_rad::<Libm>(3.0 * PI / 2.0) + PI / 2.0).abs() < 1e-6);
+        assert!((wrap_angle_rad::<Libm>(-3.0 * PI / 2.0) - PI / 2.0).abs() < 1e-6);
+        assert_eq!(wrap_angle_rad::<Libm>(0.5), 0.5);
     }
 }

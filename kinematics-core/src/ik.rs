@@ -204,7 +204,7 @@ pub fn arm_angles<M: Math>(geometry: &Geometry, pose: &Pose) -> Result<[f32; LEG
         arm_angles_raw::<M>(geometry, pose).map_err(|leg| IkError::Unreachable { leg })?;
     for (i, a) in alpha.iter_mut().enumerate() {
         let alpha0 = Real::<M>::new(geometry.alpha0_rad(i));
-        *a = (alpha0 + Real::new(wrap_angle_rad((Real::new(*a) - alpha0).0))).0;
+        *a = (alpha0 + Real::new(wrap_angle_rad::<M>((Real::new(*a) - alpha0).0))).0;
     }
     Ok(alpha)
 }

@@ -111,7 +111,8 @@ impl ServoConfig {
     /// True if `pulse_us` is finite and within `[min_us, max_us]`.
     #[inline]
     pub fn allows(&self, pulse_us: f32) -> bool {
-        pulse_us >= self.min_us && pulse_us <= self.max_us
+        // Integer comparisons, exactly IEEE's (float ones are library calls on the chip).
+        crate::math::le(self.min_us, pulse_us) && crate::math::le(pulse_us, self.max_us)
     }
 
     /// Checks this servo's numbers; `servo` (1..=6) names it in the error.
