@@ -147,7 +147,7 @@ fn below(x: f32, bound: f32) -> bool {
 /// then `L`, `M`, `N` and the half-angle root, all arithmetic through `M` ([`Real`]). With
 /// `L - N` and `L + N` at hand, the discriminant is `D = M^2 - (L - N)(L + N)`.
 pub(crate) fn arm_angles_raw<M: Math>(geometry: &Geometry, pose: &Pose) -> Result<[f32; LEGS], u8> {
-    let r = pose.rotation::<M>();
+    let r = pose.rotation_columns::<M>(!geometry.planar_platform);
     let real = Real::<M>::new;
     let row = |i: usize| [real(r[(i, 0)]), real(r[(i, 1)]), real(r[(i, 2)])];
     let rows = [row(0), row(1), row(2)];
@@ -197,29 +197,40 @@ pub(crate) fn arm_angles_raw<M: Math>(geometry: &Geometry, pose: &Pose) -> Resul
     Ok(alpha)
 }
 
-/// Arm angles `alpha_i` for a pose (eq. 9), rad, each within `(-pi, pi]` of its `alpha0`.
-pub fn arm_angles<M: Math>(geometry: &Geometry, pose: &Pose) -> Result<[f32; LEGS], IkError> {
+/// Each arm's angle from its home angle, `alpha_i - alpha0_i` wrapped into `(-pi, pi]`, rad.
+fn arm_offsets<M: Math>(geometry: &Geometry, pose: &Pose) -> Result<[f32; LEGS], IkError> {
     check_pose(pose)?;
     let mut alpha =
         arm_angles_raw::<M>(geometry, pose).map_err(|leg| IkError::Unreachable { leg })?;
     for (i, a) in alpha.iter_mut().enumerate() {
         let alpha0 = Real::<M>::new(geometry.alpha0_rad(i));
-        *a = (alpha0 + Real::new(wrap_angle_rad::<M>((Real::new(*a) - alpha0).0))).0;
+        *a = wrap_angle_rad::<M>((Real::new(*a) - alpha0).0);
+    }
+    Ok(alpha)
+}
+
+/// Arm angles `alpha_i` for a pose (eq. 9), rad, each within `(-pi, pi]` of its `alpha0`.
+pub fn arm_angles<M: Math>(geometry: &Geometry, pose: &Pose) -> Result<[f32; LEGS], IkError> {
+    let mut alpha = arm_offsets::<M>(geometry, pose)?;
+    for (i, a) in alpha.iter_mut().enumerate() {
+        *a = (Real::<M>::new(geometry.alpha0_rad(i)) + Real::new(*a)).0;
     }
     Ok(alpha)
 }
 
 /// Arm angles and pulse widths for a pose (eq. 9, 13, 14): all six or an error naming the
-/// first leg or servo that cannot follow.
+/// first leg or servo that cannot follow. The pulses come from the offsets from home (eq. 13,
+/// 14 use `alpha - alpha0`), not from the angles, which saves a subtraction per servo.
 pub fn solve<M: Math>(
     geometry: &Geometry,
     servos: &ServoSet,
     pose: &Pose,
 ) -> Result<Solution, IkError> {
-    let arm_rad = arm_angles::<M>(geometry, pose)?;
+    let offset_rad = arm_offsets::<M>(geometry, pose)?;
+    let mut arm_rad = [0.0f32; LEGS];
     let mut pulse_us = [0.0f32; LEGS];
-    for (i, (servo, w)) in servos.0.iter().zip(pulse_us.iter_mut()).enumerate() {
-        let pulse = servo.pulse_us_with::<M>(arm_rad[i], geometry.alpha0_rad(i));
+    for (i, servo) in servos.0.iter().enumerate() {
+        let pulse = servo.pulse_us_for_offset::<M>(offset_rad[i]);
         if !servo.allows(pulse) {
             return Err(IkError::ServoLimit {
                 servo: i as u8 + 1,
@@ -228,7 +239,8 @@ pub fn solve<M: Math>(
                 max_us: servo.max_us,
             });
         }
-        *w = pulse;
+        pulse_us[i] = pulse;
+        arm_rad[i] = (Real::<M>::new(geometry.alpha0_rad(i)) + Real::new(offset_rad[i])).0;
     }
     Ok(Solution { arm_rad, pulse_us })
 }
