@@ -6,8 +6,10 @@
 //! and finiteness checks around every ROM call, about 40 cycles on top of a 55-70 cycle `fadd`
 //! or `fmul`. The IK's hot loop calls the ROM through [`Math`] instead, as the Pico SDK does:
 //! the soft-float table's address is looked up once and kept in RAM ([`table`]), and the
-//! addresses of `fadd`, `fsub` and `fmul` (about 240 calls per IK) are kept in RAM themselves
-//! ([`ADD`], [`SUB`], [`MUL`]), so each call is two loads and a `blx`.
+//! addresses of `fadd` and `fmul` (about 215 calls per IK) are kept in RAM themselves
+//! ([`ADD`], [`MUL`]), so each call is two loads and a `blx`. Subtraction is `fadd` with the
+//! second operand's sign flipped (IEEE defines `a - b` as `a + (-b)`; both are correctly
+//! rounded): the ROM's `fsub` costs about 9 cycles more per call.
 //!
 //! ABI facts relied on (RP2040 datasheet, section 2.8.3 "Floating point"; checked on the
 //! emulated chip by `emulator/test/rom-math.test.js`):
@@ -19,7 +21,7 @@
 //! - `fatan2` (offset 0x58) exists from ROM version 2 (every RP2040 sold, B1 and later; B0 was
 //!   never on a Pico); on an older ROM `libm`'s `atan2f` is used instead;
 //! - `fsqrt` returns -inf for negative input; the trait wants NaN, so negatives are caught here;
-//! - `fadd`, `fsub`, `fmul` are correctly rounded for finite values (denormal results flush to
+//! - `fadd`, `fmul` are correctly rounded for finite values (denormal results flush to
 //!   zero, far below anything the kinematics computes). Non-finite operands and overflow are
 //!   not handled as IEEE says (rp2040-hal's wrappers exist for that), which the trait allows:
 //!   the IK checks the pose and bounds its magnitudes before they could overflow.
@@ -32,7 +34,6 @@ use rp2040_hal::rom_data;
 
 /// Byte offsets in the soft-float table (datasheet table 180).
 const FADD: usize = 0x00;
-const FSUB: usize = 0x04;
 const FMUL: usize = 0x08;
 const FSQRT: usize = 0x18;
 const FSIN: usize = 0x40;
@@ -40,9 +41,8 @@ const FATAN2: usize = 0x58;
 
 /// The soft-float routines the IK calls, by name, with their table offsets (for the benchmark,
 /// which attributes cycles to them).
-pub const IK_ROUTINES: [(&str, usize); 6] = [
+pub const IK_ROUTINES: [(&str, usize); 5] = [
     ("fadd", FADD),
-    ("fsub", FSUB),
     ("fmul", FMUL),
     ("fsqrt", FSQRT),
     ("fsin", FSIN),
@@ -56,20 +56,17 @@ static ATAN2: AtomicUsize = AtomicUsize::new(0);
 
 type BinaryFn = extern "C" fn(f32, f32) -> f32;
 
-/// `fadd`, `fsub`, `fmul`: until the first call, a stand-in ([`first_add`] ...) that stores the
+/// `fadd`, `fmul`: until the first call, a stand-in ([`first_add`] ...) that stores the
 /// ROM routines' addresses here and then calls the ROM. Always an `extern "C" fn(f32, f32) ->
 /// f32`.
 static ADD: AtomicPtr<()> = AtomicPtr::new(first_add as BinaryFn as *mut ());
 /// See [`ADD`].
-static SUB: AtomicPtr<()> = AtomicPtr::new(first_sub as BinaryFn as *mut ());
-/// See [`ADD`].
 static MUL: AtomicPtr<()> = AtomicPtr::new(first_mul as BinaryFn as *mut ());
 
-/// Stores the ROM's `fadd`, `fsub` and `fmul` in [`ADD`], [`SUB`], [`MUL`] (the same addresses
+/// Stores the ROM's `fadd` and `fmul` in [`ADD`] and [`MUL`] (the same addresses
 /// whoever does it, so a race could only repeat it).
 fn resolve_arithmetic() {
     ADD.store(entry(FADD) as *mut (), Ordering::Relaxed);
-    SUB.store(entry(FSUB) as *mut (), Ordering::Relaxed);
     MUL.store(entry(FMUL) as *mut (), Ordering::Relaxed);
 }
 
@@ -78,17 +75,12 @@ extern "C" fn first_add(a: f32, b: f32) -> f32 {
     binary(FADD, a, b)
 }
 
-extern "C" fn first_sub(a: f32, b: f32) -> f32 {
-    resolve_arithmetic();
-    binary(FSUB, a, b)
-}
-
 extern "C" fn first_mul(a: f32, b: f32) -> f32 {
     resolve_arithmetic();
     binary(FMUL, a, b)
 }
 
-/// Calls the routine in `slot` ([`ADD`], [`SUB`] or [`MUL`]).
+/// Calls the routine in `slot` ([`ADD`] or [`MUL`]).
 #[inline]
 fn call(slot: &AtomicPtr<()>, a: f32, b: f32) -> f32 {
     // SAFETY: the slots only ever hold `extern "C" fn(f32, f32) -> f32`s: a stand-in above or
@@ -203,7 +195,8 @@ impl Math for RomMath {
 
     #[inline]
     fn sub(a: f32, b: f32) -> f32 {
-        call(&SUB, a, b)
+        // `a + (-b)`: see the module docs.
+        call(&ADD, a, -b)
     }
 
     #[inline]

@@ -72,6 +72,9 @@ pub struct Geometry {
     pub(crate) constants: [LegConstants; LEGS],
     /// Every platform joint has `z = 0` (true of every circular layout): `R p` skips a column.
     pub(crate) planar_platform: bool,
+    /// Every base joint has the same `z` (true of every circular layout): the `z` of
+    /// `(x, y, z) + offset` is the same for all legs, so the IK adds it once.
+    pub(crate) flat_base: bool,
 }
 
 /// Which length of a geometry a [`GeometryError`] is about.
@@ -223,6 +226,7 @@ impl Geometry {
             two_arm_mm: 2.0 * arm_mm,
             constants: [LegConstants::default(); LEGS],
             planar_platform: legs.iter().all(|leg| leg.platform_mm.z == 0.0),
+            flat_base: legs.iter().all(|leg| leg.base_mm.z == legs[0].base_mm.z),
         };
         let two_arm_mm = geometry.two_arm_mm;
         for (c, leg) in geometry.constants.iter_mut().zip(legs.iter()) {

@@ -141,6 +141,18 @@ fn below(x: f32, bound: f32) -> bool {
     x.to_bits() < bound.to_bits()
 }
 
+/// `x + x` (exact): for a normal `x` below 2^127 by adding one to the binary exponent in
+/// integer instructions (an `M::add` costs a library call on the chip); through `M` otherwise.
+#[inline]
+fn twice<M: Math>(x: f32) -> f32 {
+    let exponent = x.to_bits() & 0x7f80_0000;
+    if exponent != 0 && exponent < 0x7f00_0000 {
+        f32::from_bits(x.to_bits() + 0x0080_0000)
+    } else {
+        (Real::<M>::new(x) + Real::new(x)).0
+    }
+}
+
 /// Eq. 9 for all legs without the pose checks; `Err(leg number)` if a leg cannot reach.
 ///
 /// The hot loop of the firmware: per leg, `l = R p + (x, y, z) + ((0, 0, h0) - b)` (eq. 2, 3),
@@ -154,6 +166,9 @@ pub(crate) fn arm_angles_raw<M: Math>(geometry: &Geometry, pose: &Pose) -> Resul
     let position = [real(pose.x_mm), real(pose.y_mm), real(pose.z_mm)];
     let rod_sq_minus_arm_sq = real(geometry.rod_sq_minus_arm_sq);
     let two_arm = real(geometry.two_arm_mm);
+    // With a flat base every leg has the same z offset: `z + offset_z` once for all legs
+    // (the same sum each leg would compute).
+    let shared_z = position[2] + real(geometry.constants[0].offset_mm[2]);
     let mut alpha = [0.0f32; LEGS];
     for (i, c) in geometry.constants.iter().enumerate() {
         let p = c.platform_mm.map(real);
@@ -163,7 +178,12 @@ pub(crate) fn arm_angles_raw<M: Math>(geometry: &Geometry, pose: &Pose) -> Resul
             } else {
                 rows[k][0] * p[0] + rows[k][1] * p[1] + rows[k][2] * p[2]
             };
-            rp + (position[k] + real(c.offset_mm[k]))
+            let translation = if k == 2 && geometry.flat_base {
+                shared_z
+            } else {
+                position[k] + real(c.offset_mm[k])
+            };
+            rp + translation
         });
         let leg_sq = l[0] * l[0] + l[1] * l[1] + l[2] * l[2];
         let big_m = two_arm * l[2];
@@ -188,7 +208,7 @@ pub(crate) fn arm_angles_raw<M: Math>(geometry: &Geometry, pose: &Pose) -> Resul
         } else {
             M::atan2((big_m - root).0, l_plus_n.0)
         };
-        let a = (real(half) + real(half)).0; // 2 half, exactly
+        let a = twice::<M>(half);
         if !below(a.abs(), f32::INFINITY) {
             return Err(i as u8 + 1);
         }
@@ -249,6 +269,25 @@ pub fn solve<M: Math>(
 mod tests {
     use super::*;
     use crate::math::Libm;
+
+    #[test]
+    fn twice_is_x_plus_x() {
+        for x in [
+            0.0f32,
+            -0.0,
+            1e-45,
+            -1e-40,
+            f32::MIN_POSITIVE,
+            -1.0,
+            0.8,
+            -3.0,
+            1.7e38,
+            -1.7e38,
+            3e38,
+        ] {
+            assert_eq!(twice::<Libm>(x).to_bits(), (x + x).to_bits(), "{x}");
+        }
+    }
 
     #[test]
     fn home_gives_home_pulses_exactly() {
