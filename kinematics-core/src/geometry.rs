@@ -56,6 +56,9 @@ pub(crate) struct LegConstants {
     pub n_y_mm: f32,
     /// Home arm angle alpha0, rad.
     pub alpha0_rad: f32,
+    /// `p_i` (x, y) and `offset` in fixed point, 2^-20 mm (`ik::MM_FRAC`).
+    pub platform_q: [i32; 2],
+    pub offset_q: [i32; 3],
 }
 
 /// A validated platform geometry with its derived constants.
@@ -75,6 +78,9 @@ pub struct Geometry {
     /// Every base joint has the same `z` (true of every circular layout): the `z` of
     /// `(x, y, z) + offset` is the same for all legs, so the IK adds it once.
     pub(crate) flat_base: bool,
+    /// Planar, and every `p_i` and offset coordinate within `ik::MAX_FIXED_MM`: the IK may
+    /// compute `l` in fixed point.
+    pub(crate) fixed_point: bool,
 }
 
 /// Which length of a geometry a [`GeometryError`] is about.
@@ -227,6 +233,7 @@ impl Geometry {
             constants: [LegConstants::default(); LEGS],
             planar_platform: legs.iter().all(|leg| leg.platform_mm.z == 0.0),
             flat_base: legs.iter().all(|leg| leg.base_mm.z == legs[0].base_mm.z),
+            fixed_point: false,
         };
         let two_arm_mm = geometry.two_arm_mm;
         for (c, leg) in geometry.constants.iter_mut().zip(legs.iter()) {
@@ -241,7 +248,16 @@ impl Geometry {
             ];
             c.n_x_mm = two_arm_mm * cos_beta;
             c.n_y_mm = two_arm_mm * sin_beta;
+            c.platform_q = [0, 1].map(|k| ik::to_fixed(c.platform_mm[k], ik::MM_FRAC));
+            c.offset_q = [0, 1, 2].map(|k| ik::to_fixed(c.offset_mm[k], ik::MM_FRAC));
         }
+        geometry.fixed_point = geometry.planar_platform
+            && geometry.constants.iter().all(|c| {
+                c.platform_mm
+                    .iter()
+                    .chain(c.offset_mm.iter())
+                    .all(|v| v.abs() < ik::MAX_FIXED_MM)
+            });
         // Eq. 12 is eq. 9 at the home pose (with eq. 9's naming: M0 = 2a(h0 + z_p - z_b),
         // N0 = 2a[cos(beta)(x_p - x_b) + sin(beta)(y_p - y_b)], L0 = 2a^2 when the legs agree
         // exactly). Evaluating eq. 9 itself at home gives the exact alpha0 of every leg.
