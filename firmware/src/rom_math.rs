@@ -5,7 +5,11 @@
 //! wrappers (and the `__aeabi_f*` intrinsics the compiler calls for `+ - *`) add a table look-up
 //! and finiteness checks around every ROM call, about 40 cycles on top of a 55-70 cycle `fadd`
 //! or `fmul`. The IK's hot loop calls the ROM through [`Math`] instead, as the Pico SDK does:
-//! the soft-float table's address is looked up once and kept in RAM ([`table`]).
+//! the soft-float table's address is looked up once and kept in RAM ([`table`]), and the
+//! addresses of `fadd` and `fmul` (about 215 calls per IK) are kept in RAM themselves
+//! ([`ADD`], [`MUL`]), so each call is two loads and a `blx`. Subtraction is `fadd` with the
+//! second operand's sign flipped (IEEE defines `a - b` as `a + (-b)`; both are correctly
+//! rounded): the ROM's `fsub` costs about 9 cycles more per call.
 //!
 //! ABI facts relied on (RP2040 datasheet, section 2.8.3 "Floating point"; checked on the
 //! emulated chip by `emulator/test/rom-math.test.js`):
@@ -17,20 +21,19 @@
 //! - `fatan2` (offset 0x58) exists from ROM version 2 (every RP2040 sold, B1 and later; B0 was
 //!   never on a Pico); on an older ROM `libm`'s `atan2f` is used instead;
 //! - `fsqrt` returns -inf for negative input; the trait wants NaN, so negatives are caught here;
-//! - `fadd`, `fsub`, `fmul` are correctly rounded for finite values (denormal results flush to
+//! - `fadd`, `fmul` are correctly rounded for finite values (denormal results flush to
 //!   zero, far below anything the kinematics computes). Non-finite operands and overflow are
 //!   not handled as IEEE says (rp2040-hal's wrappers exist for that), which the trait allows:
 //!   the IK checks the pose and bounds its magnitudes before they could overflow.
 
 use core::arch::asm;
-use core::sync::atomic::{AtomicUsize, Ordering};
+use core::sync::atomic::{AtomicPtr, AtomicUsize, Ordering};
 
 use kinematics_core::Math;
 use rp2040_hal::rom_data;
 
 /// Byte offsets in the soft-float table (datasheet table 180).
 const FADD: usize = 0x00;
-const FSUB: usize = 0x04;
 const FMUL: usize = 0x08;
 const FSQRT: usize = 0x18;
 const FSIN: usize = 0x40;
@@ -38,9 +41,8 @@ const FATAN2: usize = 0x58;
 
 /// The soft-float routines the IK calls, by name, with their table offsets (for the benchmark,
 /// which attributes cycles to them).
-pub const IK_ROUTINES: [(&str, usize); 6] = [
+pub const IK_ROUTINES: [(&str, usize); 5] = [
     ("fadd", FADD),
-    ("fsub", FSUB),
     ("fmul", FMUL),
     ("fsqrt", FSQRT),
     ("fsin", FSIN),
@@ -53,6 +55,40 @@ static TABLE: AtomicUsize = AtomicUsize::new(0);
 static ATAN2: AtomicUsize = AtomicUsize::new(0);
 
 type BinaryFn = extern "C" fn(f32, f32) -> f32;
+
+/// `fadd`, `fmul`: until the first call, a stand-in ([`first_add`] ...) that stores the
+/// ROM routines' addresses here and then calls the ROM. Always an `extern "C" fn(f32, f32) ->
+/// f32`.
+static ADD: AtomicPtr<()> = AtomicPtr::new(first_add as BinaryFn as *mut ());
+/// See [`ADD`].
+static MUL: AtomicPtr<()> = AtomicPtr::new(first_mul as BinaryFn as *mut ());
+
+/// Stores the ROM's `fadd` and `fmul` in [`ADD`] and [`MUL`] (the same addresses
+/// whoever does it, so a race could only repeat it).
+fn resolve_arithmetic() {
+    ADD.store(entry(FADD) as *mut (), Ordering::Relaxed);
+    MUL.store(entry(FMUL) as *mut (), Ordering::Relaxed);
+}
+
+extern "C" fn first_add(a: f32, b: f32) -> f32 {
+    resolve_arithmetic();
+    binary(FADD, a, b)
+}
+
+extern "C" fn first_mul(a: f32, b: f32) -> f32 {
+    resolve_arithmetic();
+    binary(FMUL, a, b)
+}
+
+/// Calls the routine in `slot` ([`ADD`] or [`MUL`]).
+#[inline]
+fn call(slot: &AtomicPtr<()>, a: f32, b: f32) -> f32 {
+    // SAFETY: the slots only ever hold `extern "C" fn(f32, f32) -> f32`s: a stand-in above or
+    // the ROM routine it stores (see module docs).
+    let f: BinaryFn =
+        unsafe { core::mem::transmute::<*mut (), BinaryFn>(slot.load(Ordering::Relaxed)) };
+    f(a, b)
+}
 type UnaryFn = extern "C" fn(f32) -> f32;
 
 /// The boot ROM's float library, called directly.
@@ -136,8 +172,9 @@ impl Math for RomMath {
 
     #[inline]
     fn sqrt(x: f32) -> f32 {
-        // The ROM returns -inf for negative input; the trait promises NaN.
-        if x >= 0.0 {
+        // The ROM returns -inf for negative input; the trait promises NaN. `x >= 0.0` in
+        // integer instructions (a float comparison is a library call): +0 up to +inf, or -0.
+        if x.to_bits() <= f32::INFINITY.to_bits() || x.to_bits() == (-0.0f32).to_bits() {
             // SAFETY: `fsqrt` is `extern "C" fn(f32) -> f32`.
             let f: UnaryFn = unsafe { core::mem::transmute::<usize, UnaryFn>(entry(FSQRT)) };
             f(x)
@@ -153,16 +190,17 @@ impl Math for RomMath {
 
     #[inline]
     fn add(a: f32, b: f32) -> f32 {
-        binary(FADD, a, b)
+        call(&ADD, a, b)
     }
 
     #[inline]
     fn sub(a: f32, b: f32) -> f32 {
-        binary(FSUB, a, b)
+        // `a + (-b)`: see the module docs.
+        call(&ADD, a, -b)
     }
 
     #[inline]
     fn mul(a: f32, b: f32) -> f32 {
-        binary(FMUL, a, b)
+        call(&MUL, a, b)
     }
 }

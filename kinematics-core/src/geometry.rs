@@ -22,7 +22,7 @@ use core::f32::consts::PI;
 use core::fmt;
 
 use crate::ik;
-use crate::math::Libm;
+use crate::math::{Libm, Math, Real};
 use crate::pose::Pose;
 use crate::{Vec3, LEGS};
 
@@ -56,6 +56,9 @@ pub(crate) struct LegConstants {
     pub n_y_mm: f32,
     /// Home arm angle alpha0, rad.
     pub alpha0_rad: f32,
+    /// `p_i` (x, y) and `offset` in fixed point, 2^-20 mm (`ik::MM_FRAC`).
+    pub platform_q: [i32; 2],
+    pub offset_q: [i32; 3],
 }
 
 /// A validated platform geometry with its derived constants.
@@ -72,6 +75,12 @@ pub struct Geometry {
     pub(crate) constants: [LegConstants; LEGS],
     /// Every platform joint has `z = 0` (true of every circular layout): `R p` skips a column.
     pub(crate) planar_platform: bool,
+    /// Every base joint has the same `z` (true of every circular layout): the `z` of
+    /// `(x, y, z) + offset` is the same for all legs, so the IK adds it once.
+    pub(crate) flat_base: bool,
+    /// Planar, and every `p_i` and offset coordinate within `ik::MAX_FIXED_MM`: the IK may
+    /// compute `l` in fixed point.
+    pub(crate) fixed_point: bool,
 }
 
 /// Which length of a geometry a [`GeometryError`] is about.
@@ -223,6 +232,8 @@ impl Geometry {
             two_arm_mm: 2.0 * arm_mm,
             constants: [LegConstants::default(); LEGS],
             planar_platform: legs.iter().all(|leg| leg.platform_mm.z == 0.0),
+            flat_base: legs.iter().all(|leg| leg.base_mm.z == legs[0].base_mm.z),
+            fixed_point: false,
         };
         let two_arm_mm = geometry.two_arm_mm;
         for (c, leg) in geometry.constants.iter_mut().zip(legs.iter()) {
@@ -237,7 +248,16 @@ impl Geometry {
             ];
             c.n_x_mm = two_arm_mm * cos_beta;
             c.n_y_mm = two_arm_mm * sin_beta;
+            c.platform_q = [0, 1].map(|k| ik::to_fixed(c.platform_mm[k], ik::MM_FRAC));
+            c.offset_q = [0, 1, 2].map(|k| ik::to_fixed(c.offset_mm[k], ik::MM_FRAC));
         }
+        geometry.fixed_point = geometry.planar_platform
+            && geometry.constants.iter().all(|c| {
+                c.platform_mm
+                    .iter()
+                    .chain(c.offset_mm.iter())
+                    .all(|v| v.abs() < ik::MAX_FIXED_MM)
+            });
         // Eq. 12 is eq. 9 at the home pose (with eq. 9's naming: M0 = 2a(h0 + z_p - z_b),
         // N0 = 2a[cos(beta)(x_p - x_b) + sin(beta)(y_p - y_b)], L0 = 2a^2 when the legs agree
         // exactly). Evaluating eq. 9 itself at home gives the exact alpha0 of every leg.
@@ -412,14 +432,21 @@ impl PairedLayout {
     }
 }
 
-/// Wraps an angle into `(-pi, pi]`, rad.
-pub(crate) fn wrap_angle_rad(mut a: f32) -> f32 {
-    if a > PI {
-        a -= 2.0 * PI;
-    } else if a <= -PI {
-        a += 2.0 * PI;
+/// Wraps an angle into `(-pi, pi]`, rad, with `M`'s arithmetic (the IK's hot path). The angle
+/// must be finite (see [`Math::add`]).
+pub(crate) fn wrap_angle_rad<M: Math>(a: f32) -> f32 {
+    // Integer comparisons (`math::lt`, `math::le`): float ones are library calls on the chip.
+    // The correction goes through `M` too: a plain `a - 2 pi` would be computed on every call
+    // (the compiler evaluates cheap-looking float operations ahead of the branch, but on the
+    // chip it is a library call of about 100 cycles).
+    let two_pi = Real::<M>::new(2.0 * PI);
+    if crate::math::lt(PI, a) {
+        (Real::new(a) - two_pi).0
+    } else if crate::math::le(a, -PI) {
+        (Real::new(a) + two_pi).0
+    } else {
+        a
     }
-    a
 }
 
 #[cfg(test)]
@@ -535,8 +562,8 @@ mod tests {
 
     #[test]
     fn wrap_angle_stays_in_range() {
-        assert!((wrap_angle_rad(3.0 * PI / 2.0) + PI / 2.0).abs() < 1e-6);
-        assert!((wrap_angle_rad(-3.0 * PI / 2.0) - PI / 2.0).abs() < 1e-6);
-        assert_eq!(wrap_angle_rad(0.5), 0.5);
+        assert!((wrap_angle_rad::<Libm>(3.0 * PI / 2.0) + PI / 2.0).abs() < 1e-6);
+        assert!((wrap_angle_rad::<Libm>(-3.0 * PI / 2.0) - PI / 2.0).abs() < 1e-6);
+        assert_eq!(wrap_angle_rad::<Libm>(0.5), 0.5);
     }
 }

@@ -109,7 +109,8 @@ pub fn check_pose(pose: &Pose) -> Result<(), IkError> {
     }
     for axis in [Axis::Roll, Axis::Pitch, Axis::Yaw] {
         let value_rad = pose.get(axis);
-        if value_rad.abs() > MAX_ANGLE_RAD {
+        // Integer comparison (a float one is a library call on the chip).
+        if crate::math::lt(MAX_ANGLE_RAD, value_rad.abs()) {
             return Err(IkError::AngleTooLarge { axis, value_rad });
         }
     }
@@ -141,30 +142,196 @@ fn below(x: f32, bound: f32) -> bool {
     x.to_bits() < bound.to_bits()
 }
 
+/// `x + x` (exact): for a normal `x` below 2^127 by adding one to the binary exponent in
+/// integer instructions (an `M::add` costs a library call on the chip); through `M` otherwise.
+#[inline]
+fn twice<M: Math>(x: f32) -> f32 {
+    let exponent = x.to_bits() & 0x7f80_0000;
+    if exponent != 0 && exponent < 0x7f00_0000 {
+        f32::from_bits(x.to_bits() + 0x0080_0000)
+    } else {
+        (Real::<M>::new(x) + Real::new(x)).0
+    }
+}
+
+/// Fraction bits of the rotation entries `R_kj` in the fixed-point part of eq. 2, 3.
+const ROT_FRAC: u32 = 30;
+/// Fraction bits of lengths (mm) in the fixed-point part: steps of 2^-20 mm ~ 1e-6 mm, finer
+/// than an `f32` of the leg lengths (~100 mm, ulp 7.6e-6 mm) resolves.
+pub(crate) const MM_FRAC: u32 = 20;
+/// Bound (exclusive) on `|p_i|`, `|offset_i|` (per coordinate) and on `|x|, |y|, |z|` for the
+/// fixed-point part, mm. With `|R_kj| <= 1 + 2^-10`, `|l_k| < 2 * 1.001 * 384 + 384 + 384
+/// < 1540 mm`, inside the 2048 mm an `i32` with [`MM_FRAC`] fraction bits holds. Larger
+/// geometries and poses take the float path (such a pose is far outside any workspace anyway).
+pub(crate) const MAX_FIXED_MM: f32 = 384.0;
+/// Bound on `|R_kj|` for the fixed-point part: 1 plus far more than any rounding.
+const MAX_ROTATION_ENTRY: f32 = 1.0 + 1.0 / 1024.0;
+
+/// `x * 2^frac` rounded to the nearest integer (halves away from zero), in integer
+/// instructions. `|x| * 2^frac` must be below 2^31 (the callers bound `x` first).
+pub(crate) fn to_fixed(x: f32, frac: u32) -> i32 {
+    let bits = x.to_bits();
+    let exponent = ((bits >> 23) & 0xff) as i32;
+    if exponent == 0 {
+        return 0; // zero or subnormal: far below 2^-frac
+    }
+    let mantissa = ((bits & 0x7f_ffff) | 0x80_0000) as i32;
+    // x = mantissa * 2^(exponent - 150).
+    let shift = exponent - 150 + frac as i32;
+    let magnitude = if shift >= 0 {
+        mantissa << shift
+    } else if shift > -26 {
+        ((mantissa >> (-shift - 1)) + 1) >> 1
+    } else {
+        0
+    };
+    if bits >> 31 != 0 {
+        -magnitude
+    } else {
+        magnitude
+    }
+}
+
+/// `a * b` exactly, for `|a|, |b| < 2^31`, from four 16 x 16 -> 32-bit products: the M0+
+/// multiplies 32 x 32 -> 32 bits in one cycle, while the library's 64-bit multiply takes ~55.
+#[inline]
+fn wide_mul(a: i32, b: i32) -> i64 {
+    let negative = (a ^ b) < 0;
+    let (a, b) = (a.unsigned_abs(), b.unsigned_abs());
+    let (a_hi, a_lo) = (a >> 16, a & 0xffff);
+    let (b_hi, b_lo) = (b >> 16, b & 0xffff);
+    // a_hi, b_hi < 2^15: the middle sum stays below 2^32.
+    let middle = a_hi * b_lo + a_lo * b_hi;
+    let product =
+        (u64::from(a_hi * b_hi) << 32) + (u64::from(middle) << 16) + u64::from(a_lo * b_lo);
+    if negative {
+        -(product as i64)
+    } else {
+        product as i64
+    }
+}
+
+/// `v * 2^-MM_FRAC` rounded to the nearest `f32` (ties to even), in integer instructions (the
+/// library's int-to-float conversion costs ~75 cycles on the M0+). `|v| < 2^31`.
+fn from_fixed(v: i32) -> f32 {
+    if v == 0 {
+        return 0.0;
+    }
+    let sign = v as u32 & 0x8000_0000;
+    let mut m = v.unsigned_abs();
+    // Normalise: leading one to bit 31 (the M0+ has no count-leading-zeros instruction).
+    let mut exponent = 127 + 31 - MM_FRAC;
+    if m < 1 << 16 {
+        m <<= 16;
+        exponent -= 16;
+    }
+    if m < 1 << 24 {
+        m <<= 8;
+        exponent -= 8;
+    }
+    if m < 1 << 28 {
+        m <<= 4;
+        exponent -= 4;
+    }
+    if m < 1 << 30 {
+        m <<= 2;
+        exponent -= 2;
+    }
+    if m < 1 << 31 {
+        m <<= 1;
+        exponent -= 1;
+    }
+    // 24 significant bits, to nearest, ties to even; a carry out of the mantissa moves into
+    // the exponent field, which is then right.
+    let mut mantissa = m >> 8;
+    let rest = m & 0xff;
+    if rest > 0x80 || (rest == 0x80 && mantissa & 1 == 1) {
+        mantissa += 1;
+    }
+    f32::from_bits(sign | ((exponent << 23) + mantissa - (1 << 23)))
+}
+
+/// The pose's part of eq. 2, 3 in fixed point: the first two columns of `R` ([`ROT_FRAC`]
+/// fraction bits) and `(x, y, z)` ([`MM_FRAC`]).
+struct FixedPose {
+    rows: [[i32; 2]; 3],
+    position: [i32; 3],
+}
+
+/// The fixed-point pose, or `None` where the float path must run: a geometry that is not
+/// planar or too large ([`Geometry::fixed_point`]), or a position or rotation beyond the
+/// bounds of [`MAX_FIXED_MM`].
+fn fixed_pose(geometry: &Geometry, pose: &Pose, r: &crate::Mat3) -> Option<FixedPose> {
+    if !geometry.fixed_point {
+        return None;
+    }
+    let position = [pose.x_mm, pose.y_mm, pose.z_mm];
+    let rows: [[f32; 2]; 3] = core::array::from_fn(|k| [r[(k, 0)], r[(k, 1)]]);
+    let in_bounds = position.iter().all(|v| below(v.abs(), MAX_FIXED_MM))
+        && rows
+            .iter()
+            .flatten()
+            .all(|v| below(v.abs(), MAX_ROTATION_ENTRY));
+    in_bounds.then(|| FixedPose {
+        rows: rows.map(|row| row.map(|v| to_fixed(v, ROT_FRAC))),
+        position: position.map(|v| to_fixed(v, MM_FRAC)),
+    })
+}
+
 /// Eq. 9 for all legs without the pose checks; `Err(leg number)` if a leg cannot reach.
 ///
 /// The hot loop of the firmware: per leg, `l = R p + (x, y, z) + ((0, 0, h0) - b)` (eq. 2, 3),
-/// then `L`, `M`, `N` and the half-angle root, all arithmetic through `M` ([`Real`]). With
-/// `L - N` and `L + N` at hand, the discriminant is `D = M^2 - (L - N)(L + N)`.
+/// then `L`, `M`, `N` and the half-angle root, all float arithmetic through `M` ([`Real`]).
+/// With `L - N` and `L + N` at hand, the discriminant is `D = M^2 - (L - N)(L + N)`.
+///
+/// For a planar platform within [`MAX_FIXED_MM`] (every usual build) and a pose within it,
+/// `l` (eq. 2, 3) is computed in fixed point instead: `R` with 30 fraction bits, lengths with
+/// 20 (2^-20 mm), exact integer products and sums, one rounding to 2^-20 mm and one to `f32`
+/// per coordinate. That is as accurate as the `f32` sums it replaces (an `f32` of ~100 mm has
+/// steps of 7.6e-6 mm) and on the chip several times cheaper than 2 `fmul` and 3 `fadd` per
+/// coordinate. Integer arithmetic is the same everywhere, so the host runs it too.
 pub(crate) fn arm_angles_raw<M: Math>(geometry: &Geometry, pose: &Pose) -> Result<[f32; LEGS], u8> {
-    let r = pose.rotation::<M>();
+    let r = pose.rotation_columns::<M>(!geometry.planar_platform);
     let real = Real::<M>::new;
     let row = |i: usize| [real(r[(i, 0)]), real(r[(i, 1)]), real(r[(i, 2)])];
     let rows = [row(0), row(1), row(2)];
     let position = [real(pose.x_mm), real(pose.y_mm), real(pose.z_mm)];
     let rod_sq_minus_arm_sq = real(geometry.rod_sq_minus_arm_sq);
     let two_arm = real(geometry.two_arm_mm);
+    // With a flat base every leg has the same z offset: `z + offset_z` once for all legs
+    // (the same sum each leg would compute).
+    let fixed = fixed_pose(geometry, pose, &r);
+    let shared_z = if fixed.is_none() {
+        position[2] + real(geometry.constants[0].offset_mm[2])
+    } else {
+        real(0.0) // unused
+    };
     let mut alpha = [0.0f32; LEGS];
     for (i, c) in geometry.constants.iter().enumerate() {
         let p = c.platform_mm.map(real);
-        let l: [Real<M>; 3] = core::array::from_fn(|k| {
-            let rp = if geometry.planar_platform {
-                rows[k][0] * p[0] + rows[k][1] * p[1]
-            } else {
-                rows[k][0] * p[0] + rows[k][1] * p[1] + rows[k][2] * p[2]
-            };
-            rp + (position[k] + real(c.offset_mm[k]))
-        });
+        let l: [Real<M>; 3] = if let Some(fixed) = &fixed {
+            core::array::from_fn(|k| {
+                let rp = wide_mul(fixed.rows[k][0], c.platform_q[0])
+                    + wide_mul(fixed.rows[k][1], c.platform_q[1]);
+                // R p rounded to 2^-20 mm (halves up), then the translation, exactly.
+                let rp = ((rp >> (ROT_FRAC - 1)) + 1) >> 1;
+                real(from_fixed(rp as i32 + fixed.position[k] + c.offset_q[k]))
+            })
+        } else {
+            core::array::from_fn(|k| {
+                let rp = if geometry.planar_platform {
+                    rows[k][0] * p[0] + rows[k][1] * p[1]
+                } else {
+                    rows[k][0] * p[0] + rows[k][1] * p[1] + rows[k][2] * p[2]
+                };
+                let translation = if k == 2 && geometry.flat_base {
+                    shared_z
+                } else {
+                    position[k] + real(c.offset_mm[k])
+                };
+                rp + translation
+            })
+        };
         let leg_sq = l[0] * l[0] + l[1] * l[1] + l[2] * l[2];
         let big_m = two_arm * l[2];
         let big_n = real(c.n_x_mm) * l[0] + real(c.n_y_mm) * l[1];
@@ -188,7 +355,7 @@ pub(crate) fn arm_angles_raw<M: Math>(geometry: &Geometry, pose: &Pose) -> Resul
         } else {
             M::atan2((big_m - root).0, l_plus_n.0)
         };
-        let a = (real(half) + real(half)).0; // 2 half, exactly
+        let a = twice::<M>(half);
         if !below(a.abs(), f32::INFINITY) {
             return Err(i as u8 + 1);
         }
@@ -197,29 +364,40 @@ pub(crate) fn arm_angles_raw<M: Math>(geometry: &Geometry, pose: &Pose) -> Resul
     Ok(alpha)
 }
 
-/// Arm angles `alpha_i` for a pose (eq. 9), rad, each within `(-pi, pi]` of its `alpha0`.
-pub fn arm_angles<M: Math>(geometry: &Geometry, pose: &Pose) -> Result<[f32; LEGS], IkError> {
+/// Each arm's angle from its home angle, `alpha_i - alpha0_i` wrapped into `(-pi, pi]`, rad.
+fn arm_offsets<M: Math>(geometry: &Geometry, pose: &Pose) -> Result<[f32; LEGS], IkError> {
     check_pose(pose)?;
     let mut alpha =
         arm_angles_raw::<M>(geometry, pose).map_err(|leg| IkError::Unreachable { leg })?;
     for (i, a) in alpha.iter_mut().enumerate() {
         let alpha0 = Real::<M>::new(geometry.alpha0_rad(i));
-        *a = (alpha0 + Real::new(wrap_angle_rad((Real::new(*a) - alpha0).0))).0;
+        *a = wrap_angle_rad::<M>((Real::new(*a) - alpha0).0);
+    }
+    Ok(alpha)
+}
+
+/// Arm angles `alpha_i` for a pose (eq. 9), rad, each within `(-pi, pi]` of its `alpha0`.
+pub fn arm_angles<M: Math>(geometry: &Geometry, pose: &Pose) -> Result<[f32; LEGS], IkError> {
+    let mut alpha = arm_offsets::<M>(geometry, pose)?;
+    for (i, a) in alpha.iter_mut().enumerate() {
+        *a = (Real::<M>::new(geometry.alpha0_rad(i)) + Real::new(*a)).0;
     }
     Ok(alpha)
 }
 
 /// Arm angles and pulse widths for a pose (eq. 9, 13, 14): all six or an error naming the
-/// first leg or servo that cannot follow.
+/// first leg or servo that cannot follow. The pulses come from the offsets from home (eq. 13,
+/// 14 use `alpha - alpha0`), not from the angles, which saves a subtraction per servo.
 pub fn solve<M: Math>(
     geometry: &Geometry,
     servos: &ServoSet,
     pose: &Pose,
 ) -> Result<Solution, IkError> {
-    let arm_rad = arm_angles::<M>(geometry, pose)?;
+    let offset_rad = arm_offsets::<M>(geometry, pose)?;
+    let mut arm_rad = [0.0f32; LEGS];
     let mut pulse_us = [0.0f32; LEGS];
-    for (i, (servo, w)) in servos.0.iter().zip(pulse_us.iter_mut()).enumerate() {
-        let pulse = servo.pulse_us_with::<M>(arm_rad[i], geometry.alpha0_rad(i));
+    for (i, servo) in servos.0.iter().enumerate() {
+        let pulse = servo.pulse_us_for_offset::<M>(offset_rad[i]);
         if !servo.allows(pulse) {
             return Err(IkError::ServoLimit {
                 servo: i as u8 + 1,
@@ -228,7 +406,8 @@ pub fn solve<M: Math>(
                 max_us: servo.max_us,
             });
         }
-        *w = pulse;
+        pulse_us[i] = pulse;
+        arm_rad[i] = (Real::<M>::new(geometry.alpha0_rad(i)) + Real::new(offset_rad[i])).0;
     }
     Ok(Solution { arm_rad, pulse_us })
 }
@@ -237,6 +416,86 @@ pub fn solve<M: Math>(
 mod tests {
     use super::*;
     use crate::math::Libm;
+
+    #[test]
+    fn fixed_point_conversions_and_products_are_exact() {
+        let mut seed = 0x1234_5678_u32;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 17;
+            seed ^= seed << 5;
+            seed
+        };
+        for _ in 0..100_000 {
+            let (a, b) = (next() as i32 >> (next() % 8), next() as i32 >> (next() % 8));
+            if a == i32::MIN || b == i32::MIN {
+                continue;
+            }
+            assert_eq!(wide_mul(a, b), i64::from(a) * i64::from(b), "{a} * {b}");
+            let v = next() as i32 >> (next() % 31 + 1);
+            let scale = f64::from(1u32 << MM_FRAC);
+            assert_eq!(from_fixed(v), (f64::from(v) / scale) as f32, "{v}");
+            let x = f32::from_bits(next()) % MAX_FIXED_MM;
+            if x.is_finite() {
+                let expected = (f64::from(x) * scale).round() as i32;
+                assert_eq!(to_fixed(x, MM_FRAC), expected, "{x}");
+                let r = x / MAX_FIXED_MM;
+                let expected = (f64::from(r) * f64::from(1u32 << ROT_FRAC)).round() as i32;
+                assert_eq!(to_fixed(r, ROT_FRAC), expected, "{r}");
+            }
+        }
+    }
+
+    #[test]
+    fn fixed_and_float_paths_agree() {
+        // Both are within ~2e-6 rad of the f64 reference (host-tests); 5e-6 rad is ~0.003 us.
+        let g = Geometry::default();
+        assert!(g.fixed_point);
+        let mut float = g.clone();
+        float.fixed_point = false;
+        for i in 0..2000 {
+            let t = i as f32 * 0.01;
+            let pose = Pose::from_degrees(
+                20.0 * libm::sinf(t),
+                20.0 * libm::cosf(1.3 * t),
+                10.0 * libm::sinf(0.7 * t),
+                8.0 * libm::sinf(1.1 * t),
+                8.0 * libm::cosf(0.9 * t),
+                15.0 * libm::sinf(0.5 * t),
+            );
+            match (
+                arm_angles_raw::<Libm>(&g, &pose),
+                arm_angles_raw::<Libm>(&float, &pose),
+            ) {
+                (Ok(a), Ok(b)) => {
+                    for leg in 0..LEGS {
+                        let d = (a[leg] - b[leg]).abs();
+                        assert!(d < 5e-6, "{pose:?} leg {leg}: {d}");
+                    }
+                }
+                (a, b) => assert_eq!(a.is_ok(), b.is_ok(), "{pose:?}"),
+            }
+        }
+    }
+
+    #[test]
+    fn twice_is_x_plus_x() {
+        for x in [
+            0.0f32,
+            -0.0,
+            1e-45,
+            -1e-40,
+            f32::MIN_POSITIVE,
+            -1.0,
+            0.8,
+            -3.0,
+            1.7e38,
+            -1.7e38,
+            3e38,
+        ] {
+            assert_eq!(twice::<Libm>(x).to_bits(), (x + x).to_bits(), "{x}");
+        }
+    }
 
     #[test]
     fn home_gives_home_pulses_exactly() {

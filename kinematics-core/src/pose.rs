@@ -144,6 +144,13 @@ impl Pose {
     /// The rotation matrix `R = Rz(yaw) Ry(pitch) Rx(roll)`, written out as in seed 001 eq. 1.
     /// Angles must be finite; keep them within +-2*pi (the boot ROM's sin/cos need |x| < 128).
     pub fn rotation<M: Math>(&self) -> Mat3 {
+        self.rotation_columns::<M>(true)
+    }
+
+    /// [`Pose::rotation`], but with `third_column` false the third column is left zero (and its
+    /// five multiplications and two additions are not done): the IK of a platform whose joints
+    /// all have `z = 0` never uses it.
+    pub(crate) fn rotation_columns<M: Math>(&self, third_column: bool) -> Mat3 {
         let sin_cos = |x: f32| {
             let (s, c) = M::sin_cos(x);
             (Real::<M>::new(s), Real::<M>::new(c))
@@ -153,16 +160,25 @@ impl Pose {
         let (s_psi, c_psi) = sin_cos(self.yaw_rad);
         // Shared products, so each entry costs at most two multiplications.
         let (cs, ss) = (c_psi * s_theta, s_psi * s_theta);
+        let (r02, r12, r22) = if third_column {
+            (
+                (s_psi * s_phi + cs * c_phi).0,
+                (ss * c_phi - c_psi * s_phi).0,
+                (c_theta * c_phi).0,
+            )
+        } else {
+            (0.0, 0.0, 0.0)
+        };
         Mat3::new(
             (c_psi * c_theta).0,
             (cs * s_phi - s_psi * c_phi).0,
-            (s_psi * s_phi + cs * c_phi).0,
+            r02,
             (s_psi * c_theta).0,
             (c_psi * c_phi + ss * s_phi).0,
-            (ss * c_phi - c_psi * s_phi).0,
+            r12,
             -s_theta.0,
             (c_theta * s_phi).0,
-            (c_theta * c_phi).0,
+            r22,
         )
     }
 }

@@ -95,7 +95,14 @@ impl ServoConfig {
     /// The angles must be finite (see [`Math::add`]).
     #[inline]
     pub fn pulse_us_with<M: Math>(&self, alpha_rad: f32, alpha0_rad: f32) -> f32 {
-        let offset_rad = Real::<M>::new(alpha_rad) - Real::new(alpha0_rad);
+        self.pulse_us_for_offset::<M>((Real::<M>::new(alpha_rad) - Real::new(alpha0_rad)).0)
+    }
+
+    /// Pulse width for an arm angle `alpha0 + offset_rad` (eq. 13 / 14) given the offset from
+    /// home, us, with `M`'s arithmetic. The offset must be finite (see [`Math::add`]).
+    #[inline]
+    pub fn pulse_us_for_offset<M: Math>(&self, offset_rad: f32) -> f32 {
+        let offset_rad = Real::<M>::new(offset_rad);
         let signed_rad = match self.direction {
             Direction::Normal => offset_rad,
             Direction::Reversed => -offset_rad,
@@ -111,7 +118,8 @@ impl ServoConfig {
     /// True if `pulse_us` is finite and within `[min_us, max_us]`.
     #[inline]
     pub fn allows(&self, pulse_us: f32) -> bool {
-        pulse_us >= self.min_us && pulse_us <= self.max_us
+        // Integer comparisons, exactly IEEE's (float ones are library calls on the chip).
+        crate::math::le(self.min_us, pulse_us) && crate::math::le(pulse_us, self.max_us)
     }
 
     /// Checks this servo's numbers; `servo` (1..=6) names it in the error.
