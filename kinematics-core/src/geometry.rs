@@ -59,6 +59,8 @@ pub(crate) struct LegConstants {
     /// `p_i` (x, y) and `offset` in fixed point, 2^-20 mm (`ik::MM_FRAC`).
     pub platform_q: [i32; 2],
     pub offset_q: [i32; 3],
+    /// `n_x`, `n_y` in fixed point, 2^-20 mm.
+    pub n_q: [i32; 2],
 }
 
 /// A validated platform geometry with its derived constants.
@@ -72,14 +74,18 @@ pub struct Geometry {
     pub(crate) rod_sq_minus_arm_sq: f32,
     /// `2a`, mm (the factor in `M` and `N` of eq. 9).
     pub(crate) two_arm_mm: f32,
+    /// `s^2 - a^2` in fixed point, 2^-36 mm^2 (`ik::SQ_FRAC`), from the lengths in `f64`.
+    pub(crate) rod_term_q: i64,
+    /// `2a` in fixed point, 2^-20 mm (`ik::MM_FRAC`).
+    pub(crate) two_arm_q: i32,
     pub(crate) constants: [LegConstants; LEGS],
     /// Every platform joint has `z = 0` (true of every circular layout): `R p` skips a column.
     pub(crate) planar_platform: bool,
     /// Every base joint has the same `z` (true of every circular layout): the `z` of
     /// `(x, y, z) + offset` is the same for all legs, so the IK adds it once.
     pub(crate) flat_base: bool,
-    /// Planar, and every `p_i` and offset coordinate within `ik::MAX_FIXED_MM`: the IK may
-    /// compute `l` in fixed point.
+    /// Planar, every `p_i` and offset coordinate within `ik::MAX_FIXED_MM`, `2a` and
+    /// `s^2 - a^2` within their bounds: the IK may compute `l`, `L`, `M`, `N` in fixed point.
     pub(crate) fixed_point: bool,
 }
 
@@ -230,6 +236,8 @@ impl Geometry {
             home_height_mm,
             rod_sq_minus_arm_sq: rod_mm * rod_mm - arm_mm * arm_mm,
             two_arm_mm: 2.0 * arm_mm,
+            rod_term_q: 0,
+            two_arm_q: 0,
             constants: [LegConstants::default(); LEGS],
             planar_platform: legs.iter().all(|leg| leg.platform_mm.z == 0.0),
             flat_base: legs.iter().all(|leg| leg.base_mm.z == legs[0].base_mm.z),
@@ -250,8 +258,24 @@ impl Geometry {
             c.n_y_mm = two_arm_mm * sin_beta;
             c.platform_q = [0, 1].map(|k| ik::to_fixed(c.platform_mm[k], ik::MM_FRAC));
             c.offset_q = [0, 1, 2].map(|k| ik::to_fixed(c.offset_mm[k], ik::MM_FRAC));
+            c.n_q = [c.n_x_mm, c.n_y_mm].map(|v| {
+                if v.abs() < ik::MAX_FIXED_TWO_ARM_MM {
+                    ik::to_fixed(v, ik::MM_FRAC)
+                } else {
+                    0 // unused: the fixed-point path is off for this arm
+                }
+            });
+        }
+        let rod_term_mm2 =
+            f64::from(rod_mm) * f64::from(rod_mm) - f64::from(arm_mm) * f64::from(arm_mm);
+        let fixed_lengths = two_arm_mm < ik::MAX_FIXED_TWO_ARM_MM
+            && libm::fabs(rod_term_mm2) < f64::from(ik::MAX_FIXED_ROD_TERM_MM2);
+        if fixed_lengths {
+            geometry.two_arm_q = ik::to_fixed(two_arm_mm, ik::MM_FRAC);
+            geometry.rod_term_q = libm::round(rod_term_mm2 * (1u64 << ik::SQ_FRAC) as f64) as i64;
         }
         geometry.fixed_point = geometry.planar_platform
+            && fixed_lengths
             && geometry.constants.iter().all(|c| {
                 c.platform_mm
                     .iter()

@@ -164,6 +164,17 @@ pub(crate) const MM_FRAC: u32 = 20;
 /// < 1540 mm`, inside the 2048 mm an `i32` with [`MM_FRAC`] fraction bits holds. Larger
 /// geometries and poses take the float path (such a pose is far outside any workspace anyway).
 pub(crate) const MAX_FIXED_MM: f32 = 384.0;
+/// Fraction bits of the squared lengths (mm^2) `|l|^2`, `L`, `M`, `N` of eq. 9 in the
+/// fixed-point part: the exact products of two [`MM_FRAC`] numbers (2^-40 mm^2) cut to 2^-36
+/// mm^2 (3e-11 mm^2, while an `f32` of ~1e4 mm^2 has steps of 1e-3 mm^2), which leaves an
+/// `i64` room for every sum: `|l|^2 < 3 * 1540^2 mm^2` is below 2^59 of these steps.
+pub(crate) const SQ_FRAC: u32 = 36;
+/// Bound (exclusive) on `2a` for the fixed-point part, mm: `|N|, |M| < 2a |l| < 2^21 mm^2`.
+pub(crate) const MAX_FIXED_TWO_ARM_MM: f32 = 2.0 * MAX_FIXED_MM;
+/// Bound (exclusive) on `|s^2 - a^2|` for the fixed-point part, mm^2 (a rod up to ~6 m):
+/// `|L +- N| < 2^23 + 4e7 + 2^21 < 2^26 mm^2`, which is 2^62 steps of [`SQ_FRAC`].
+pub(crate) const MAX_FIXED_ROD_TERM_MM2: f32 = 4.0e7;
+
 /// Bound on `|R_kj|` for the fixed-point part: 1 plus far more than any rounding.
 const MAX_ROTATION_ENTRY: f32 = 1.0 + 1.0 / 1024.0;
 
@@ -211,44 +222,67 @@ fn wide_mul(a: i32, b: i32) -> i64 {
     }
 }
 
-/// `v * 2^-MM_FRAC` rounded to the nearest `f32` (ties to even), in integer instructions (the
-/// library's int-to-float conversion costs ~75 cycles on the M0+). `|v| < 2^31`.
-fn from_fixed(v: i32) -> f32 {
-    if v == 0 {
-        return 0.0;
-    }
-    let sign = v as u32 & 0x8000_0000;
-    let mut m = v.unsigned_abs();
-    // Normalise: leading one to bit 31 (the M0+ has no count-leading-zeros instruction).
-    let mut exponent = 127 + 31 - MM_FRAC;
+/// `m` shifted so its leading one is bit 31, and the shift. `m != 0`. (The M0+ has no
+/// count-leading-zeros instruction; the library's takes longer than these five steps.)
+#[inline(always)]
+fn normalise(mut m: u32) -> (u32, u32) {
+    let mut shift = 0;
     if m < 1 << 16 {
         m <<= 16;
-        exponent -= 16;
+        shift += 16;
     }
     if m < 1 << 24 {
         m <<= 8;
-        exponent -= 8;
+        shift += 8;
     }
     if m < 1 << 28 {
         m <<= 4;
-        exponent -= 4;
+        shift += 4;
     }
     if m < 1 << 30 {
         m <<= 2;
-        exponent -= 2;
+        shift += 2;
     }
     if m < 1 << 31 {
         m <<= 1;
-        exponent -= 1;
+        shift += 1;
     }
-    // 24 significant bits, to nearest, ties to even; a carry out of the mantissa moves into
-    // the exponent field, which is then right.
+    (m, shift)
+}
+
+/// The `f32` nearest (ties to even) to `sign * m * 2^(exponent - 158)`, where `m` has its
+/// leading one in bit 31, `sticky` says whether non-zero bits were cut off below `m`, and the
+/// result is a normal number. In integer instructions: a carry out of the mantissa moves into
+/// the exponent field, which is then right.
+#[inline(always)]
+fn pack(sign: u32, m: u32, sticky: bool, exponent: u32) -> f32 {
     let mut mantissa = m >> 8;
     let rest = m & 0xff;
-    if rest > 0x80 || (rest == 0x80 && mantissa & 1 == 1) {
+    if rest > 0x80 || (rest == 0x80 && (sticky || mantissa & 1 == 1)) {
         mantissa += 1;
     }
     f32::from_bits(sign | ((exponent << 23) + mantissa - (1 << 23)))
+}
+
+/// `v * 2^-SQ_FRAC` rounded to the nearest `f32` (ties to even), in integer instructions.
+fn from_fixed_sq(v: i64) -> f32 {
+    let sign = (v >> 32) as u32 & 0x8000_0000;
+    let magnitude = v.unsigned_abs();
+    let (high, low) = ((magnitude >> 32) as u32, magnitude as u32);
+    if high == 0 {
+        if low == 0 {
+            return 0.0;
+        }
+        let (m, shift) = normalise(low);
+        return pack(sign, m, false, 127 + 31 - SQ_FRAC - shift);
+    }
+    let (_, shift) = normalise(high);
+    let (m, sticky) = if shift == 0 {
+        (high, low != 0)
+    } else {
+        ((high << shift) | (low >> (32 - shift)), low << shift != 0)
+    };
+    pack(sign, m, sticky, 127 + 63 - SQ_FRAC - shift)
 }
 
 /// The pose's part of eq. 2, 3 in fixed point: the first two columns of `R` ([`ROT_FRAC`]
@@ -281,15 +315,18 @@ fn fixed_pose(geometry: &Geometry, pose: &Pose, r: &crate::Mat3) -> Option<Fixed
 /// Eq. 9 for all legs without the pose checks; `Err(leg number)` if a leg cannot reach.
 ///
 /// The hot loop of the firmware: per leg, `l = R p + (x, y, z) + ((0, 0, h0) - b)` (eq. 2, 3),
-/// then `L`, `M`, `N` and the half-angle root, all float arithmetic through `M` ([`Real`]).
+/// then `L`, `M`, `N` and the half-angle root, float arithmetic through `M` ([`Real`]).
 /// With `L - N` and `L + N` at hand, the discriminant is `D = M^2 - (L - N)(L + N)`.
 ///
 /// For a planar platform within [`MAX_FIXED_MM`] (every usual build) and a pose within it,
-/// `l` (eq. 2, 3) is computed in fixed point instead: `R` with 30 fraction bits, lengths with
-/// 20 (2^-20 mm), exact integer products and sums, one rounding to 2^-20 mm and one to `f32`
-/// per coordinate. That is as accurate as the `f32` sums it replaces (an `f32` of ~100 mm has
-/// steps of 7.6e-6 mm) and on the chip several times cheaper than 2 `fmul` and 3 `fadd` per
-/// coordinate. Integer arithmetic is the same everywhere, so the host runs it too.
+/// `l` (eq. 2, 3) and then `|l|^2`, `M`, `L - N`, `L + N` are computed in fixed point
+/// instead: `R` with 30 fraction bits, lengths with 20 (2^-20 mm), squared lengths with 36,
+/// exact integer products and sums but for one rounding of `l` to 2^-20 mm and one cut of each
+/// product to 2^-36 mm^2, then one rounding to `f32` of each of the three terms. That is more
+/// accurate than the `f32` arithmetic it replaces (an `f32` of ~100 mm has steps of 7.6e-6 mm,
+/// one of ~1e4 mm^2 steps of 1e-3 mm^2) and on the chip several times cheaper than the 3
+/// conversions, 6 `fmul` and 6 `fadd` per leg. Integer arithmetic is the same everywhere, so
+/// the host runs it too.
 pub(crate) fn arm_angles_raw<M: Math>(geometry: &Geometry, pose: &Pose) -> Result<[f32; LEGS], u8> {
     let r = pose.rotation_columns::<M>(!geometry.planar_platform);
     let real = Real::<M>::new;
@@ -308,17 +345,28 @@ pub(crate) fn arm_angles_raw<M: Math>(geometry: &Geometry, pose: &Pose) -> Resul
     };
     let mut alpha = [0.0f32; LEGS];
     for (i, c) in geometry.constants.iter().enumerate() {
-        let p = c.platform_mm.map(real);
-        let l: [Real<M>; 3] = if let Some(fixed) = &fixed {
-            core::array::from_fn(|k| {
+        // `M`, `L - N` and `L + N` of eq. 9, mm^2.
+        let (big_m, l_minus_n, l_plus_n) = if let Some(fixed) = &fixed {
+            // l (eq. 2, 3) in 2^-20 mm: R p rounded to nearest (halves up), then the
+            // translation, exactly.
+            let l: [i32; 3] = core::array::from_fn(|k| {
                 let rp = wide_mul(fixed.rows[k][0], c.platform_q[0])
                     + wide_mul(fixed.rows[k][1], c.platform_q[1]);
-                // R p rounded to 2^-20 mm (halves up), then the translation, exactly.
-                let rp = ((rp >> (ROT_FRAC - 1)) + 1) >> 1;
-                real(from_fixed(rp as i32 + fixed.position[k] + c.offset_q[k]))
-            })
+                (((rp >> (ROT_FRAC - 1)) + 1) >> 1) as i32 + fixed.position[k] + c.offset_q[k]
+            });
+            // Products of two 2^-20 mm numbers, cut to 2^-36 mm^2.
+            let sq = |a: i32, b: i32| wide_mul(a, b) >> (2 * MM_FRAC - SQ_FRAC);
+            let leg_sq = sq(l[0], l[0]) + sq(l[1], l[1]) + sq(l[2], l[2]);
+            let big_l = leg_sq - geometry.rod_term_q;
+            let big_n = sq(c.n_q[0], l[0]) + sq(c.n_q[1], l[1]);
+            (
+                real(from_fixed_sq(sq(geometry.two_arm_q, l[2]))),
+                real(from_fixed_sq(big_l - big_n)),
+                real(from_fixed_sq(big_l + big_n)),
+            )
         } else {
-            core::array::from_fn(|k| {
+            let p = c.platform_mm.map(real);
+            let l: [Real<M>; 3] = core::array::from_fn(|k| {
                 let rp = if geometry.planar_platform {
                     rows[k][0] * p[0] + rows[k][1] * p[1]
                 } else {
@@ -330,19 +378,19 @@ pub(crate) fn arm_angles_raw<M: Math>(geometry: &Geometry, pose: &Pose) -> Resul
                     position[k] + real(c.offset_mm[k])
                 };
                 rp + translation
-            })
+            });
+            let leg_sq = l[0] * l[0] + l[1] * l[1] + l[2] * l[2];
+            let big_m = two_arm * l[2];
+            let big_n = real(c.n_x_mm) * l[0] + real(c.n_y_mm) * l[1];
+            let bounded = below(leg_sq.0, MAX_TERM_MM2)
+                && below(big_m.0.abs(), MAX_TERM_MM2)
+                && below(big_n.0.abs(), MAX_TERM_MM2);
+            if !bounded {
+                return Err(i as u8 + 1);
+            }
+            let big_l = leg_sq - rod_sq_minus_arm_sq;
+            (big_m, big_l - big_n, big_l + big_n)
         };
-        let leg_sq = l[0] * l[0] + l[1] * l[1] + l[2] * l[2];
-        let big_m = two_arm * l[2];
-        let big_n = real(c.n_x_mm) * l[0] + real(c.n_y_mm) * l[1];
-        let bounded = below(leg_sq.0, MAX_TERM_MM2)
-            && below(big_m.0.abs(), MAX_TERM_MM2)
-            && below(big_n.0.abs(), MAX_TERM_MM2);
-        if !bounded {
-            return Err(i as u8 + 1);
-        }
-        let big_l = leg_sq - rod_sq_minus_arm_sq;
-        let (l_minus_n, l_plus_n) = (big_l - big_n, big_l + big_n);
         let discriminant = big_m * big_m - l_minus_n * l_plus_n;
         if !below(discriminant.0, f32::INFINITY) {
             return Err(i as u8 + 1);
@@ -415,6 +463,7 @@ pub fn solve<M: Math>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::geometry::Leg;
     use crate::math::Libm;
 
     #[test]
@@ -432,9 +481,11 @@ mod tests {
                 continue;
             }
             assert_eq!(wide_mul(a, b), i64::from(a) * i64::from(b), "{a} * {b}");
-            let v = next() as i32 >> (next() % 31 + 1);
             let scale = f64::from(1u32 << MM_FRAC);
-            assert_eq!(from_fixed(v), (f64::from(v) / scale) as f32, "{v}");
+            // `i64 as f32` rounds once, to nearest even; the power of two scales exactly.
+            let w = ((u64::from(next()) << 32 | u64::from(next())) as i64) >> (next() % 64);
+            let expected = w as f32 * (-(SQ_FRAC as f32)).exp2();
+            assert_eq!(from_fixed_sq(w).to_bits(), expected.to_bits(), "{w}");
             let x = f32::from_bits(next()) % MAX_FIXED_MM;
             if x.is_finite() {
                 let expected = (f64::from(x) * scale).round() as i32;
@@ -447,12 +498,73 @@ mod tests {
     }
 
     #[test]
-    fn fixed_and_float_paths_agree() {
-        // Both are within ~2e-6 rad of the f64 reference (host-tests); 5e-6 rad is ~0.003 us.
+    fn wide_conversion_rounds_ties_to_even() {
+        // 2^40 + 2^16 (a tie, even stays), + 1 (above the tie), 2^40 + 3 * 2^16 (a tie, odd
+        // rounds up), and the extremes.
+        for w in [
+            (1i64 << 40) + (1 << 16),
+            (1i64 << 40) + (1 << 16) + 1,
+            (1i64 << 40) + 3 * (1 << 16),
+            -((1i64 << 40) + 3 * (1 << 16)),
+            i64::MAX,
+            -i64::MAX,
+            1,
+            -1,
+            0,
+            (1 << 32) - 1,
+            1 << 32,
+        ] {
+            let expected = w as f32 * (-(SQ_FRAC as f32)).exp2();
+            assert_eq!(from_fixed_sq(w).to_bits(), expected.to_bits(), "{w}");
+        }
+    }
+
+    /// Eq. 9 (half-angle form, as in [`arm_angles_raw`]) for one leg in `f64`, rad.
+    fn arm_angle_f64(g: &Geometry, pose: &Pose, leg: usize) -> f64 {
+        let (sr, cr) = libm::sincos(f64::from(pose.roll_rad));
+        let (sp, cp) = libm::sincos(f64::from(pose.pitch_rad));
+        let (sy, cy) = libm::sincos(f64::from(pose.yaw_rad));
+        let r = [
+            [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+            [-sp, cp * sr, cp * cr],
+        ];
+        let t = [
+            f64::from(pose.x_mm),
+            f64::from(pose.y_mm),
+            f64::from(g.home_height_mm()) + f64::from(pose.z_mm),
+        ];
+        let Leg {
+            base_mm: b,
+            platform_mm: p,
+            beta_rad,
+        } = *g.leg(leg);
+        let (p, b) = (
+            [p.x, p.y, p.z].map(f64::from),
+            [b.x, b.y, b.z].map(f64::from),
+        );
+        let l: [f64; 3] =
+            core::array::from_fn(|k| t[k] + (0..3).map(|j| r[k][j] * p[j]).sum::<f64>() - b[k]);
+        let (a, s) = (f64::from(g.arm_mm()), f64::from(g.rod_mm()));
+        let (sin_beta, cos_beta) = libm::sincos(f64::from(beta_rad));
+        let big_l = l.iter().map(|v| v * v).sum::<f64>() - (s * s - a * a);
+        let big_m = 2.0 * a * l[2];
+        let big_n = 2.0 * a * (cos_beta * l[0] + sin_beta * l[1]);
+        let root = libm::sqrt(big_m * big_m + big_n * big_n - big_l * big_l);
+        if big_m >= 0.0 {
+            2.0 * libm::atan2(big_l - big_n, big_m + root)
+        } else {
+            2.0 * libm::atan2(big_m - root, big_l + big_n)
+        }
+    }
+
+    #[test]
+    fn fixed_point_path_is_more_accurate_than_float() {
         let g = Geometry::default();
         assert!(g.fixed_point);
         let mut float = g.clone();
         float.fixed_point = false;
+        let (mut worst_fixed, mut worst_float) = (0.0f64, 0.0f64);
         for i in 0..2000 {
             let t = i as f32 * 0.01;
             let pose = Pose::from_degrees(
@@ -469,13 +581,89 @@ mod tests {
             ) {
                 (Ok(a), Ok(b)) => {
                     for leg in 0..LEGS {
-                        let d = (a[leg] - b[leg]).abs();
-                        assert!(d < 5e-6, "{pose:?} leg {leg}: {d}");
+                        let exact = arm_angle_f64(&g, &pose, leg);
+                        worst_fixed = worst_fixed.max((f64::from(a[leg]) - exact).abs());
+                        worst_float = worst_float.max((f64::from(b[leg]) - exact).abs());
                     }
                 }
                 (a, b) => assert_eq!(a.is_ok(), b.is_ok(), "{pose:?}"),
             }
         }
+        // Measured: 1.8e-6 rad fixed point, 1.0e-5 rad float (the rest is the f32 rotation,
+        // discriminant and atan2). 1e-5 rad is ~0.005 us of pulse.
+        assert!(worst_fixed < 3e-6, "fixed point: {worst_fixed:e} rad");
+        assert!(worst_float < 3e-5, "float: {worst_float:e} rad");
+        assert!(
+            worst_fixed < worst_float,
+            "{worst_fixed:e} vs {worst_float:e}"
+        );
+    }
+
+    #[test]
+    fn fixed_point_path_holds_up_to_its_bounds() {
+        use crate::geometry::PairedLayout;
+        // Builds near the bounds of the fixed-point path (offsets up to ~380 mm, 2a up to
+        // 760 mm), which must take it, and poses out to its limits: integer overflow would
+        // panic in this (debug) build; reachable poses must agree with eq. 9 in f64.
+        let builds = [
+            PairedLayout {
+                base_radius_mm: 240.0,
+                platform_radius_mm: 192.0,
+                arm_mm: 64.0,
+                rod_mm: 384.0,
+                ..PairedLayout::default()
+            },
+            PairedLayout {
+                base_radius_mm: 370.0,
+                platform_radius_mm: 330.0,
+                arm_mm: 380.0,
+                rod_mm: 120.0,
+                ..PairedLayout::default()
+            },
+        ];
+        let mut seed = 0x9e37_79b9_u32;
+        let mut next = |scale: f32| {
+            seed ^= seed << 13;
+            seed ^= seed >> 17;
+            seed ^= seed << 5;
+            (seed as f32 / u32::MAX as f32 * 2.0 - 1.0) * scale
+        };
+        for build in builds {
+            let g = build.build().unwrap();
+            assert!(g.fixed_point, "{build:?}");
+            let (mut ok, mut worst) = (0, 0.0f64);
+            for i in 0..4000 {
+                // Half the poses small, half out to the fixed-point limits.
+                let (mm, deg) = if i % 2 == 0 {
+                    (20.0, 10.0)
+                } else {
+                    (383.0, 180.0)
+                };
+                let pose = Pose::from_degrees(
+                    next(mm),
+                    next(mm),
+                    next(mm),
+                    next(deg),
+                    next(deg),
+                    next(deg),
+                );
+                if let Ok(alpha) = arm_angles_raw::<Libm>(&g, &pose) {
+                    ok += 1;
+                    for (leg, a) in alpha.iter().enumerate() {
+                        let d = (f64::from(*a) - arm_angle_f64(&g, &pose, leg)).abs();
+                        worst = worst.max(d.min((d - 2.0 * core::f64::consts::PI).abs()));
+                    }
+                }
+            }
+            assert!(ok > 500, "{build:?}: {ok} reachable poses");
+            assert!(worst < 2e-5, "{build:?}: {worst:e} rad");
+        }
+        // One step past a bound the float path takes over.
+        let past = PairedLayout {
+            arm_mm: 385.0,
+            ..builds[1]
+        };
+        assert!(!past.build().unwrap().fixed_point);
     }
 
     #[test]
