@@ -244,6 +244,14 @@ impl Geometry {
             fixed_point: false,
         };
         let two_arm_mm = geometry.two_arm_mm;
+        let rod_term_mm2 =
+            f64::from(rod_mm) * f64::from(rod_mm) - f64::from(arm_mm) * f64::from(arm_mm);
+        let fixed_lengths = two_arm_mm < ik::MAX_FIXED_TWO_ARM_MM
+            && libm::fabs(rod_term_mm2) < f64::from(ik::MAX_FIXED_ROD_TERM_MM2);
+        if fixed_lengths {
+            geometry.two_arm_q = ik::to_fixed(two_arm_mm, ik::MM_FRAC);
+            geometry.rod_term_q = libm::round(rod_term_mm2 * (1u64 << ik::SQ_FRAC) as f64) as i64;
+        }
         for (c, leg) in geometry.constants.iter_mut().zip(legs.iter()) {
             let (sin_beta, cos_beta) = libm::sincosf(leg.beta_rad);
             c.sin_beta = sin_beta;
@@ -258,21 +266,10 @@ impl Geometry {
             c.n_y_mm = two_arm_mm * sin_beta;
             c.platform_q = [0, 1].map(|k| ik::to_fixed(c.platform_mm[k], ik::MM_FRAC));
             c.offset_q = [0, 1, 2].map(|k| ik::to_fixed(c.offset_mm[k], ik::MM_FRAC));
-            c.n_q = [c.n_x_mm, c.n_y_mm].map(|v| {
-                if v.abs() < ik::MAX_FIXED_TWO_ARM_MM {
-                    ik::to_fixed(v, ik::MM_FRAC)
-                } else {
-                    0 // unused: the fixed-point path is off for this arm
-                }
-            });
-        }
-        let rod_term_mm2 =
-            f64::from(rod_mm) * f64::from(rod_mm) - f64::from(arm_mm) * f64::from(arm_mm);
-        let fixed_lengths = two_arm_mm < ik::MAX_FIXED_TWO_ARM_MM
-            && libm::fabs(rod_term_mm2) < f64::from(ik::MAX_FIXED_ROD_TERM_MM2);
-        if fixed_lengths {
-            geometry.two_arm_q = ik::to_fixed(two_arm_mm, ik::MM_FRAC);
-            geometry.rod_term_q = libm::round(rod_term_mm2 * (1u64 << ik::SQ_FRAC) as f64) as i64;
+            if fixed_lengths {
+                // |n_x|, |n_y| <= 2a: within `to_fixed`'s range.
+                c.n_q = [c.n_x_mm, c.n_y_mm].map(|v| ik::to_fixed(v, ik::MM_FRAC));
+            }
         }
         geometry.fixed_point = geometry.planar_platform
             && fixed_lengths
