@@ -466,15 +466,18 @@ mod tests {
     use crate::geometry::Leg;
     use crate::math::Libm;
 
+    /// The next number of a xorshift32 sequence (seeded, reproducible test inputs).
+    fn xorshift(seed: &mut u32) -> u32 {
+        *seed ^= *seed << 13;
+        *seed ^= *seed >> 17;
+        *seed ^= *seed << 5;
+        *seed
+    }
+
     #[test]
     fn fixed_point_conversions_and_products_are_exact() {
         let mut seed = 0x1234_5678_u32;
-        let mut next = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 17;
-            seed ^= seed << 5;
-            seed
-        };
+        let mut next = || xorshift(&mut seed);
         for _ in 0..100_000 {
             let (a, b) = (next() as i32 >> (next() % 8), next() as i32 >> (next() % 8));
             if a == i32::MIN || b == i32::MIN {
@@ -623,9 +626,7 @@ mod tests {
         ];
         let mut seed = 0x9e37_79b9_u32;
         let mut next = |scale: f32| {
-            seed ^= seed << 13;
-            seed ^= seed >> 17;
-            seed ^= seed << 5;
+            let seed = xorshift(&mut seed);
             (seed as f32 / u32::MAX as f32 * 2.0 - 1.0) * scale
         };
         for build in builds {
