@@ -7,8 +7,9 @@ use std::io::{Read, Write};
 
 fn main() {
     let mut ctl = control::Controller::new(control::Settings::default());
+    let mut terminal = control::Session::new();
     let mut out = String::new();
-    ctl.banner(&mut out);
+    ctl.banner(&mut terminal, &mut out);
     let stdout = std::io::stdout();
     let mut stdout = stdout.lock();
     let _ = stdout.write_all(out.as_bytes());
@@ -16,7 +17,7 @@ fn main() {
     for byte in std::io::stdin().lock().bytes() {
         let Ok(byte) = byte else { break };
         out.clear();
-        ctl.on_byte(byte, &mut out);
+        ctl.on_byte(&mut terminal, byte, &mut out);
         if byte == b'\n' || byte == b'\r' {
             let mut frames = 0u32;
             while ctl.is_moving() && frames < 10_000_000 {
@@ -35,7 +36,7 @@ fn main() {
                     out.push_str("> ");
                 }
             }
-            ctl.write_notices(&mut out);
+            ctl.write_notices(&mut terminal, &mut out);
         }
         let _ = stdout.write_all(out.as_bytes());
         let _ = stdout.flush();

@@ -1,18 +1,18 @@
-//! Command parsing: one line of text -> one [`Command`], or the [`Error`] that explains why not.
+//! Command parsing: one line of text -> one [`Command`], or the [`ParseError`] that explains
+//! why not.
 //!
 //! Lines are case-insensitive; words are separated by spaces, tabs or commas. Numbers are strict
 //! decimals ([`crate::number`]); lengths are mm, angles degrees. Parsing only looks at the text:
-//! whether a pose is reachable is decided later by the controller.
+//! whether a pose is reachable is decided later by the controller. The usage text and the
+//! message of every refusal are [`crate::report`]'s.
 
 use kinematics_core::pose::Axis;
 use kinematics_core::Pose;
 
 use crate::number::{parse_f32, NumberError};
-use crate::protocol::MAX_LINE;
-use crate::report::{
-    word, Error, Field, USAGE_CHECK, USAGE_MOVE, USAGE_NUDGE, USAGE_POSE, USAGE_SET,
-};
-use crate::settings::{SettingId, SettingValue};
+use crate::protocol::{Spoiled, MAX_LINE};
+use crate::settings::{SettingError, SettingId, SettingValue};
+use crate::word::{word, Word};
 
 /// Values for some of the six axes, in user units (mm, degrees), in [`Axis::ALL`] order.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -30,6 +30,167 @@ impl AxisValues {
             }
         }
         pose
+    }
+}
+
+/// The command words, in the order `help` lists them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Verb {
+    /// `pose`.
+    Pose,
+    /// `move`.
+    Move,
+    /// `nudge`.
+    Nudge,
+    /// `check`.
+    Check,
+    /// `home`.
+    Home,
+    /// `stop`.
+    Stop,
+    /// `status` (or `?`).
+    Status,
+    /// `geometry`.
+    Geometry,
+    /// `config`.
+    Config,
+    /// `set`.
+    Set,
+    /// `defaults`.
+    Defaults,
+    /// `help`.
+    Help,
+}
+
+impl Verb {
+    /// Every command word.
+    pub const ALL: [Verb; 12] = [
+        Verb::Pose,
+        Verb::Move,
+        Verb::Nudge,
+        Verb::Check,
+        Verb::Home,
+        Verb::Stop,
+        Verb::Status,
+        Verb::Geometry,
+        Verb::Config,
+        Verb::Set,
+        Verb::Defaults,
+        Verb::Help,
+    ];
+
+    /// The word that names the command (as typed, lowercase).
+    pub const fn name(self) -> &'static str {
+        match self {
+            Verb::Pose => "pose",
+            Verb::Move => "move",
+            Verb::Nudge => "nudge",
+            Verb::Check => "check",
+            Verb::Home => "home",
+            Verb::Stop => "stop",
+            Verb::Status => "status",
+            Verb::Geometry => "geometry",
+            Verb::Config => "config",
+            Verb::Set => "set",
+            Verb::Defaults => "defaults",
+            Verb::Help => "help",
+        }
+    }
+
+    /// The command a (lowercase) word names; `?` is `status`.
+    pub fn parse(word: &str) -> Option<Verb> {
+        if word == "?" {
+            return Some(Verb::Status);
+        }
+        Verb::ALL.into_iter().find(|v| v.name() == word)
+    }
+}
+
+/// What a [`ParseError::MissingField`] is missing.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Missing {
+    /// A pose coordinate (or the value after `axis=`).
+    Axis(Axis),
+    /// `move`/`nudge` without any `axis=value`.
+    AxisValue,
+    /// `set` without a setting name.
+    SettingName,
+    /// `set <name>` without a value.
+    SettingValue,
+}
+
+/// Why a line is not a command.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ParseError {
+    /// The line is too long, or holds a byte that is not printable ASCII.
+    Spoiled(Spoiled),
+    /// The first word is not a command.
+    UnknownCommand {
+        /// What was typed.
+        word: Word,
+    },
+    /// A value the command needs is missing.
+    MissingField {
+        /// What is missing.
+        what: Missing,
+        /// The command.
+        verb: Verb,
+    },
+    /// There is more on the line than the command takes.
+    ExtraField {
+        /// The first word too many.
+        word: Word,
+        /// The command.
+        verb: Verb,
+    },
+    /// A pose value is not a decimal number.
+    BadNumber {
+        /// The coordinate.
+        axis: Axis,
+        /// What was typed.
+        word: Word,
+    },
+    /// A pose value is NaN or infinity.
+    NotFinite {
+        /// The coordinate.
+        axis: Axis,
+        /// What was typed.
+        word: Word,
+    },
+    /// A pose value does not fit (e.g. `1e39`).
+    NumberTooLarge {
+        /// The coordinate.
+        axis: Axis,
+        /// What was typed.
+        word: Word,
+    },
+    /// `move`/`nudge` named something that is not an axis.
+    UnknownAxis {
+        /// What was typed.
+        word: Word,
+    },
+    /// `move`/`nudge` named an axis twice.
+    DuplicateAxis {
+        /// The axis named twice.
+        axis: Axis,
+    },
+    /// `move`/`nudge` got a word that is not `axis=value`.
+    BadAssignment {
+        /// What was typed.
+        word: Word,
+    },
+    /// `set` named something that is not a setting.
+    UnknownSetting {
+        /// What was typed.
+        word: Word,
+    },
+    /// `set` got a value the setting does not take.
+    Setting(SettingError),
+}
+
+impl From<SettingError> for ParseError {
+    fn from(e: SettingError) -> ParseError {
+        ParseError::Setting(e)
     }
 }
 
@@ -85,140 +246,138 @@ impl<'a> Iterator for Words<'a> {
     }
 }
 
-/// Parses one number for `field`.
-fn number(field: Field, text: &str) -> Result<f32, Error> {
+/// Parses one number for `axis`.
+fn number(axis: Axis, text: &str) -> Result<f32, ParseError> {
     parse_f32(text).map_err(|e| {
         let word = word(text);
         match e {
-            NumberError::NotFinite => Error::NotFinite { field, word },
-            NumberError::TooLarge => Error::NumberTooLarge { field, word },
-            NumberError::Syntax | NumberError::NotWhole => Error::BadNumber { field, word },
+            NumberError::NotFinite => ParseError::NotFinite { axis, word },
+            NumberError::TooLarge => ParseError::NumberTooLarge { axis, word },
+            NumberError::Syntax | NumberError::NotWhole => ParseError::BadNumber { axis, word },
         }
     })
 }
 
-fn no_more(words: &mut Words<'_>, usage: &'static str) -> Result<(), Error> {
+fn no_more(words: &mut Words<'_>, verb: Verb) -> Result<(), ParseError> {
     match words.next() {
-        Some(extra) => Err(Error::ExtraField {
+        Some(extra) => Err(ParseError::ExtraField {
             word: word(extra),
-            usage,
+            verb,
         }),
         None => Ok(()),
     }
 }
 
 /// `x y z roll pitch yaw`, exactly six numbers.
-fn full_pose(words: &mut Words<'_>, usage: &'static str) -> Result<Pose, Error> {
+fn full_pose(words: &mut Words<'_>, verb: Verb) -> Result<Pose, ParseError> {
     let mut v = [0.0f32; 6];
     for (slot, axis) in v.iter_mut().zip(Axis::ALL) {
-        let text = words.next().ok_or(Error::MissingField {
-            what: axis.name(),
-            usage,
+        let text = words.next().ok_or(ParseError::MissingField {
+            what: Missing::Axis(axis),
+            verb,
         })?;
-        *slot = number(Field::Axis(axis), text)?;
+        *slot = number(axis, text)?;
     }
-    no_more(words, usage)?;
+    no_more(words, verb)?;
     Ok(Pose::from_degrees(v[0], v[1], v[2], v[3], v[4], v[5]))
 }
 
 /// `axis=value ...`, at least one, each axis at most once.
-fn axis_values(words: &mut Words<'_>, usage: &'static str) -> Result<AxisValues, Error> {
+fn axis_values(words: &mut Words<'_>, verb: Verb) -> Result<AxisValues, ParseError> {
     let mut values = AxisValues::default();
     let mut any = false;
     for w in words {
         let (name, value) = w
             .split_once('=')
-            .ok_or(Error::BadAssignment { word: word(w) })?;
+            .ok_or(ParseError::BadAssignment { word: word(w) })?;
         let axis = Axis::ALL
             .into_iter()
             .find(|a| a.name() == name)
-            .ok_or(Error::UnknownAxis { word: word(name) })?;
+            .ok_or(ParseError::UnknownAxis { word: word(name) })?;
         let slot = &mut values.0[axis as usize];
         if slot.is_some() {
-            return Err(Error::DuplicateAxis { axis });
+            return Err(ParseError::DuplicateAxis { axis });
         }
         if value.is_empty() {
-            return Err(Error::MissingField {
-                what: axis.name(),
-                usage,
+            return Err(ParseError::MissingField {
+                what: Missing::Axis(axis),
+                verb,
             });
         }
-        *slot = Some(number(Field::Axis(axis), value)?);
+        *slot = Some(number(axis, value)?);
         any = true;
     }
     if any {
         Ok(values)
     } else {
-        Err(Error::MissingField {
-            what: "axis=value",
-            usage,
+        Err(ParseError::MissingField {
+            what: Missing::AxisValue,
+            verb,
         })
     }
 }
 
 /// Parses one line (any case; at most [`MAX_LINE`] characters of printable ASCII). The line
 /// must not be blank.
-pub fn parse(line: &str) -> Result<Command, Error> {
+pub fn parse(line: &str) -> Result<Command, ParseError> {
     if line.len() > MAX_LINE {
-        return Err(Error::LineTooLong);
+        return Err(ParseError::Spoiled(Spoiled::TooLong));
     }
     if let Some(&byte) = line
         .as_bytes()
         .iter()
         .find(|b| !(0x20..=0x7E).contains(*b) && **b != b'\t')
     {
-        return Err(Error::BadCharacter { byte });
+        return Err(ParseError::Spoiled(Spoiled::BadByte(byte)));
     }
     let mut lower = [0u8; MAX_LINE];
     let lower = &mut lower[..line.len()];
     lower.copy_from_slice(line.as_bytes());
     lower.make_ascii_lowercase();
     // Printable ASCII throughout, checked above.
-    let line = core::str::from_utf8(lower).map_err(|_| Error::BadCharacter { byte: 0 })?;
+    let line = core::str::from_utf8(lower).map_err(|_| ParseError::Spoiled(Spoiled::BadByte(0)))?;
 
     let mut words = Words::new(line);
     let name = words.next().unwrap_or("");
-    let simple = |cmd: Command, usage: &'static str, words: &mut Words<'_>| {
-        no_more(words, usage).map(|()| cmd)
-    };
-    match name {
-        "pose" => full_pose(&mut words, USAGE_POSE).map(Command::Pose),
-        "check" => full_pose(&mut words, USAGE_CHECK).map(Command::Check),
-        "move" => axis_values(&mut words, USAGE_MOVE).map(Command::Move),
-        "nudge" => axis_values(&mut words, USAGE_NUDGE).map(Command::Nudge),
-        "home" => simple(Command::Home, "home", &mut words),
-        "stop" => simple(Command::Stop, "stop", &mut words),
-        "status" | "?" => simple(Command::Status, "status", &mut words),
-        "geometry" => simple(Command::Geometry, "geometry", &mut words),
-        "config" => simple(Command::Config, "config", &mut words),
-        "help" => simple(Command::Help, "help", &mut words),
-        "defaults" => simple(Command::Defaults, "defaults", &mut words),
-        "set" => {
-            let name = words.next().ok_or(Error::MissingField {
-                what: "name",
-                usage: USAGE_SET,
+    let verb = Verb::parse(name).ok_or(ParseError::UnknownCommand { word: word(name) })?;
+    let simple = |cmd: Command, words: &mut Words<'_>| no_more(words, verb).map(|()| cmd);
+    match verb {
+        Verb::Pose => full_pose(&mut words, verb).map(Command::Pose),
+        Verb::Check => full_pose(&mut words, verb).map(Command::Check),
+        Verb::Move => axis_values(&mut words, verb).map(Command::Move),
+        Verb::Nudge => axis_values(&mut words, verb).map(Command::Nudge),
+        Verb::Home => simple(Command::Home, &mut words),
+        Verb::Stop => simple(Command::Stop, &mut words),
+        Verb::Status => simple(Command::Status, &mut words),
+        Verb::Geometry => simple(Command::Geometry, &mut words),
+        Verb::Config => simple(Command::Config, &mut words),
+        Verb::Help => simple(Command::Help, &mut words),
+        Verb::Defaults => simple(Command::Defaults, &mut words),
+        Verb::Set => {
+            let name = words.next().ok_or(ParseError::MissingField {
+                what: Missing::SettingName,
+                verb,
             })?;
-            let id = SettingId::parse(name).ok_or(Error::UnknownSetting { word: word(name) })?;
-            let value = words.next().ok_or(Error::MissingField {
-                what: "value",
-                usage: USAGE_SET,
+            let id =
+                SettingId::parse(name).ok_or(ParseError::UnknownSetting { word: word(name) })?;
+            let value = words.next().ok_or(ParseError::MissingField {
+                what: Missing::SettingValue,
+                verb,
             })?;
             let value = id.parse_value(value)?;
-            no_more(&mut words, USAGE_SET)?;
+            no_more(&mut words, verb)?;
             Ok(Command::Set(id, value))
         }
-        other => Err(Error::UnknownCommand { word: word(other) }),
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::report::Code;
     use crate::settings::{ServoParam, ServoSel};
 
-    fn code(line: &str) -> Code {
-        parse(line).unwrap_err().code()
+    fn err(line: &str) -> ParseError {
+        parse(line).unwrap_err()
     }
 
     #[test]
@@ -242,48 +401,57 @@ mod tests {
     fn pose_field_errors_name_the_field() {
         assert_eq!(
             parse("pose 1 2 3 4"),
-            Err(Error::MissingField {
-                what: "pitch",
-                usage: USAGE_POSE
+            Err(ParseError::MissingField {
+                what: Missing::Axis(Axis::Pitch),
+                verb: Verb::Pose
             })
         );
         assert_eq!(
             parse("pose 1 2 3 4 5 6 7"),
-            Err(Error::ExtraField {
+            Err(ParseError::ExtraField {
                 word: word("7"),
-                usage: USAGE_POSE
+                verb: Verb::Pose
             })
         );
         assert_eq!(
             parse("pose 1 2 x 0 0 0"),
-            Err(Error::BadNumber {
-                field: Field::Axis(Axis::Z),
+            Err(ParseError::BadNumber {
+                axis: Axis::Z,
                 word: word("x")
             })
         );
         assert_eq!(
             parse("pose 0 0 0 nan 0 0"),
-            Err(Error::NotFinite {
-                field: Field::Axis(Axis::Roll),
+            Err(ParseError::NotFinite {
+                axis: Axis::Roll,
                 word: word("nan")
             })
         );
         assert_eq!(
             parse("pose 0 0 0 0 0 -inf"),
-            Err(Error::NotFinite {
-                field: Field::Axis(Axis::Yaw),
+            Err(ParseError::NotFinite {
+                axis: Axis::Yaw,
                 word: word("-inf")
             })
         );
         assert_eq!(
             parse("pose 1e39 0 0 0 0 0"),
-            Err(Error::NumberTooLarge {
-                field: Field::Axis(Axis::X),
+            Err(ParseError::NumberTooLarge {
+                axis: Axis::X,
                 word: word("1e39")
             })
         );
-        assert_eq!(code("pose 0x10 0 0 0 0 0"), Code::BadNumber);
-        assert_eq!(code("check 0 0 0 0 0"), Code::MissingField);
+        assert!(matches!(
+            err("pose 0x10 0 0 0 0 0"),
+            ParseError::BadNumber { axis: Axis::X, .. }
+        ));
+        assert!(matches!(
+            err("check 0 0 0 0 0"),
+            ParseError::MissingField {
+                what: Missing::Axis(Axis::Yaw),
+                verb: Verb::Check
+            }
+        ));
     }
 
     #[test]
@@ -308,15 +476,39 @@ mod tests {
 
     #[test]
     fn move_errors() {
-        assert_eq!(code("move"), Code::MissingField);
-        assert_eq!(code("move z"), Code::BadAssignment);
-        assert_eq!(code("move z 10"), Code::BadAssignment);
-        assert_eq!(code("move w=1"), Code::UnknownAxis);
-        assert_eq!(code("move z=1 z=2"), Code::DuplicateAxis);
-        assert_eq!(code("move z="), Code::MissingField);
-        assert_eq!(code("nudge roll=abc"), Code::BadNumber);
-        assert_eq!(code("nudge roll=inf"), Code::NotFinite);
-        assert_eq!(code("nudge x=-1e40"), Code::NumberTooLarge);
+        assert!(matches!(
+            err("move"),
+            ParseError::MissingField {
+                what: Missing::AxisValue,
+                verb: Verb::Move
+            }
+        ));
+        assert!(matches!(err("move z"), ParseError::BadAssignment { .. }));
+        assert!(matches!(err("move z 10"), ParseError::BadAssignment { .. }));
+        assert!(matches!(err("move w=1"), ParseError::UnknownAxis { .. }));
+        assert_eq!(
+            err("move z=1 z=2"),
+            ParseError::DuplicateAxis { axis: Axis::Z }
+        );
+        assert!(matches!(
+            err("move z="),
+            ParseError::MissingField {
+                what: Missing::Axis(Axis::Z),
+                ..
+            }
+        ));
+        assert!(matches!(
+            err("nudge roll=abc"),
+            ParseError::BadNumber { .. }
+        ));
+        assert!(matches!(
+            err("nudge roll=inf"),
+            ParseError::NotFinite { .. }
+        ));
+        assert!(matches!(
+            err("nudge x=-1e40"),
+            ParseError::NumberTooLarge { .. }
+        ));
     }
 
     #[test]
@@ -333,7 +525,10 @@ mod tests {
         ] {
             assert_eq!(parse(text), Ok(cmd), "{text}");
             let extra = std::format!("{text} now");
-            assert_eq!(code(&extra), Code::ExtraField, "{extra}");
+            assert!(
+                matches!(err(&extra), ParseError::ExtraField { .. }),
+                "{extra}"
+            );
         }
     }
 
@@ -350,21 +545,45 @@ mod tests {
             parse("SET Echo OFF"),
             Ok(Command::Set(SettingId::Echo, SettingValue::Flag(false)))
         );
-        assert_eq!(code("set"), Code::MissingField);
-        assert_eq!(code("set frame_hz"), Code::MissingField);
-        assert_eq!(code("set colour red"), Code::UnknownSetting);
-        assert_eq!(code("set frame_hz 100 now"), Code::ExtraField);
-        assert_eq!(code("set frame_hz 1000"), Code::OutOfRange);
+        assert!(matches!(
+            err("set"),
+            ParseError::MissingField {
+                what: Missing::SettingName,
+                ..
+            }
+        ));
+        assert!(matches!(
+            err("set frame_hz"),
+            ParseError::MissingField {
+                what: Missing::SettingValue,
+                ..
+            }
+        ));
+        assert!(matches!(
+            err("set colour red"),
+            ParseError::UnknownSetting { .. }
+        ));
+        assert!(matches!(
+            err("set frame_hz 100 now"),
+            ParseError::ExtraField { .. }
+        ));
+        assert!(matches!(
+            err("set frame_hz 1000"),
+            ParseError::Setting(SettingError::OutOfRange { .. })
+        ));
     }
 
     #[test]
     fn unknown_commands_and_bad_lines() {
         assert_eq!(
             parse("fly 1 2"),
-            Err(Error::UnknownCommand { word: word("fly") })
+            Err(ParseError::UnknownCommand { word: word("fly") })
         );
-        assert_eq!(code(&"x".repeat(MAX_LINE + 1)), Code::LineTooLong);
-        assert_eq!(code("home\u{7}"), Code::BadCharacter);
+        assert_eq!(
+            err(&"x".repeat(MAX_LINE + 1)),
+            ParseError::Spoiled(Spoiled::TooLong)
+        );
+        assert_eq!(err("home\u{7}"), ParseError::Spoiled(Spoiled::BadByte(7)));
     }
 
     proptest::proptest! {

@@ -1,10 +1,11 @@
-//! The controller: bytes in, replies out, six pulse widths per frame.
+//! The controller: the platform's state and the commands that change it. Bytes in (with the
+//! [`Session`] of the link they came from), replies out to that link, six pulse widths per frame.
 //!
-//! It owns the line buffer, the settings and the motion, and runs commands. Data flows one way:
-//! [`protocol`](crate::protocol) (bytes -> lines) -> [`command`] (line ->
-//! command) -> here (command -> target pose, checked by the IK) -> [`motion`](crate::motion)
-//! (target -> one pose per frame) -> IK -> pulse widths. Everything written goes through
-//! [`report`].
+//! It owns the settings, UART0's baud rate, the motion and the last IK solution, and runs
+//! commands. Data flows one way: the link's [`Session`] (bytes -> lines, echo) -> [`command`]
+//! (line -> command) -> here (command -> target pose, checked by the IK) ->
+//! [`motion`](crate::motion) (target -> one pose per frame) -> IK -> pulse widths. Everything
+//! written goes through [`report`].
 //!
 //! Rules it keeps:
 //! - exactly one final reply per completed non-blank line;
@@ -32,30 +33,23 @@ use core::fmt::Write;
 use core::marker::PhantomData;
 
 use kinematics_core::ik::{self, IkError, Solution};
-use kinematics_core::{Geometry, Libm, Math, Pose, ServoSet, LEGS};
+use kinematics_core::{Geometry, Libm, Math, Pose, LEGS};
 
 use crate::command::{self, Command};
+use crate::error::Error;
 use crate::motion::{Motion, Segment, SpeedLimits};
-use crate::protocol::{Feed, LineBuffer, Spoiled};
-use crate::report::{self, Error, Fault, MotionReport, Notice, StatusReport, EOL, PROMPT};
-use crate::settings::{SettingId, Settings};
+use crate::protocol::Feed;
+use crate::report::{self, Fault, MotionReport, Notice, StatusReport, EOL};
+use crate::session::Session;
+use crate::settings::{LinkSettings, SettingId, SettingValue, Settings, DEFAULT_BAUD};
 
 /// Linear speed for returning home after link loss when `speed_mm_s` is off, mm/s.
 pub const LINK_LOSS_SPEED_MM_S: f32 = 10.0;
 /// Angular speed for returning home after link loss when `speed_deg_s` is off, deg/s.
 pub const LINK_LOSS_SPEED_DEG_S: f32 = 15.0;
 
-/// Notices waiting to be written.
+/// Notices kept for links that have not shown them yet (the latest ones).
 const NOTICE_QUEUE: usize = 4;
-
-/// Solves the IK with the chosen math.
-fn solve<M: Math>(
-    geometry: &Geometry,
-    servos: &ServoSet,
-    pose: &Pose,
-) -> Result<Solution, IkError> {
-    ik::solve::<M>(geometry, servos, pose)
-}
 
 /// The hardware-independent firmware: feed it bytes and frames.
 ///
@@ -64,9 +58,10 @@ fn solve<M: Math>(
 #[derive(Debug, Clone)]
 pub struct Controller<M: Math = Libm> {
     settings: Settings,
+    /// UART0's baud rate (a link setting: `defaults` keeps it).
+    baud: u32,
     generation: u32,
     geometry: Geometry,
-    line: LineBuffer,
     motion: Motion,
     /// The last good IK result (what the servos are being given).
     solution: Solution,
@@ -80,7 +75,10 @@ pub struct Controller<M: Math = Libm> {
     fault: Option<Fault>,
     /// The commanded pulses changed outside a frame (see [`Controller::take_new_pulses`]).
     new_pulses: bool,
-    notices: heapless::Deque<Notice, NOTICE_QUEUE>,
+    /// The latest notices, each with its sequence number.
+    notices: heapless::Deque<(u32, Notice), NOTICE_QUEUE>,
+    /// Sequence number of the next notice.
+    next_notice: u32,
     _math: PhantomData<M>,
 }
 
@@ -110,12 +108,12 @@ impl<M: Math> Controller<M> {
     /// A controller with these settings, or why they cannot be used.
     pub fn try_with_math(settings: Settings) -> Result<Self, Error> {
         let geometry = settings.validate()?;
-        let solution = solve::<M>(&geometry, &settings.servos, &Pose::HOME)?;
+        let solution = ik::solve::<M>(&geometry, &settings.servos, &Pose::HOME)?;
         Ok(Controller {
             settings,
+            baud: DEFAULT_BAUD,
             generation: 0,
             geometry,
-            line: LineBuffer::new(),
             motion: Motion::new(Pose::HOME),
             solution,
             returning_home: false,
@@ -124,19 +122,21 @@ impl<M: Math> Controller<M> {
             fault: None,
             new_pulses: false,
             notices: heapless::Deque::new(),
+            next_notice: 0,
             _math: PhantomData,
         })
     }
 
     // ----- what the board reads -----
 
-    /// The active settings.
+    /// The platform's active settings.
     pub fn settings(&self) -> &Settings {
         &self.settings
     }
 
-    /// Increases every time the settings change; the board compares it with the value it last
-    /// applied and then reconfigures (UART baud after the reply has been sent, PWM frame rate).
+    /// Increases every time the settings or the baud rate change; the board compares it with
+    /// the value it last applied and then reconfigures (UART baud after the reply has been
+    /// sent, PWM frame rate).
     pub fn settings_generation(&self) -> u32 {
         self.generation
     }
@@ -146,9 +146,9 @@ impl<M: Math> Controller<M> {
         self.settings.frame_hz
     }
 
-    /// UART baud rate.
+    /// UART0's baud rate (`set baud`; a link setting, kept by `defaults`).
     pub fn baud(&self) -> u32 {
-        self.settings.baud
+        self.baud
     }
 
     /// The active geometry.
@@ -195,92 +195,58 @@ impl<M: Math> Controller<M> {
 
     // ----- what the board calls -----
 
-    /// Writes the start-up banner (and any notice, e.g. refused settings), then the prompt.
-    pub fn banner(&mut self, out: &mut impl Write) {
+    /// Writes the start-up banner (and any notice, e.g. refused settings), then the prompt, to
+    /// one link.
+    pub fn banner(&self, session: &mut Session, out: &mut impl Write) {
         report::write_banner(out);
-        self.flush_notices(out);
-        self.prompt(out);
+        self.flush_notices(session, out);
+        session.prompt(out);
     }
 
-    /// Feeds one received byte: echo and line editing; at the end of a line, runs it and
-    /// writes exactly one final reply (blank lines get none).
-    pub fn on_byte(&mut self, byte: u8, out: &mut impl Write) {
-        let echo = self.settings.echo;
-        let feed = self.line.feed(byte);
-        if echo {
-            match feed {
-                Feed::Added(b) => {
-                    let _ = out.write_char(char::from(b));
-                }
-                Feed::Erased => {
-                    let _ = out.write_str("\x08 \x08");
-                }
-                Feed::ErasedLine(n) => {
-                    for _ in 0..n {
-                        let _ = out.write_str("\x08 \x08");
-                    }
-                }
-                Feed::Cancelled => {
-                    let _ = out.write_str("^C");
-                    let _ = out.write_str(EOL);
-                }
-                Feed::Overflowed => {
-                    let _ = out.write_char('\x07'); // bell: the rest of the line is ignored
-                }
-                Feed::Empty | Feed::Line | Feed::Spoiled(_) => {
-                    let _ = out.write_str(EOL);
-                }
-                Feed::Nothing => {}
-            }
-        }
-        match feed {
+    /// Feeds one byte received on `session`'s link: echo and line editing; at the end of a
+    /// line, runs it and writes exactly one final reply to that link (blank lines get none).
+    pub fn on_byte(&mut self, session: &mut Session, byte: u8, out: &mut impl Write) {
+        match session.feed(byte, out) {
             Feed::Line => {
-                // Copy the line out so the buffer is free while the command runs.
-                let mut copy = [0u8; crate::protocol::MAX_LINE];
-                let len = self.line.len();
-                copy[..len].copy_from_slice(self.line.line().as_bytes());
-                self.line.clear();
-                let text = core::str::from_utf8(&copy[..len]).unwrap_or("");
-                self.execute_line(text, out);
-                self.prompt(out);
+                // Copied out so the link can take the next line while the command runs.
+                let line = session.take_line();
+                self.execute_line(session, &line, out);
+                session.prompt(out);
             }
             Feed::Spoiled(why) => {
                 self.heard_from_host();
-                self.flush_notices(out);
-                let error = match why {
-                    Spoiled::TooLong => Error::LineTooLong,
-                    Spoiled::BadByte(byte) => Error::BadCharacter { byte },
-                    Spoiled::RxOverflow(dropped) => Error::RxOverflow { dropped },
-                };
-                report::write_error(out, &error);
-                self.prompt(out);
+                self.flush_notices(session, out);
+                report::write_error(out, &Error::from(why));
+                session.prompt(out);
             }
-            Feed::Empty | Feed::Cancelled => self.prompt(out),
+            Feed::Empty | Feed::Cancelled => session.prompt(out),
             _ => {}
         }
     }
 
-    /// The board's receive queue dropped `dropped` bytes: the line being received is refused
-    /// when it ends (`error:rx-overflow`), and a warning is written now.
-    pub fn on_rx_overflow(&mut self, dropped: u32, out: &mut impl Write) {
-        self.line.rx_overflow(dropped);
+    /// `session`'s link lost `dropped` received bytes: the line being received there is refused
+    /// when it ends (`error:rx-overflow`), and a warning goes to every link (to this one now).
+    pub fn on_rx_overflow(&mut self, session: &mut Session, dropped: u32, out: &mut impl Write) {
+        session.rx_overflow(dropped);
         self.notify(Notice::RxOverflow { dropped });
-        self.write_notices(out);
+        self.write_notices(session, out);
     }
 
-    /// Writes pending notices (faults, link loss) now, restoring the prompt and the line being
-    /// typed when echo is on. Optional: pending notices are also written before the next reply.
-    pub fn write_notices(&mut self, out: &mut impl Write) {
-        if self.notices.is_empty() {
+    /// Writes the notices (faults, link loss, warnings) this link has not shown yet, restoring
+    /// the prompt and the line being typed when echo is on. Call it for every link after
+    /// anything that may notify (a frame, a receive overflow); notices pending for a link are
+    /// also written before its next reply.
+    pub fn write_notices(&self, session: &mut Session, out: &mut impl Write) {
+        if !self.has_notices_for(session) {
             return;
         }
-        if self.settings.echo {
+        if session.echo() {
             let _ = out.write_str(EOL);
         }
-        self.flush_notices(out);
-        if self.settings.echo {
-            let _ = out.write_str(PROMPT);
-            let _ = out.write_str(self.line.line());
+        self.flush_notices(session, out);
+        if session.echo() {
+            session.prompt(out);
+            let _ = out.write_str(session.typed());
         }
     }
 
@@ -298,7 +264,7 @@ impl<M: Math> Controller<M> {
             return self.safe_pulses();
         }
         let next = self.motion.next_pose();
-        match solve::<M>(&self.geometry, &self.settings.servos, &next) {
+        match ik::solve::<M>(&self.geometry, &self.settings.servos, &next) {
             Ok(solution) => {
                 self.motion.commit();
                 self.solution = solution;
@@ -325,15 +291,17 @@ impl<M: Math> Controller<M> {
         self.safe_pulses()
     }
 
-    /// Runs one line as if it had been typed (any case, blank lines ignored) and writes its
-    /// replies; for transports other than the byte stream.
-    pub fn execute_line(&mut self, line: &str, out: &mut impl Write) {
+    /// Runs one line as if it had been typed on `session`'s link (any case, blank lines
+    /// ignored) and writes its replies there; for transports other than the byte stream.
+    pub fn execute_line(&mut self, session: &mut Session, line: &str, out: &mut impl Write) {
         if line.bytes().all(|b| b == b' ' || b == b'\t') {
             return;
         }
         self.heard_from_host();
-        self.flush_notices(out);
-        let result = command::parse(line).and_then(|cmd| self.run(cmd, out));
+        self.flush_notices(session, out);
+        let result = command::parse(line)
+            .map_err(Error::from)
+            .and_then(|cmd| self.run(session, cmd, out));
         match result {
             Ok(()) => report::write_ok(out),
             Err(e) => report::write_error(out, &e),
@@ -342,7 +310,12 @@ impl<M: Math> Controller<M> {
 
     // ----- commands -----
 
-    fn run(&mut self, cmd: Command, out: &mut impl Write) -> Result<(), Error> {
+    fn run(
+        &mut self,
+        session: &mut Session,
+        cmd: Command,
+        out: &mut impl Write,
+    ) -> Result<(), Error> {
         match cmd {
             Command::Pose(target) => self.move_to(target),
             Command::Move(values) => self.move_to(values.apply(self.motion.target(), false)),
@@ -373,11 +346,24 @@ impl<M: Math> Controller<M> {
                 Ok(())
             }
             Command::Config => {
-                report::write_config(out, &self.settings);
+                let link = LinkSettings {
+                    baud: self.baud,
+                    echo: session.echo(),
+                };
+                report::write_config(out, &self.settings, &link);
                 Ok(())
             }
             Command::Help => {
                 report::write_help(out);
+                Ok(())
+            }
+            Command::Set(SettingId::Echo, SettingValue::Flag(on)) => {
+                session.set_echo(on);
+                Ok(())
+            }
+            Command::Set(SettingId::Baud, SettingValue::Whole(baud)) => {
+                self.baud = baud;
+                self.generation = self.generation.wrapping_add(1);
                 Ok(())
             }
             Command::Set(id, value) => {
@@ -394,14 +380,9 @@ impl<M: Math> Controller<M> {
                 if self.motion.is_moving() {
                     return Err(Error::Busy);
                 }
-                // The link stays as it is: a host talking at 921600 baud without echo keeps
-                // talking.
-                let defaults = Settings {
-                    baud: self.settings.baud,
-                    echo: self.settings.echo,
-                    ..Settings::default()
-                };
-                self.change_settings(defaults)
+                // Only the platform's settings: the links stay as they are (a host talking at
+                // 921600 baud without echo keeps talking).
+                self.change_settings(Settings::default())
             }
         }
     }
@@ -416,7 +397,7 @@ impl<M: Math> Controller<M> {
     /// Checks a target and the straight path to it from the current pose.
     fn plan(&self, target: Pose, limits: SpeedLimits) -> Result<(Solution, Segment), Error> {
         // The target itself first: its error is the most useful one.
-        let solution = solve::<M>(&self.geometry, &self.settings.servos, &target)?;
+        let solution = ik::solve::<M>(&self.geometry, &self.settings.servos, &target)?;
         let segment = Segment::plan(
             *self.motion.pose(),
             target,
@@ -428,7 +409,7 @@ impl<M: Math> Controller<M> {
                 if *p == target {
                     return Ok(()); // solved above
                 }
-                solve::<M>(&self.geometry, &self.settings.servos, p).map(|_| ())
+                ik::solve::<M>(&self.geometry, &self.settings.servos, p).map(|_| ())
             })
             .map_err(|e| Error::PathBlocked {
                 percent: e.fraction * 100.0,
@@ -463,7 +444,7 @@ impl<M: Math> Controller<M> {
     fn change_settings(&mut self, candidate: Settings) -> Result<(), Error> {
         let geometry = candidate.validate()?;
         // The pose being held must stay drivable (and the pulses change right away).
-        let solution = solve::<M>(&geometry, &candidate.servos, self.motion.pose())
+        let solution = ik::solve::<M>(&geometry, &candidate.servos, self.motion.pose())
             .map_err(|cause| Error::PoseConflict { cause })?;
         self.settings = candidate;
         self.geometry = geometry;
@@ -548,23 +529,29 @@ impl<M: Math> Controller<M> {
 
     // ----- output helpers -----
 
+    /// Keeps a notice for every link to show (only the latest [`NOTICE_QUEUE`]).
     fn notify(&mut self, notice: Notice) {
         if self.notices.is_full() {
             self.notices.pop_front();
         }
-        let _ = self.notices.push_back(notice);
+        let _ = self.notices.push_back((self.next_notice, notice));
+        self.next_notice = self.next_notice.wrapping_add(1);
     }
 
-    fn flush_notices(&mut self, out: &mut impl Write) {
-        while let Some(n) = self.notices.pop_front() {
-            report::write_notice(out, &n);
-        }
+    fn has_notices_for(&self, session: &Session) -> bool {
+        self.notices
+            .back()
+            .is_some_and(|(seq, _)| session.has_not_seen(*seq))
     }
 
-    fn prompt(&self, out: &mut impl Write) {
-        if self.settings.echo {
-            let _ = out.write_str(PROMPT);
+    /// Writes the notices `session` has not shown yet.
+    fn flush_notices(&self, session: &mut Session, out: &mut impl Write) {
+        for (seq, notice) in &self.notices {
+            if session.has_not_seen(*seq) {
+                report::write_notice(out, notice);
+            }
         }
+        session.saw_notices_until(self.next_notice);
     }
 
     /// The last good pulses, guarded once more: finite and within the current limits.
@@ -588,15 +575,25 @@ mod tests {
     use crate::report::Code;
 
     fn quiet() -> Controller {
-        Controller::new(Settings {
-            echo: false,
-            ..Settings::default()
-        })
+        Controller::new(Settings::default())
     }
 
-    fn run(c: &mut Controller, line: &str) -> std::string::String {
+    /// A link with echo off, as a program talks.
+    fn program() -> Session {
+        let mut session = Session::new();
+        session.set_echo(false);
+        session
+    }
+
+    fn run(c: &mut Controller, link: &mut Session, line: &str) -> std::string::String {
         let mut out = std::string::String::new();
-        c.execute_line(line, &mut out);
+        c.execute_line(link, line, &mut out);
+        out
+    }
+
+    fn notices(c: &Controller, link: &mut Session) -> std::string::String {
+        let mut out = std::string::String::new();
+        c.write_notices(link, &mut out);
         out
     }
 
@@ -621,15 +618,15 @@ mod tests {
 
     #[test]
     fn ik_failure_on_a_frame_holds_the_last_good_pulses_and_stops() {
-        let mut c = quiet();
-        assert_eq!(run(&mut c, &pose_command(FROM)), "ok\r\n");
+        let (mut c, mut link) = (quiet(), program());
+        assert_eq!(run(&mut c, &mut link, &pose_command(FROM)), "ok\r\n");
         while c.is_moving() {
             c.on_frame();
         }
         // Start the blocked move without its path check, as if the check had missed it.
         let segment = Segment::plan(*c.pose(), pose(TO), c.speed_limits(), 50.0);
         assert!(segment
-            .check_path(|p| solve::<Libm>(&c.geometry, &c.settings.servos, p).map(|_| ()))
+            .check_path(|p| ik::solve::<Libm>(&c.geometry, &c.settings.servos, p).map(|_| ()))
             .is_err());
         c.start(segment);
         let mut last_good = c.pulses_us();
@@ -657,24 +654,23 @@ mod tests {
         for _ in 0..10 {
             assert_eq!(c.on_frame(), last_good);
         }
-        let mut out = std::string::String::new();
-        c.write_notices(&mut out);
+        let out = notices(&c, &mut link);
         assert!(out.starts_with("# fault: motion stopped: "), "{out:?}");
-        let status = run(&mut c, "status");
+        let status = run(&mut c, &mut link, "status");
         assert!(status.contains("# fault: motion stopped"), "{status}");
         // The next accepted move clears the fault.
-        assert_eq!(run(&mut c, "home"), "ok\r\n");
+        assert_eq!(run(&mut c, &mut link, "home"), "ok\r\n");
         assert!(c.fault().is_none());
     }
 
     #[test]
     fn link_loss_with_the_way_home_blocked_holds_and_reports() {
-        let mut c = quiet();
-        assert_eq!(run(&mut c, "set link_timeout_s 0.1"), "ok\r\n");
+        let (mut c, mut link) = (quiet(), program());
+        assert_eq!(run(&mut c, &mut link, "set link_timeout_s 0.1"), "ok\r\n");
         // Put the platform at a reachable pose from which the line home is not.
         let stuck = pose([40.0, 20.0, -18.5, -5.0, -16.0, -26.0]);
         c.motion = Motion::new(stuck);
-        c.solution = solve::<Libm>(&c.geometry, &c.settings.servos, &stuck).unwrap();
+        c.solution = ik::solve::<Libm>(&c.geometry, &c.settings.servos, &stuck).unwrap();
         for _ in 0..20 {
             let pulses = c.on_frame();
             assert!(within_limits(&c, &pulses));
@@ -682,8 +678,7 @@ mod tests {
         assert!(!c.is_moving());
         assert_eq!(*c.pose(), stuck);
         assert!(matches!(c.fault(), Some(Fault::HomeBlocked { .. })));
-        let mut out = std::string::String::new();
-        c.write_notices(&mut out);
+        let out = notices(&c, &mut link);
         assert!(
             out.starts_with("# fault: link lost but the way home is blocked"),
             "{out:?}"
@@ -702,25 +697,72 @@ mod tests {
 
     #[test]
     fn blank_lines_through_execute_line_get_no_reply() {
-        let mut c = quiet();
-        assert_eq!(run(&mut c, "   "), "");
-        assert!(
-            run(&mut c, "nonsense").starts_with(&std::format!("error:{} ", Code::UnknownCommand))
-        );
+        let (mut c, mut link) = (quiet(), program());
+        assert_eq!(run(&mut c, &mut link, "   "), "");
+        assert!(run(&mut c, &mut link, "nonsense")
+            .starts_with(&std::format!("error:{} ", Code::UnknownCommand)));
     }
 
     #[test]
     fn notice_queue_keeps_the_latest() {
-        let mut c = quiet();
+        let (mut c, mut link) = (quiet(), program());
         for dropped in 1..=10 {
             c.notify(Notice::RxOverflow { dropped });
         }
         let mut out = std::string::String::new();
-        c.write_notices(&mut out);
+        c.write_notices(&mut link, &mut out);
         assert_eq!(out.lines().count(), NOTICE_QUEUE);
         assert!(
             out.contains("10 bytes") && !out.contains(" 1 bytes"),
             "{out}"
+        );
+        // Shown once per link: the same link gets nothing more, another link gets them too.
+        out.clear();
+        c.write_notices(&mut link, &mut out);
+        assert_eq!(out, "");
+        assert_eq!(notices(&c, &mut program()).lines().count(), NOTICE_QUEUE);
+    }
+
+    #[test]
+    fn replies_go_to_the_asking_link_and_notices_to_every_link() {
+        let mut c = quiet();
+        let (mut terminal, mut program) = (Session::new(), program());
+        let (mut to_terminal, mut to_program) =
+            (std::string::String::new(), std::string::String::new());
+        c.banner(&mut terminal, &mut to_terminal);
+        c.banner(&mut program, &mut to_program);
+        to_terminal.clear();
+        to_program.clear();
+        // Each link assembles its own line, even interleaved byte by byte.
+        for (a, b) in b"home\r".iter().zip(b"help\n") {
+            c.on_byte(&mut terminal, *a, &mut to_terminal);
+            c.on_byte(&mut program, *b, &mut to_program);
+        }
+        assert_eq!(to_terminal, "home\r\nok\r\n> ");
+        assert!(
+            to_program.starts_with("# commands") && to_program.ends_with("\r\nok\r\n"),
+            "{to_program:?}"
+        );
+        // Echo is the link's own.
+        to_program.clear();
+        c.execute_line(&mut program, "set echo on", &mut to_program);
+        assert!(program.echo() && terminal.echo());
+        c.execute_line(&mut terminal, "set echo off", &mut to_terminal);
+        assert!(program.echo() && !terminal.echo());
+        // A notice caused by one link reaches both, once each; the typed line is restored.
+        to_terminal.clear();
+        to_program.clear();
+        c.on_byte(&mut program, b's', &mut to_program);
+        c.on_rx_overflow(&mut terminal, 9, &mut to_terminal);
+        c.write_notices(&mut program, &mut to_program);
+        c.write_notices(&mut terminal, &mut to_terminal);
+        assert_eq!(
+            to_terminal,
+            "# warning: receive queue overflowed, 9 bytes lost\r\n"
+        );
+        assert_eq!(
+            to_program,
+            "s\r\n# warning: receive queue overflowed, 9 bytes lost\r\n> s"
         );
     }
 }

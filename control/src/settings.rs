@@ -1,18 +1,23 @@
-//! Settings: what a user can change without touching code, their names, ranges and defaults,
-//! and a fixed-size binary form for flash.
+//! Settings: what a user can change without touching code, their names, ranges and defaults.
 //!
-//! [`Settings`] holds the platform's build numbers (a [`PairedLayout`]), the six servo mappings,
-//! the motion limits and the serial settings. `set <name> <value>` changes one value; the
-//! controller then validates the whole result ([`Settings::validate`]: every range, the servo
-//! set, the geometry) before committing it, so a refused change leaves everything as it was.
+//! [`Settings`] is the platform: its build numbers (a [`PairedLayout`]), the six servo mappings,
+//! the motion limits and the frame rate. `set <name> <value>` changes one value; the controller
+//! then validates the whole result ([`Settings::validate`]: every range, the servo set, the
+//! geometry) before committing it, so a refused change leaves everything as it was. `defaults`
+//! restores [`Settings::default`].
+//!
+//! Two names `set` takes are not the platform's but a link's ([`LinkSettings`]): `echo` belongs
+//! to the link the line came from (each link has its own, see [`crate::session`]) and `baud` is
+//! UART0's configuration. `config` lists them with the others; `defaults` leaves them alone, so
+//! a host keeps its connection.
 //!
 //! # Names (as `config` lists them and `set` takes them)
 //!
 //! | name | value | default |
 //! | --- | --- | --- |
 //! | `frame_hz` | servo frame rate, whole number 50..=333 Hz | 50 |
-//! | `baud` | one of 9600 19200 38400 57600 115200 230400 460800 921600 | 115200 |
-//! | `echo` | `on` / `off` (echo and prompt, for terminals) | on |
+//! | `baud` | UART0: one of [`BAUD_RATES`] | 115200 |
+//! | `echo` | this link: `on` / `off` (echo and prompt, for terminals) | on |
 //! | `speed_mm_s` | linear speed limit 0.1..=1000 mm/s, `0`/`off` = jump | 50 |
 //! | `speed_deg_s` | angular speed limit 0.1..=3600 deg/s, `0`/`off` = jump | 60 |
 //! | `link_timeout_s` | return home after this long without a command, 0.1..=3600 s, `0`/`off` | off |
@@ -24,60 +29,40 @@
 //! | `servoN.dir` | `normal` (even servos, eq. 13) / `reversed` (odd servos, eq. 14) | by parity |
 //! | `servoN.min_us`, `servoN.max_us` | pulse limits, 400..=2600 us | 1100, 1900 |
 //!
-//! `servos.<field>` sets that field of all six servos at once. The `defaults` command restores
-//! [`Settings::default`] except `baud` and `echo`, so the host keeps its connection.
-//!
-//! # Binary form ([`Settings::encode`], [`Settings::decode`])
-//!
-//! [`ENCODED_LEN`] bytes, little-endian:
-//!
-//! | offset | size | content |
-//! | --- | --- | --- |
-//! | 0 | 4 | magic `HXPS` |
-//! | 4 | 2 | format version ([`FORMAT_VERSION`]) |
-//! | 6 | 2 | payload length ([`PAYLOAD_LEN`]) |
-//! | 8 | 2 | `frame_hz` (u16) |
-//! | 10 | 4 | `baud` (u32) |
-//! | 14 | 1 | `echo` (0 or 1) |
-//! | 15 | 1 | reserved, 0 |
-//! | 16 | 12 | `speed_mm_s`, `speed_deg_s`, `link_timeout_s` (f32) |
-//! | 28 | 24 | layout: base radius, base half angle, platform radius, platform half angle, arm, rod (f32) |
-//! | 52 | 6 x 20 | per servo: trim, rate, min, max (f32), direction (0 normal, 1 reversed), 3 reserved 0 |
-//! | 172 | 4 | CRC-32 (IEEE 802.3) of bytes 0..172 |
-//!
-//! Decoding checks magic, version, length, checksum, every enumerated byte and finally
-//! [`Settings::validate`], so a decoded `Settings` is always usable.
+//! `servos.<field>` sets that field of all six servos at once. Equation numbers are those of
+//! "The Mathematics of the Stewart Platform". The binary form kept in flash is
+//! [`crate::record`]'s; the words of every refusal ([`SettingError`]) are [`crate::report`]'s.
 
 use core::fmt::{self, Display, Formatter};
 
-use kinematics_core::geometry::PairedLayout;
+use kinematics_core::geometry::{GeometryError, PairedLayout};
 use kinematics_core::servo::{
-    MAX_PULSE_US, MAX_RATE_US_PER_RAD, MIN_PULSE_US, MIN_RATE_US_PER_RAD,
+    ServoError, MAX_PULSE_US, MAX_RATE_US_PER_RAD, MIN_PULSE_US, MIN_RATE_US_PER_RAD,
 };
 use kinematics_core::{Direction, Geometry, ServoConfig, ServoSet, LEGS};
 
 use crate::number::{parse_f32, parse_u32, NumberError};
-use crate::report::{word, Error, Field};
+use crate::word::{word, Word};
 
 /// Lowest servo frame rate, Hz.
 pub const FRAME_HZ_MIN: u16 = 50;
 /// Highest servo frame rate, Hz (a 3 ms frame still holds the longest pulse).
 pub const FRAME_HZ_MAX: u16 = 333;
-/// Baud rates the UART may be set to.
+/// Baud rates UART0 may be set to, slowest first (the only list of them).
 pub const BAUD_RATES: [u32; 8] = [
     9_600, 19_200, 38_400, 57_600, 115_200, 230_400, 460_800, 921_600,
 ];
 
-/// Settings as shipped.
+/// Default servo frame rate, Hz.
 pub const DEFAULT_FRAME_HZ: u16 = 50;
-/// Default UART baud rate.
+/// Default UART0 baud rate.
 pub const DEFAULT_BAUD: u32 = 115_200;
 /// Default linear speed limit, mm/s.
 pub const DEFAULT_SPEED_MM_S: f32 = 50.0;
 /// Default angular speed limit, deg/s.
 pub const DEFAULT_SPEED_DEG_S: f32 = 60.0;
 
-/// Everything configurable.
+/// The platform's settings: everything `set` changes except the link settings.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Settings {
     /// The platform's build numbers.
@@ -92,10 +77,6 @@ pub struct Settings {
     pub link_timeout_s: f32,
     /// Servo frame rate, Hz.
     pub frame_hz: u16,
-    /// UART baud rate.
-    pub baud: u32,
-    /// Echo typed characters and show a prompt.
-    pub echo: bool,
 }
 
 impl Default for Settings {
@@ -107,8 +88,35 @@ impl Default for Settings {
             speed_deg_s: DEFAULT_SPEED_DEG_S,
             link_timeout_s: 0.0,
             frame_hz: DEFAULT_FRAME_HZ,
+        }
+    }
+}
+
+/// The link settings `config` lists: UART0's baud rate and the asking link's echo.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct LinkSettings {
+    /// UART0's baud rate.
+    pub baud: u32,
+    /// Echo typed characters and show a prompt on this link.
+    pub echo: bool,
+}
+
+impl Default for LinkSettings {
+    fn default() -> LinkSettings {
+        LinkSettings {
             baud: DEFAULT_BAUD,
             echo: true,
+        }
+    }
+}
+
+impl LinkSettings {
+    /// The value of a link setting (`None` for the platform's).
+    pub fn get(&self, id: SettingId) -> Option<SettingValue> {
+        match id {
+            SettingId::Baud => Some(SettingValue::Whole(self.baud)),
+            SettingId::Echo => Some(SettingValue::Flag(self.echo)),
+            _ => None,
         }
     }
 }
@@ -153,7 +161,7 @@ impl LayoutParam {
         }
     }
 
-    fn get(self, l: &PairedLayout) -> f32 {
+    pub(crate) fn get(self, l: &PairedLayout) -> f32 {
         match self {
             LayoutParam::BaseRadiusMm => l.base_radius_mm,
             LayoutParam::BaseHalfAngleDeg => l.base_half_angle_deg,
@@ -164,7 +172,7 @@ impl LayoutParam {
         }
     }
 
-    fn slot(self, l: &mut PairedLayout) -> &mut f32 {
+    pub(crate) fn slot(self, l: &mut PairedLayout) -> &mut f32 {
         match self {
             LayoutParam::BaseRadiusMm => &mut l.base_radius_mm,
             LayoutParam::BaseHalfAngleDeg => &mut l.base_half_angle_deg,
@@ -310,6 +318,80 @@ pub enum SettingValue {
     Dir(Direction),
 }
 
+/// What a refused setting value was expected to be (for [`SettingError::BadValue`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Expected {
+    /// A whole number (`frame_hz`, `baud`).
+    WholeNumber,
+    /// `on` or `off`.
+    OnOrOff,
+    /// `normal` or `reversed`.
+    NormalOrReversed,
+}
+
+/// Why a setting value, or a set of settings, is refused.
+#[derive(Debug, Clone, PartialEq)]
+pub enum SettingError {
+    /// The value is not a decimal number.
+    BadNumber {
+        /// The setting.
+        setting: SettingId,
+        /// What was typed.
+        word: Word,
+    },
+    /// The value is NaN or infinity.
+    NotFinite {
+        /// The setting.
+        setting: SettingId,
+        /// What was typed.
+        word: Word,
+    },
+    /// The value does not fit (e.g. `1e39`).
+    NumberTooLarge {
+        /// The setting.
+        setting: SettingId,
+        /// What was typed.
+        word: Word,
+    },
+    /// The value has the wrong form (e.g. `echo maybe`).
+    BadValue {
+        /// The setting.
+        setting: SettingId,
+        /// What was typed.
+        word: Word,
+        /// What is accepted.
+        expected: Expected,
+    },
+    /// A whole number that is not one of the values the setting allows (`baud`).
+    NotOneOf {
+        /// The setting.
+        setting: SettingId,
+        /// The value given.
+        value: u32,
+        /// The values allowed.
+        allowed: &'static [u32],
+    },
+    /// The value is outside the setting's range.
+    OutOfRange {
+        /// The setting.
+        setting: SettingId,
+        /// The value given.
+        value: f32,
+        /// Smallest value accepted.
+        min: f32,
+        /// Largest value accepted.
+        max: f32,
+        /// Unit of the three numbers (may be empty).
+        unit: &'static str,
+        /// Whether 0 / `off` is also accepted.
+        off_allowed: bool,
+    },
+    /// The resulting servo settings are inconsistent.
+    BadServoConfig(ServoError),
+    /// The resulting geometry is not a buildable platform.
+    BadGeometry(GeometryError),
+}
+
 const fn number(min: f32, max: f32, unit: &'static str, decimals: u8) -> Kind {
     Kind::Number {
         min,
@@ -424,30 +506,35 @@ impl SettingId {
         }
     }
 
+    /// True for the link settings (`baud`, `echo`), which are not part of [`Settings`].
+    pub const fn is_link(self) -> bool {
+        matches!(self, SettingId::Baud | SettingId::Echo)
+    }
+
     /// Parses and range-checks a value typed for this setting (already lowercase).
-    pub fn parse_value(self, text: &str) -> Result<SettingValue, Error> {
-        let field = Field::Setting(self);
+    pub fn parse_value(self, text: &str) -> Result<SettingValue, SettingError> {
+        let setting = self;
         let number_error = |e: NumberError| match e {
-            NumberError::Syntax => Error::BadNumber {
-                field,
+            NumberError::Syntax => SettingError::BadNumber {
+                setting,
                 word: word(text),
             },
-            NumberError::NotFinite => Error::NotFinite {
-                field,
+            NumberError::NotFinite => SettingError::NotFinite {
+                setting,
                 word: word(text),
             },
-            NumberError::TooLarge => Error::NumberTooLarge {
-                field,
+            NumberError::TooLarge => SettingError::NumberTooLarge {
+                setting,
                 word: word(text),
             },
-            NumberError::NotWhole => Error::BadValue {
-                setting: self,
+            NumberError::NotWhole => SettingError::BadValue {
+                setting,
                 word: word(text),
-                expected: "a whole number",
+                expected: Expected::WholeNumber,
             },
         };
-        let bad_value = |expected| Error::BadValue {
-            setting: self,
+        let bad_value = |expected| SettingError::BadValue {
+            setting,
             word: word(text),
             expected,
         };
@@ -463,12 +550,12 @@ impl SettingId {
             Kind::Flag => match text {
                 "on" | "1" => SettingValue::Flag(true),
                 "off" | "0" => SettingValue::Flag(false),
-                _ => return Err(bad_value("on or off")),
+                _ => return Err(bad_value(Expected::OnOrOff)),
             },
             Kind::Dir => match text {
                 "normal" | "+1" | "1" => SettingValue::Dir(Direction::Normal),
                 "reversed" | "-1" => SettingValue::Dir(Direction::Reversed),
-                _ => return Err(bad_value("normal or reversed")),
+                _ => return Err(bad_value(Expected::NormalOrReversed)),
             },
         };
         self.check(value)?;
@@ -476,7 +563,8 @@ impl SettingId {
     }
 
     /// Checks that a value has this setting's form and range.
-    pub fn check(self, value: SettingValue) -> Result<(), Error> {
+    pub fn check(self, value: SettingValue) -> Result<(), SettingError> {
+        let setting = self;
         match (self.kind(), value) {
             (
                 Kind::Whole {
@@ -488,22 +576,21 @@ impl SettingId {
                 SettingValue::Whole(v),
             ) => {
                 if !list.is_empty() {
-                    if list.contains(&v) {
-                        return Ok(());
-                    }
-                    let mut text = heapless::String::<12>::new();
-                    let _ = fmt::write(&mut text, format_args!("{v}"));
-                    return Err(Error::BadValue {
-                        setting: self,
-                        word: word(&text),
-                        expected: "one of 9600 19200 38400 57600 115200 230400 460800 921600",
-                    });
+                    return if list.contains(&v) {
+                        Ok(())
+                    } else {
+                        Err(SettingError::NotOneOf {
+                            setting,
+                            value: v,
+                            allowed: list,
+                        })
+                    };
                 }
                 if (min..=max).contains(&v) {
                     Ok(())
                 } else {
-                    Err(Error::OutOfRange {
-                        setting: self,
+                    Err(SettingError::OutOfRange {
+                        setting,
                         value: v as f32,
                         min: min as f32,
                         max: max as f32,
@@ -525,8 +612,8 @@ impl SettingId {
                 if (off_allowed && v == 0.0) || (min..=max).contains(&v) {
                     Ok(())
                 } else {
-                    Err(Error::OutOfRange {
-                        setting: self,
+                    Err(SettingError::OutOfRange {
+                        setting,
                         value: v,
                         min,
                         max,
@@ -536,10 +623,15 @@ impl SettingId {
                 }
             }
             (Kind::Flag, SettingValue::Flag(_)) | (Kind::Dir, SettingValue::Dir(_)) => Ok(()),
-            _ => Err(Error::BadValue {
-                setting: self,
+            // A value of another kind: only a caller's mistake (`parse_value` never makes one).
+            (kind, _) => Err(SettingError::BadValue {
+                setting,
                 word: word("?"),
-                expected: "a value of the right kind",
+                expected: match kind {
+                    Kind::Flag => Expected::OnOrOff,
+                    Kind::Dir => Expected::NormalOrReversed,
+                    Kind::Whole { .. } | Kind::Number { .. } => Expected::WholeNumber,
+                },
             }),
         }
     }
@@ -556,12 +648,12 @@ impl Display for SettingId {
 }
 
 impl Settings {
-    /// The current value of a setting (`servos.x` reads servo 1).
-    pub fn get(&self, id: SettingId) -> SettingValue {
-        match id {
+    /// The current value of a platform setting (`servos.x` reads servo 1); `None` for the link
+    /// settings (see [`LinkSettings::get`]).
+    pub fn get(&self, id: SettingId) -> Option<SettingValue> {
+        Some(match id {
             SettingId::FrameHz => SettingValue::Whole(u32::from(self.frame_hz)),
-            SettingId::Baud => SettingValue::Whole(self.baud),
-            SettingId::Echo => SettingValue::Flag(self.echo),
+            SettingId::Baud | SettingId::Echo => return None,
             SettingId::SpeedMmS => SettingValue::Number(self.speed_mm_s),
             SettingId::SpeedDegS => SettingValue::Number(self.speed_deg_s),
             SettingId::LinkTimeoutS => SettingValue::Number(self.link_timeout_s),
@@ -573,19 +665,17 @@ impl Settings {
                 };
                 p.get(&self.servos.0[index])
             }
-        }
+        })
     }
 
-    /// A copy with one value replaced (not validated: see [`Settings::validate`]). A value of
-    /// the wrong kind for the setting leaves it unchanged.
+    /// A copy with one platform value replaced (not validated: see [`Settings::validate`]). A
+    /// link setting, or a value of the wrong kind for the setting, leaves it unchanged.
     pub fn with(&self, id: SettingId, value: SettingValue) -> Settings {
         let mut s = *self;
         match (id, value) {
             (SettingId::FrameHz, SettingValue::Whole(v)) => {
                 s.frame_hz = u16::try_from(v).unwrap_or(u16::MAX)
             }
-            (SettingId::Baud, SettingValue::Whole(v)) => s.baud = v,
-            (SettingId::Echo, SettingValue::Flag(v)) => s.echo = v,
             (SettingId::SpeedMmS, SettingValue::Number(v)) => s.speed_mm_s = v,
             (SettingId::SpeedDegS, SettingValue::Number(v)) => s.speed_deg_s = v,
             (SettingId::LinkTimeoutS, SettingValue::Number(v)) => s.link_timeout_s = v,
@@ -603,230 +693,32 @@ impl Settings {
     }
 
     /// Checks every value's range, the servo set and the geometry; returns the geometry.
-    pub fn validate(&self) -> Result<Geometry, Error> {
+    pub fn validate(&self) -> Result<Geometry, SettingError> {
         for id in SettingId::GLOBAL {
-            id.check(self.get(id))?;
+            if let Some(value) = self.get(id) {
+                id.check(value)?;
+            }
         }
         for servo in 1..=LEGS as u8 {
             for p in ServoParam::ALL {
                 let id = SettingId::Servo(ServoSel::One(servo), p);
-                id.check(self.get(id))?;
+                if let Some(value) = self.get(id) {
+                    id.check(value)?;
+                }
             }
         }
-        self.servos.validate().map_err(Error::BadServoConfig)?;
-        self.layout.build().map_err(Error::BadGeometry)
-    }
-}
-
-/// Binary format version.
-pub const FORMAT_VERSION: u16 = 1;
-/// Bytes between the header and the checksum.
-pub const PAYLOAD_LEN: usize = 164;
-/// Bytes of an encoded [`Settings`].
-pub const ENCODED_LEN: usize = HEADER_LEN + PAYLOAD_LEN + 4;
-const HEADER_LEN: usize = 8;
-const MAGIC: [u8; 4] = *b"HXPS";
-const SERVO_RECORD_LEN: usize = 20;
-
-/// Why stored bytes are not a usable [`Settings`].
-#[derive(Debug, Clone, PartialEq)]
-pub enum DecodeError {
-    /// Fewer than [`ENCODED_LEN`] bytes.
-    TooShort,
-    /// Not settings at all (erased flash reads as `0xFF`).
-    BadMagic,
-    /// Written by a different format version.
-    UnsupportedVersion(u16),
-    /// The stored payload length does not match this version's.
-    BadLength(u16),
-    /// The checksum does not match: the data is damaged.
-    BadChecksum,
-    /// A byte that must be 0/1 (echo, direction) or reserved 0 is not.
-    BadField {
-        /// Offset of the byte.
-        offset: usize,
-    },
-    /// Intact, but the values are not valid settings.
-    Invalid(Error),
-}
-
-/// CRC-32 (IEEE 802.3, reflected, polynomial 0xEDB88320), bit by bit: small and fast enough
-/// for a 176-byte record.
-pub fn crc32(bytes: &[u8]) -> u32 {
-    let mut crc = 0xFFFF_FFFFu32;
-    for &b in bytes {
-        crc ^= u32::from(b);
-        for _ in 0..8 {
-            let mask = (crc & 1).wrapping_neg();
-            crc = (crc >> 1) ^ (0xEDB8_8320 & mask);
-        }
-    }
-    !crc
-}
-
-struct Writer<'a> {
-    buf: &'a mut [u8; ENCODED_LEN],
-    at: usize,
-}
-
-impl Writer<'_> {
-    fn bytes(&mut self, b: &[u8]) {
-        self.buf[self.at..self.at + b.len()].copy_from_slice(b);
-        self.at += b.len();
-    }
-    fn f32(&mut self, v: f32) {
-        self.bytes(&v.to_le_bytes());
-    }
-}
-
-struct Reader<'a> {
-    buf: &'a [u8],
-    at: usize,
-}
-
-impl Reader<'_> {
-    fn take<const N: usize>(&mut self) -> [u8; N] {
-        let mut out = [0u8; N];
-        out.copy_from_slice(&self.buf[self.at..self.at + N]);
-        self.at += N;
-        out
-    }
-    fn u8(&mut self) -> u8 {
-        self.take::<1>()[0]
-    }
-    fn f32(&mut self) -> f32 {
-        f32::from_le_bytes(self.take())
-    }
-    /// A byte that must be 0 or 1.
-    fn bit(&mut self) -> Result<bool, DecodeError> {
-        let offset = self.at;
-        match self.u8() {
-            0 => Ok(false),
-            1 => Ok(true),
-            _ => Err(DecodeError::BadField { offset }),
-        }
-    }
-    fn zeros(&mut self, n: usize) -> Result<(), DecodeError> {
-        for _ in 0..n {
-            let offset = self.at;
-            if self.u8() != 0 {
-                return Err(DecodeError::BadField { offset });
-            }
-        }
-        Ok(())
-    }
-}
-
-impl Settings {
-    /// The fixed-size binary form (see the module docs).
-    pub fn encode(&self) -> [u8; ENCODED_LEN] {
-        let mut buf = [0u8; ENCODED_LEN];
-        let mut w = Writer {
-            buf: &mut buf,
-            at: 0,
-        };
-        w.bytes(&MAGIC);
-        w.bytes(&FORMAT_VERSION.to_le_bytes());
-        w.bytes(&(PAYLOAD_LEN as u16).to_le_bytes());
-        w.bytes(&self.frame_hz.to_le_bytes());
-        w.bytes(&self.baud.to_le_bytes());
-        w.bytes(&[u8::from(self.echo), 0]);
-        w.f32(self.speed_mm_s);
-        w.f32(self.speed_deg_s);
-        w.f32(self.link_timeout_s);
-        for p in LayoutParam::ALL {
-            w.f32(p.get(&self.layout));
-        }
-        for s in &self.servos.0 {
-            w.f32(s.home_us);
-            w.f32(s.rate_us_per_rad);
-            w.f32(s.min_us);
-            w.f32(s.max_us);
-            let dir = match s.direction {
-                Direction::Normal => 0,
-                Direction::Reversed => 1,
-            };
-            w.bytes(&[dir, 0, 0, 0]);
-        }
-        let end = w.at;
-        debug_assert_eq!(end, HEADER_LEN + PAYLOAD_LEN);
-        let crc = crc32(&buf[..end]);
-        buf[end..].copy_from_slice(&crc.to_le_bytes());
-        buf
-    }
-
-    /// Reads the binary form back, refusing anything damaged, foreign or invalid.
-    pub fn decode(bytes: &[u8]) -> Result<Settings, DecodeError> {
-        if bytes.len() < ENCODED_LEN {
-            return Err(DecodeError::TooShort);
-        }
-        let bytes = &bytes[..ENCODED_LEN];
-        if bytes[..4] != MAGIC {
-            return Err(DecodeError::BadMagic);
-        }
-        let version = u16::from_le_bytes([bytes[4], bytes[5]]);
-        if version != FORMAT_VERSION {
-            return Err(DecodeError::UnsupportedVersion(version));
-        }
-        let len = u16::from_le_bytes([bytes[6], bytes[7]]);
-        if usize::from(len) != PAYLOAD_LEN {
-            return Err(DecodeError::BadLength(len));
-        }
-        let end = HEADER_LEN + PAYLOAD_LEN;
-        let stored =
-            u32::from_le_bytes([bytes[end], bytes[end + 1], bytes[end + 2], bytes[end + 3]]);
-        if crc32(&bytes[..end]) != stored {
-            return Err(DecodeError::BadChecksum);
-        }
-        let mut r = Reader {
-            buf: bytes,
-            at: HEADER_LEN,
-        };
-        let frame_hz = u16::from_le_bytes(r.take());
-        let baud = u32::from_le_bytes(r.take());
-        let echo = r.bit()?;
-        r.zeros(1)?;
-        let speed_mm_s = r.f32();
-        let speed_deg_s = r.f32();
-        let link_timeout_s = r.f32();
-        let mut layout = PairedLayout::default();
-        for p in LayoutParam::ALL {
-            *p.slot(&mut layout) = r.f32();
-        }
-        let mut servos = ServoSet::default();
-        for s in servos.0.iter_mut() {
-            s.home_us = r.f32();
-            s.rate_us_per_rad = r.f32();
-            s.min_us = r.f32();
-            s.max_us = r.f32();
-            s.direction = if r.bit()? {
-                Direction::Reversed
-            } else {
-                Direction::Normal
-            };
-            r.zeros(SERVO_RECORD_LEN - 17)?;
-        }
-        let settings = Settings {
-            layout,
-            servos,
-            speed_mm_s,
-            speed_deg_s,
-            link_timeout_s,
-            frame_hz,
-            baud,
-            echo,
-        };
-        settings.validate().map_err(DecodeError::Invalid)?;
-        Ok(settings)
+        self.servos
+            .validate()
+            .map_err(SettingError::BadServoConfig)?;
+        self.layout.build().map_err(SettingError::BadGeometry)
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::report::Code;
 
-    fn parse(name: &str, value: &str) -> Result<Settings, Error> {
+    fn parse(name: &str, value: &str) -> Result<Settings, SettingError> {
         let id = SettingId::parse(name).expect("known name");
         let s = Settings::default().with(id, id.parse_value(value)?);
         s.validate()?;
@@ -837,9 +729,11 @@ mod tests {
     fn defaults_are_valid_and_as_documented() {
         let s = Settings::default();
         s.validate().unwrap();
-        assert_eq!((s.frame_hz, s.baud, s.echo), (50, 115_200, true));
+        assert_eq!(s.frame_hz, 50);
         assert_eq!(s.link_timeout_s, 0.0);
         assert_eq!(s.servos, ServoSet::default());
+        let link = LinkSettings::default();
+        assert_eq!((link.baud, link.echo), (115_200, true));
     }
 
     #[test]
@@ -871,8 +765,6 @@ mod tests {
     #[test]
     fn values_are_set() {
         assert_eq!(parse("frame_hz", "333").unwrap().frame_hz, 333);
-        assert_eq!(parse("baud", "921600").unwrap().baud, 921_600);
-        assert!(!parse("echo", "off").unwrap().echo);
         assert_eq!(parse("speed_mm_s", "off").unwrap().speed_mm_s, 0.0);
         assert_eq!(parse("speed_deg_s", "0").unwrap().speed_deg_s, 0.0);
         assert_eq!(parse("link_timeout_s", "2.5").unwrap().link_timeout_s, 2.5);
@@ -887,161 +779,114 @@ mod tests {
     }
 
     #[test]
-    fn bad_values_are_refused_with_their_own_codes() {
-        let code = |name, value| parse(name, value).unwrap_err().code();
-        assert_eq!(code("frame_hz", "49"), Code::OutOfRange);
-        assert_eq!(code("frame_hz", "334"), Code::OutOfRange);
-        assert_eq!(code("frame_hz", "50.5"), Code::BadValue);
-        assert_eq!(code("frame_hz", "fast"), Code::BadNumber);
-        assert_eq!(code("frame_hz", "99999999999"), Code::NumberTooLarge);
-        assert_eq!(code("baud", "1000000"), Code::BadValue);
-        assert_eq!(code("echo", "maybe"), Code::BadValue);
-        assert_eq!(code("speed_mm_s", "-1"), Code::OutOfRange);
-        assert_eq!(code("speed_mm_s", "nan"), Code::NotFinite);
-        assert_eq!(code("speed_mm_s", "1e39"), Code::NumberTooLarge);
-        assert_eq!(code("speed_deg_s", "0.01"), Code::OutOfRange);
-        assert_eq!(code("link_timeout_s", "-2"), Code::OutOfRange);
-        assert_eq!(code("arm_mm", "off"), Code::BadNumber);
-        assert_eq!(code("servo1.trim_us", "3000"), Code::OutOfRange);
-        assert_eq!(code("servo1.dir", "up"), Code::BadValue);
-        // In range on its own, but the servo set is inconsistent: home outside its limits.
-        assert_eq!(code("servo4.trim_us", "1950"), Code::BadServoConfig);
-        assert_eq!(code("servos.min_us", "1600"), Code::BadServoConfig);
-        // In range on its own, but no home height exists.
-        assert_eq!(code("rod_mm", "10"), Code::BadGeometry);
-    }
-
-    #[test]
-    fn out_of_range_message_names_setting_and_limits() {
-        let e = parse("frame_hz", "20").unwrap_err();
-        assert_eq!(std::format!("{e}"), "frame_hz 20 is outside 50..333 Hz");
-        let e = parse("speed_mm_s", "5000").unwrap_err();
+    fn link_settings_parse_but_are_not_the_platform() {
         assert_eq!(
-            std::format!("{e}"),
-            "speed_mm_s 5000 is outside 0.1..1000 mm/s (or 0/off)"
+            SettingId::Baud.parse_value("921600"),
+            Ok(SettingValue::Whole(921_600))
         );
+        assert_eq!(
+            SettingId::Echo.parse_value("off"),
+            Ok(SettingValue::Flag(false))
+        );
+        let s = Settings::default();
+        assert_eq!(s.with(SettingId::Baud, SettingValue::Whole(9600)), s);
+        assert_eq!(s.get(SettingId::Echo), None);
+        assert!(SettingId::Baud.is_link() && SettingId::Echo.is_link());
+        assert!(!SettingId::FrameHz.is_link());
     }
 
     #[test]
-    fn encoding_roundtrips() {
-        let mut s = Settings {
-            frame_hz: 200,
-            baud: 921_600,
-            echo: false,
-            speed_mm_s: 0.0,
-            speed_deg_s: 12.5,
-            link_timeout_s: 3.0,
-            ..Settings::default()
+    fn bad_values_are_refused_with_their_own_kinds() {
+        use SettingError as E;
+        let err = |name, value| parse(name, value).unwrap_err();
+        let value_err = |name: &str, value| {
+            SettingId::parse(name)
+                .unwrap()
+                .parse_value(value)
+                .unwrap_err()
         };
-        s.layout.rod_mm = 125.0;
-        s.servos.0[4].home_us = 1523.25;
-        s.servos.0[0].direction = Direction::Normal;
-        s.servos.0[5].min_us = 1000.0;
-        s.validate().unwrap();
-        let bytes = s.encode();
-        assert_eq!(bytes.len(), ENCODED_LEN);
-        assert_eq!(&bytes[..4], b"HXPS");
-        assert_eq!(Settings::decode(&bytes), Ok(s));
-        assert_eq!(
-            Settings::decode(&Settings::default().encode()),
-            Ok(Settings::default())
-        );
-        // Trailing bytes (a flash page) are ignored.
-        let mut page = [0xFFu8; 256];
-        page[..ENCODED_LEN].copy_from_slice(&bytes);
-        assert_eq!(Settings::decode(&page), Ok(s));
-    }
-
-    #[test]
-    fn checksum_is_standard_crc32() {
-        assert_eq!(crc32(b"123456789"), 0xCBF4_3926);
-        assert_eq!(crc32(b""), 0);
-    }
-
-    #[test]
-    fn any_single_bit_flip_is_rejected() {
-        let bytes = Settings::default().encode();
-        for i in 0..ENCODED_LEN {
-            for bit in 0..8 {
-                let mut damaged = bytes;
-                damaged[i] ^= 1 << bit;
-                assert!(Settings::decode(&damaged).is_err(), "byte {i} bit {bit}");
-            }
-        }
-    }
-
-    #[test]
-    fn foreign_and_short_data_are_rejected() {
-        assert_eq!(
-            Settings::decode(&[0xFF; ENCODED_LEN]),
-            Err(DecodeError::BadMagic)
-        );
-        assert_eq!(Settings::decode(&[0; 10]), Err(DecodeError::TooShort));
-        let mut bytes = Settings::default().encode();
-        bytes[4] = 2;
-        assert_eq!(
-            Settings::decode(&bytes),
-            Err(DecodeError::UnsupportedVersion(2))
-        );
-        let mut bytes = Settings::default().encode();
-        bytes[6] = 1;
+        assert!(matches!(err("frame_hz", "49"), E::OutOfRange { .. }));
+        assert!(matches!(err("frame_hz", "334"), E::OutOfRange { .. }));
         assert!(matches!(
-            Settings::decode(&bytes),
-            Err(DecodeError::BadLength(_))
-        ));
-    }
-
-    /// Re-seals damaged contents with a correct checksum, as a buggy writer would.
-    fn reseal(mut bytes: [u8; ENCODED_LEN]) -> [u8; ENCODED_LEN] {
-        let end = HEADER_LEN + PAYLOAD_LEN;
-        let crc = crc32(&bytes[..end]);
-        bytes[end..].copy_from_slice(&crc.to_le_bytes());
-        bytes
-    }
-
-    #[test]
-    fn intact_but_invalid_contents_are_rejected() {
-        let mut bytes = Settings::default().encode();
-        bytes[8..10].copy_from_slice(&10u16.to_le_bytes()); // frame_hz 10
-        assert!(matches!(
-            Settings::decode(&reseal(bytes)),
-            Err(DecodeError::Invalid(Error::OutOfRange {
-                setting: SettingId::FrameHz,
+            err("frame_hz", "50.5"),
+            E::BadValue {
+                expected: Expected::WholeNumber,
                 ..
-            }))
+            }
         ));
-        let mut bytes = Settings::default().encode();
-        bytes[16..20].copy_from_slice(&f32::NAN.to_le_bytes()); // speed NaN
+        assert!(matches!(err("frame_hz", "fast"), E::BadNumber { .. }));
         assert!(matches!(
-            Settings::decode(&reseal(bytes)),
-            Err(DecodeError::Invalid(_))
+            err("frame_hz", "99999999999"),
+            E::NumberTooLarge { .. }
         ));
-        let mut bytes = Settings::default().encode();
-        bytes[14] = 7; // echo must be 0 or 1
         assert_eq!(
-            Settings::decode(&reseal(bytes)),
-            Err(DecodeError::BadField { offset: 14 })
+            value_err("baud", "1000000"),
+            E::NotOneOf {
+                setting: SettingId::Baud,
+                value: 1_000_000,
+                allowed: &BAUD_RATES,
+            }
         );
-        let mut bytes = Settings::default().encode();
-        bytes[52 + 16] = 2; // servo 1 direction
-        assert_eq!(
-            Settings::decode(&reseal(bytes)),
-            Err(DecodeError::BadField { offset: 68 })
-        );
-        let mut bytes = Settings::default().encode();
-        bytes[28 + 20..28 + 24].copy_from_slice(&5.0f32.to_le_bytes()); // rod 5 mm
         assert!(matches!(
-            Settings::decode(&reseal(bytes)),
-            Err(DecodeError::Invalid(Error::BadGeometry(_)))
+            value_err("echo", "maybe"),
+            E::BadValue {
+                expected: Expected::OnOrOff,
+                ..
+            }
         ));
+        assert!(matches!(err("speed_mm_s", "-1"), E::OutOfRange { .. }));
+        assert!(matches!(err("speed_mm_s", "nan"), E::NotFinite { .. }));
+        assert!(matches!(
+            err("speed_mm_s", "1e39"),
+            E::NumberTooLarge { .. }
+        ));
+        assert!(matches!(err("speed_deg_s", "0.01"), E::OutOfRange { .. }));
+        assert!(matches!(err("link_timeout_s", "-2"), E::OutOfRange { .. }));
+        assert!(matches!(err("arm_mm", "off"), E::BadNumber { .. }));
+        assert!(matches!(
+            err("servo1.trim_us", "3000"),
+            E::OutOfRange { .. }
+        ));
+        assert!(matches!(
+            err("servo1.dir", "up"),
+            E::BadValue {
+                expected: Expected::NormalOrReversed,
+                ..
+            }
+        ));
+        // In range on its own, but the servo set is inconsistent: home outside its limits.
+        assert!(matches!(
+            err("servo4.trim_us", "1950"),
+            E::BadServoConfig(ServoError::HomeOutsideLimits { servo: 4, .. })
+        ));
+        assert!(matches!(err("servos.min_us", "1600"), E::BadServoConfig(_)));
+        // In range on its own, but no home height exists.
+        assert!(matches!(err("rod_mm", "10"), E::BadGeometry(_)));
     }
 
-    proptest::proptest! {
-        #[test]
-        fn decoding_arbitrary_bytes_never_panics(bytes in proptest::collection::vec(proptest::num::u8::ANY, 0..300)) {
-            if let Ok(s) = Settings::decode(&bytes) {
-                proptest::prop_assert!(s.validate().is_ok());
-            }
-        }
+    #[test]
+    fn out_of_range_names_setting_and_limits() {
+        assert_eq!(
+            parse("frame_hz", "20"),
+            Err(SettingError::OutOfRange {
+                setting: SettingId::FrameHz,
+                value: 20.0,
+                min: 50.0,
+                max: 333.0,
+                unit: "Hz",
+                off_allowed: false,
+            })
+        );
+        assert_eq!(
+            parse("speed_mm_s", "5000"),
+            Err(SettingError::OutOfRange {
+                setting: SettingId::SpeedMmS,
+                value: 5000.0,
+                min: 0.1,
+                max: 1000.0,
+                unit: "mm/s",
+                off_allowed: true,
+            })
+        );
     }
 }

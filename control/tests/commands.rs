@@ -2,7 +2,7 @@
 
 mod common;
 
-use common::{code_of, is_final, pose_values, six, Session};
+use common::{code_of, is_final, pose_values, six, Host};
 use control::report::Code;
 use control::Settings;
 use kinematics_core::geometry::PairedLayout;
@@ -19,9 +19,9 @@ fn close(a: f32, b: f32, tol: f32) -> bool {
 
 #[test]
 fn banner_then_prompt_when_echo_is_on() {
-    let mut ctl = control::Controller::new(Settings::default());
+    let ctl = control::Controller::new(Settings::default());
     let mut out = String::new();
-    ctl.banner(&mut out);
+    ctl.banner(&mut control::Session::new(), &mut out);
     assert!(out.starts_with("# hexapod control"), "{out:?}");
     assert!(out.ends_with("\r\n> "), "{out:?}");
     assert!(!out.contains("ok") && !out.contains("error:"));
@@ -29,7 +29,7 @@ fn banner_then_prompt_when_echo_is_on() {
 
 #[test]
 fn typed_characters_are_echoed_and_backspace_erases() {
-    let mut s = Session::with(Settings::default());
+    let mut s = Host::with(Settings::default());
     let out = s.feed(b"hoxx\x08\x7fme\r");
     assert_eq!(out, "hoxx\x08 \x08\x08 \x08me\r\nok\r\n> ");
     // Ctrl-C abandons the line without a reply.
@@ -45,9 +45,9 @@ fn typed_characters_are_echoed_and_backspace_erases() {
 
 #[test]
 fn echo_off_is_for_programs() {
-    let mut s = Session::with(Settings::default());
+    let mut s = Host::with(Settings::default());
     assert_eq!(s.feed(b"set echo off\r\n"), "set echo off\r\nok\r\n");
-    assert!(!s.ctl.settings().echo);
+    assert!(!s.link.echo());
     assert_eq!(s.feed(b"home\r\n"), "ok\r\n");
     assert_eq!(s.feed(b"\r\n \n"), "");
     assert_eq!(s.feed(b"ab\x08c\x03"), "");
@@ -56,7 +56,7 @@ fn echo_off_is_for_programs() {
 
 #[test]
 fn every_line_end_gets_one_reply() {
-    let mut s = Session::quiet();
+    let mut s = Host::quiet();
     for end in ["\r", "\n", "\r\n"] {
         let out = s.feed(format!("status{end}").as_bytes());
         assert_eq!(out.lines().filter(|l| is_final(l)).count(), 1, "{end:?}");
@@ -68,7 +68,7 @@ fn every_line_end_gets_one_reply() {
 
 #[test]
 fn commands_are_case_insensitive() {
-    let mut s = Session::quiet();
+    let mut s = Host::quiet();
     s.ok("POSE 0 0 2 0 0 0");
     s.ok("Set Speed_MM_S 20");
     s.ok("STATUS");
@@ -77,7 +77,7 @@ fn commands_are_case_insensitive() {
 
 #[test]
 fn status_shows_pose_target_state_angles_and_pulses() {
-    let mut s = Session::quiet();
+    let mut s = Host::quiet();
     let data = s.ok("status");
     let keys: Vec<&str> = data
         .iter()
@@ -107,7 +107,7 @@ fn status_shows_pose_target_state_angles_and_pulses() {
 
 #[test]
 fn pose_moves_there_and_status_reports_it() {
-    let mut s = Session::quiet();
+    let mut s = Host::quiet();
     s.ok("pose 3 -2 5 4 -3 6");
     assert!(s.ctl.is_moving());
     assert!(s.status_field("state").starts_with("moving"));
@@ -139,7 +139,7 @@ fn pose_moves_there_and_status_reports_it() {
 
 #[test]
 fn move_changes_only_the_named_axes() {
-    let mut s = Session::quiet();
+    let mut s = Host::quiet();
     s.ok("pose 1 2 3 4 5 6");
     s.ok("move z=-4 yaw=-2");
     assert_eq!(
@@ -155,7 +155,7 @@ fn move_changes_only_the_named_axes() {
 
 #[test]
 fn nudge_is_relative_to_the_target_and_accumulates() {
-    let mut s = Session::quiet();
+    let mut s = Host::quiet();
     s.ok("pose 1 2 3 4 5 6");
     s.ok("nudge x=1 roll=-1");
     s.ok("nudge x=1.5");
@@ -172,7 +172,7 @@ fn nudge_is_relative_to_the_target_and_accumulates() {
 
 #[test]
 fn home_returns_and_stop_freezes() {
-    let mut s = Session::quiet();
+    let mut s = Host::quiet();
     s.ok("set speed_mm_s 10");
     s.ok("pose 0 0 10 0 0 0");
     s.frames(10);
@@ -191,7 +191,7 @@ fn home_returns_and_stop_freezes() {
 
 #[test]
 fn check_reports_pulses_and_nothing_moves() {
-    let mut s = Session::quiet();
+    let mut s = Host::quiet();
     let data = s.ok("check 5 0 -3 2 0 -4");
     let field = |key: &str| {
         data.iter()
@@ -225,7 +225,7 @@ fn check_reports_pulses_and_nothing_moves() {
 
 #[test]
 fn geometry_lists_the_build() {
-    let mut s = Session::quiet();
+    let mut s = Host::quiet();
     let data = s.ok("geometry");
     let g = PairedLayout::default().build().unwrap();
     let h0: f32 = data
@@ -251,7 +251,7 @@ fn geometry_lists_the_build() {
 
 #[test]
 fn config_values_can_be_set_back_unchanged() {
-    let mut s = Session::quiet();
+    let mut s = Host::quiet();
     s.ok("set servo3.trim_us 1512.5");
     s.ok("set link_timeout_s 4");
     let before = *s.ctl.settings();
@@ -277,10 +277,8 @@ fn config_values_can_be_set_back_unchanged() {
     // Values shown with 2-3 decimals come back within that rounding.
     assert_eq!(after.servos.0[2].home_us, 1512.5);
     assert_eq!(after.link_timeout_s, 4.0);
-    assert_eq!(
-        (after.frame_hz, after.baud, after.echo),
-        (before.frame_hz, before.baud, before.echo)
-    );
+    assert_eq!(after.frame_hz, before.frame_hz);
+    assert_eq!((s.ctl.baud(), s.link.echo()), (115_200, false));
     for (a, b) in after.servos.0.iter().zip(before.servos.0.iter()) {
         assert!(close(a.rate_us_per_rad, b.rate_us_per_rad, 6e-4));
         assert_eq!(a.direction, b.direction);
@@ -290,7 +288,7 @@ fn config_values_can_be_set_back_unchanged() {
 
 #[test]
 fn help_lists_every_command() {
-    let mut s = Session::quiet();
+    let mut s = Host::quiet();
     let help = s.ok("help").join("\n");
     for cmd in [
         "pose", "move", "nudge", "check", "home", "stop", "status", "?", "geometry", "config",
@@ -307,7 +305,7 @@ fn help_lists_every_command() {
 
 #[test]
 fn settings_change_bumps_the_generation() {
-    let mut s = Session::quiet();
+    let mut s = Host::quiet();
     let g0 = s.ctl.settings_generation();
     s.ok("set frame_hz 200");
     s.ok("set baud 921600");
@@ -317,7 +315,7 @@ fn settings_change_bumps_the_generation() {
 
 #[test]
 fn refused_settings_change_nothing() {
-    let mut s = Session::quiet();
+    let mut s = Host::quiet();
     let before = *s.ctl.settings();
     let generation = s.ctl.settings_generation();
     for (line, code) in [
@@ -352,7 +350,7 @@ fn refused_settings_change_nothing() {
 
 #[test]
 fn error_messages_name_the_setting_servo_and_limit() {
-    let mut s = Session::quiet();
+    let mut s = Host::quiet();
     let e = s.err("set servo4.trim_us 1950");
     assert!(
         e.contains("servo4.trim_us") && e.contains("1950.00") && e.contains("1900.00"),
@@ -369,7 +367,7 @@ fn error_messages_name_the_setting_servo_and_limit() {
 
 #[test]
 fn trim_and_direction_apply_at_once() {
-    let mut s = Session::quiet();
+    let mut s = Host::quiet();
     s.ok("pose 0 0 5 0 0 0");
     s.run_until_idle();
     let before = s.ctl.on_frame();
@@ -384,17 +382,13 @@ fn trim_and_direction_apply_at_once() {
     s.ok("set baud 921600");
     s.ok("defaults");
     // Everything back to the defaults except the link settings.
-    let expected = Settings {
-        echo: false,
-        baud: 921_600,
-        ..Settings::default()
-    };
-    assert_eq!(*s.ctl.settings(), expected);
+    assert_eq!(*s.ctl.settings(), Settings::default());
+    assert_eq!((s.ctl.baud(), s.link.echo()), (921_600, false));
 }
 
 #[test]
 fn settings_that_would_drop_the_held_pose_are_refused() {
-    let mut s = Session::quiet();
+    let mut s = Host::quiet();
     s.ok("pose 0 0 -8 0 0 0");
     s.run_until_idle();
     let pulses = s.ctl.on_frame();
@@ -412,7 +406,7 @@ fn settings_that_would_drop_the_held_pose_are_refused() {
 
 #[test]
 fn motion_settings_are_busy_while_moving_but_others_are_not() {
-    let mut s = Session::quiet();
+    let mut s = Host::quiet();
     s.ok("set speed_mm_s 5");
     s.ok("pose 0 0 5 0 0 0");
     assert!(s.ctl.is_moving());
@@ -432,7 +426,7 @@ fn motion_settings_are_busy_while_moving_but_others_are_not() {
 
 #[test]
 fn every_pose_error_class_and_the_next_line_works() {
-    let mut s = Session::quiet();
+    let mut s = Host::quiet();
     s.ok("pose 1 1 1 1 1 1");
     s.run_until_idle();
     let target = s.status_field("target");
@@ -465,7 +459,7 @@ fn every_pose_error_class_and_the_next_line_works() {
 
 #[test]
 fn pose_errors_name_the_field_leg_or_servo() {
-    let mut s = Session::quiet();
+    let mut s = Host::quiet();
     let e = s.err("pose 1 2 3 nan 5 6");
     assert!(e.contains("roll") && e.contains("'nan'"), "{e}");
     let e = s.err("pose 1 2");
@@ -483,7 +477,7 @@ fn pose_errors_name_the_field_leg_or_servo() {
 
 #[test]
 fn path_through_unreachable_space_is_refused_before_anything_moves() {
-    let mut s = Session::quiet();
+    let mut s = Host::quiet();
     s.ok(BLOCKED_FROM);
     s.run_until_idle();
     s.frames(1);
@@ -512,7 +506,7 @@ fn path_through_unreachable_space_is_refused_before_anything_moves() {
 
 #[test]
 fn too_long_line_gets_one_error_and_the_next_line_works() {
-    let mut s = Session::quiet();
+    let mut s = Host::quiet();
     // Exactly 128 characters is fine.
     let line = format!("{:<128}", "pose 0 0 1 0 0 0");
     assert_eq!(s.ok(&line), Vec::<String>::new());
@@ -527,17 +521,17 @@ fn too_long_line_gets_one_error_and_the_next_line_works() {
 
 #[test]
 fn non_ascii_is_refused() {
-    let mut s = Session::quiet();
+    let mut s = Host::quiet();
     assert_eq!(s.code("pose 0 0 1 0 0 0°"), "bad-character");
     s.ok("status");
 }
 
 #[test]
 fn rx_overflow_warns_at_once_and_refuses_the_line() {
-    let mut s = Session::quiet();
+    let mut s = Host::quiet();
     s.feed(b"pose 1 2");
     let mut out = String::new();
-    s.ctl.on_rx_overflow(17, &mut out);
+    s.ctl.on_rx_overflow(&mut s.link, 17, &mut out);
     assert!(out.starts_with("# ") && out.contains("17 bytes"), "{out:?}");
     assert!(!out.contains("ok") && !out.contains("error:"));
     let out = s.feed(b" 3 0 0 0\r\n");
@@ -581,10 +575,10 @@ fn every_error_code_is_documented_in_the_readme() {
 fn invalid_start_up_settings_fall_back_to_defaults_and_say_so() {
     let mut bad = Settings::default();
     bad.layout.rod_mm = 5.0;
-    let mut ctl = control::Controller::new(bad);
+    let ctl = control::Controller::new(bad);
     assert_eq!(*ctl.settings(), Settings::default());
     let mut out = String::new();
-    ctl.banner(&mut out);
+    ctl.banner(&mut control::Session::new(), &mut out);
     assert!(
         out.contains("# warning: stored settings refused (error:bad-geometry"),
         "{out}"

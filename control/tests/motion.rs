@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{pose_values, Session};
+use common::{pose_values, Host};
 use control::motion::{angular_distance_deg, linear_distance_mm};
 use control::Pose;
 
@@ -11,8 +11,8 @@ fn close(a: f32, b: f32, tol: f32) -> bool {
     (a - b).abs() <= tol
 }
 
-fn session(speed_mm_s: &str, speed_deg_s: &str) -> Session {
-    let mut s = Session::quiet();
+fn session(speed_mm_s: &str, speed_deg_s: &str) -> Host {
+    let mut s = Host::quiet();
     s.ok(&format!("set speed_mm_s {speed_mm_s}"));
     s.ok(&format!("set speed_deg_s {speed_deg_s}"));
     s
@@ -128,7 +128,7 @@ fn with_a_speed_limit_the_first_step_waits_for_the_frame() {
 
 #[test]
 fn a_trim_change_hands_the_board_the_new_pulses_at_once() {
-    let mut s = Session::quiet();
+    let mut s = Host::quiet();
     s.ok("set servo3.trim_us 1520");
     let now = s
         .ctl
@@ -177,7 +177,7 @@ fn speed_changes_apply_to_the_next_move() {
 
 #[test]
 fn link_loss_is_off_by_default() {
-    let mut s = Session::quiet();
+    let mut s = Host::quiet();
     s.ok("pose 0 0 5 0 0 0");
     s.frames(50 * 600); // ten minutes
     assert_eq!(
@@ -202,16 +202,13 @@ fn link_loss_eases_home_after_the_timeout() {
     assert_eq!(s.run_until_idle(), 24);
     assert_eq!(*s.ctl.pose(), Pose::HOME);
     // The notice comes out now (write_notices) ...
-    let mut out = String::new();
-    s.ctl.write_notices(&mut out);
+    let out = s.notices();
     assert!(
         out.starts_with("# link lost: no command for 2 s"),
         "{out:?}"
     );
     // ... and only once.
-    let mut out = String::new();
-    s.ctl.write_notices(&mut out);
-    assert_eq!(out, "");
+    assert_eq!(s.notices(), "");
 }
 
 #[test]

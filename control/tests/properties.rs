@@ -3,9 +3,9 @@
 
 mod common;
 
-use common::{is_final, Session};
+use common::{is_final, Host};
 use control::protocol::MAX_LINE;
-use control::{Controller, Settings};
+use control::{Controller, Session, Settings};
 use proptest::prelude::*;
 
 /// Final replies in a chunk of output.
@@ -57,13 +57,15 @@ proptest! {
     /// LF) ever produce one. Pulses stay valid throughout.
     #[test]
     fn arbitrary_bytes_never_panic_and_only_line_ends_reply(bytes in noisy_bytes(), echo in any::<bool>()) {
-        let mut ctl = Controller::new(Settings { echo, ..Settings::default() });
+        let mut ctl = Controller::new(Settings::default());
+        let mut link = Session::new();
+        link.set_echo(echo);
         let mut banner = String::new();
-        ctl.banner(&mut banner);
+        ctl.banner(&mut link, &mut banner);
         prop_assert_eq!(finals(&banner), 0);
         for (i, &b) in bytes.iter().enumerate() {
             let mut out = String::new();
-            ctl.on_byte(b, &mut out);
+            ctl.on_byte(&mut link, b, &mut out);
             let n = finals(&out);
             prop_assert!(n <= 1, "byte {} produced {:?}", i, out);
             if n == 1 {
@@ -77,7 +79,7 @@ proptest! {
         // Whatever came before, a fresh line is understood.
         let mut out = String::new();
         for &b in b"\x03status\r" {
-            ctl.on_byte(b, &mut out);
+            ctl.on_byte(&mut link, b, &mut out);
         }
         prop_assert_eq!(finals(&out), 1, "{:?}", out);
         prop_assert!(out.split("\r\n").any(|l| l == "ok"), "{:?}", out);
@@ -89,7 +91,7 @@ proptest! {
     fn every_completed_line_gets_exactly_one_final_reply(
         lines in proptest::collection::vec(("[ -~]{0,140}", prop_oneof![Just("\r"), Just("\n"), Just("\r\n")]), 1..20)
     ) {
-        let mut s = Session::quiet();
+        let mut s = Host::quiet();
         for (text, end) in &lines {
             // A line that turns echo back on would add a prompt; keep to the quiet protocol.
             let text = text.replace("echo", "ech0");
@@ -136,7 +138,7 @@ proptest! {
             1..25,
         )
     ) {
-        let mut s = Session::quiet();
+        let mut s = Host::quiet();
         for (line, frames) in &steps {
             let (_, reply) = s.exchange(line);
             prop_assert!(reply == "ok" || reply.starts_with("error:"), "{}", reply);

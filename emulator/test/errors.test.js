@@ -28,7 +28,7 @@ import {
 import { HostReference } from '../src/host-reference.js';
 
 const README = readFileSync(new URL('../../README.md', import.meta.url), 'utf8');
-const REPORT_RS = readFileSync(new URL('../../control/src/report.rs', import.meta.url), 'utf8');
+const REPORT_RS = readFileSync(new URL('../../control/src/report/errors.rs', import.meta.url), 'utf8');
 /** Documented as impossible from typed input (typed non-finite numbers are `not-finite`). */
 const NOT_REACHABLE_FROM_THE_WIRE = new Set(['pose-not-finite']);
 
@@ -246,7 +246,7 @@ test('every documented error code exists in the firmware and was produced above 
   const codeEnum = REPORT_RS.slice(REPORT_RS.indexOf('pub const fn as_str'));
   const implemented = [...codeEnum.slice(0, codeEnum.indexOf('\n    }\n')).matchAll(/=> "([a-z-]+)",/g)].map((m) => m[1]);
   assert.ok(documented.length >= 20, `found ${documented.length} codes in README.md`);
-  assert.deepEqual([...documented].sort(), [...implemented].sort(), 'README codes = report.rs Code');
+  assert.deepEqual([...documented].sort(), [...implemented].sort(), 'README codes = report/errors.rs Code');
   const missing = documented.filter((code) => !observed.has(code) && !NOT_REACHABLE_FROM_THE_WIRE.has(code));
   assert.deepEqual(missing, [], 'documented codes no test produced');
 });

@@ -16,7 +16,7 @@ use defmt_rtt as _;
 use panic_probe as _;
 use rp2040_hal::{self as hal, clocks::Clock, fugit::ExtU32, pac, Sio, Watchdog};
 
-use control::Settings;
+use control::{Session, Settings};
 use firmware::rom_math::RomMath;
 use serial::{Received, Serial};
 use servo_pwm::{PulseWindowUs, ServoPwm, SERVO_COUNT};
@@ -71,7 +71,9 @@ fn main() -> ! {
     .expect("the default frame rate is in range");
     watchdog.start(WATCHDOG_TIMEOUT_MS.millis());
 
-    controller.banner(&mut serial);
+    // UART0's line assembly, echo and prompt (the platform's state is the controller's).
+    let mut uart = Session::new();
+    controller.banner(&mut uart, &mut serial);
     defmt::info!("ready");
 
     let mut rx_line_errors_reported = 0;
@@ -86,7 +88,7 @@ fn main() -> ! {
             }
             match serial.read() {
                 Some(Received::Byte(byte)) => {
-                    controller.on_byte(byte, &mut serial);
+                    controller.on_byte(&mut uart, byte, &mut serial);
                     // A jump (speed limits off) is written now, not at the next frame; the
                     // compare registers latch it at the next period start, so no pulse is cut.
                     if let Some(pulses_us) = controller.take_new_pulses() {
@@ -96,7 +98,7 @@ fn main() -> ! {
                 // The main loop fell behind and bytes were lost here: that line is refused.
                 Some(Received::Lost(bytes)) => {
                     defmt::warn!("serial receive queue full: {} bytes lost", bytes);
-                    controller.on_rx_overflow(bytes, &mut serial);
+                    controller.on_rx_overflow(&mut uart, bytes, &mut serial);
                 }
                 None => break,
             }
@@ -107,7 +109,7 @@ fn main() -> ! {
         if frames > 0 {
             let pulses_us = controller.on_frame();
             servos.set_frame_pulse_widths_us(&pulses_us, &pulse_windows_us(&controller));
-            controller.write_notices(&mut serial);
+            controller.write_notices(&mut uart, &mut serial);
             if frames > 1 {
                 defmt::warn!("missed {} servo frames", frames - 1);
             }

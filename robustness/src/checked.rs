@@ -3,7 +3,7 @@
 //! fuzzer or a test harness catches).
 
 use control::report::Code;
-use control::{Controller, Pose, Settings};
+use control::{Controller, Pose, Session, Settings};
 
 use crate::line_model::{LineEnd, LineModel};
 
@@ -11,6 +11,8 @@ use crate::line_model::{LineEnd, LineModel};
 #[derive(Debug, Clone, PartialEq)]
 struct State {
     settings: Settings,
+    baud: u32,
+    echo: bool,
     generation: u32,
     pose: Pose,
     target: Pose,
@@ -22,6 +24,8 @@ struct State {
 pub struct Checked {
     /// The controller under test.
     pub ctl: Controller,
+    /// The link the bytes arrive on.
+    pub link: Session,
     model: LineModel,
     /// Everything written so far (capped, for failure messages).
     pub log: String,
@@ -75,10 +79,14 @@ pub fn check_output_bytes(out: &str) {
 }
 
 impl Checked {
-    /// A controller with `settings` (which must be valid), banner written and checked.
-    pub fn new(settings: Settings) -> Checked {
+    /// A controller with `settings` (which must be valid) on a link with `echo` on or off,
+    /// banner written and checked.
+    pub fn new(settings: Settings, echo: bool) -> Checked {
+        let mut link = Session::new();
+        link.set_echo(echo);
         let mut c = Checked {
             ctl: Controller::new(settings),
+            link,
             model: LineModel::new(),
             log: String::new(),
             replies: 0,
@@ -86,7 +94,7 @@ impl Checked {
             frames: 0,
         };
         let mut out = String::new();
-        c.ctl.banner(&mut out);
+        c.ctl.banner(&mut c.link, &mut out);
         check_output_bytes(&out);
         assert_eq!(
             Self::finals(&out, false).len(),
@@ -103,6 +111,8 @@ impl Checked {
     fn state(&self) -> State {
         State {
             settings: *self.ctl.settings(),
+            baud: self.ctl.baud(),
+            echo: self.link.echo(),
             generation: self.ctl.settings_generation(),
             pose: *self.ctl.pose(),
             target: *self.ctl.target(),
@@ -159,11 +169,11 @@ impl Checked {
     /// Feeds one byte, as the board does; checks the reply count against the line model, and
     /// that a refused line (or rejected command) changed nothing.
     pub fn byte(&mut self, b: u8) {
-        let echo_before = self.ctl.settings().echo;
+        let echo_before = self.link.echo();
         let before = self.state();
         let expected = self.model.byte(b);
         let mut out = String::new();
-        self.ctl.on_byte(b, &mut out);
+        self.ctl.on_byte(&mut self.link, b, &mut out);
         self.record(&out);
         check_output_bytes(&out);
         let finals = Self::finals(&out, echo_before);
@@ -242,7 +252,7 @@ impl Checked {
         let before = self.state();
         self.model.lost();
         let mut out = String::new();
-        self.ctl.on_rx_overflow(dropped, &mut out);
+        self.ctl.on_rx_overflow(&mut self.link, dropped, &mut out);
         self.record(&out);
         check_output_bytes(&out);
         assert!(
@@ -272,7 +282,7 @@ impl Checked {
                 "frame pulses differ from pulses_us"
             );
             let mut out = String::new();
-            self.ctl.write_notices(&mut out);
+            self.ctl.write_notices(&mut self.link, &mut out);
             self.record(&out);
             check_output_bytes(&out);
             assert_eq!(
@@ -300,7 +310,7 @@ impl Checked {
     pub fn execute(&mut self, line: &str) {
         let before = self.state();
         let mut out = String::new();
-        self.ctl.execute_line(line, &mut out);
+        self.ctl.execute_line(&mut self.link, line, &mut out);
         self.record(&out);
         check_output_bytes(&out);
         let blank = line.bytes().all(|b| b == b' ' || b == b'\t');

@@ -5,8 +5,9 @@ use arbitrary::{Arbitrary, Unstructured};
 use control::command::{self, Command};
 use control::number::{parse_f32, parse_u32, NumberError};
 use control::protocol::{Feed, LineBuffer, Spoiled};
+use control::record::{self, ENCODED_LEN};
 use control::report;
-use control::settings::{SettingId, Settings, ENCODED_LEN};
+use control::settings::{SettingId, Settings};
 
 use crate::checked::{check_output_bytes, check_pulses, code_of, Checked};
 use crate::line_model::{LineEnd, LineModel, Refusal};
@@ -95,7 +96,8 @@ pub fn command(data: &[u8]) {
         Ok(_) => {}
         Err(e) => {
             let mut out = String::new();
-            report::write_error(&mut out, e);
+            let e = control::Error::from(e.clone());
+            report::write_error(&mut out, &e);
             check_output_bytes(&out);
             assert!(out.ends_with("\r\n"), "{out:?}");
             let body = &out[..out.len() - 2];
@@ -240,16 +242,16 @@ enum SetValue {
 /// A decoded record: valid, re-encodes to the same bytes, and a controller starts on it at
 /// its home pulses.
 fn check_decoded(bytes: &[u8]) {
-    if let Ok(s) = Settings::decode(bytes) {
+    if let Ok(s) = record::decode(bytes) {
         if let Err(e) = s.validate() {
             panic!("decoded settings do not validate: {e:?}");
         }
         assert_eq!(
-            &s.encode()[..],
+            &record::encode(&s)[..],
             &bytes[..ENCODED_LEN],
             "decode/encode is not the identity"
         );
-        let mut c = Checked::new(s);
+        let mut c = Checked::new(s, true);
         c.frames(2);
         c.line("status", b"\r");
     }
@@ -275,11 +277,15 @@ pub fn settings(data: &[u8]) {
                 let candidate = s.with(id, v);
                 if candidate.validate().is_ok() {
                     s = candidate;
-                    assert_eq!(Settings::decode(&s.encode()), Ok(s), "round trip of {s:?}");
+                    assert_eq!(
+                        record::decode(&record::encode(&s)),
+                        Ok(s),
+                        "round trip of {s:?}"
+                    );
                 }
             }
         }
-        let mut c = Checked::new(s);
+        let mut c = Checked::new(s, true);
         c.frames(2);
         return;
     }
@@ -293,13 +299,13 @@ pub fn settings(data: &[u8]) {
             patches,
             fix_checksum,
         } => {
-            let mut bytes = Settings::default().encode();
+            let mut bytes = record::encode(&Settings::default());
             for (at, v) in patches {
                 bytes[usize::from(at) % ENCODED_LEN] = v;
             }
             if fix_checksum {
                 let end = ENCODED_LEN - 4;
-                let crc = control::settings::crc32(&bytes[..end]);
+                let crc = record::crc32(&bytes[..end]);
                 bytes[end..].copy_from_slice(&crc.to_le_bytes());
             }
             check_decoded(&bytes);
@@ -335,11 +341,11 @@ pub fn settings(data: &[u8]) {
                 let candidate = s.with(id, v);
                 if candidate.validate().is_ok() {
                     s = candidate;
-                    let bytes = s.encode();
-                    assert_eq!(Settings::decode(&bytes), Ok(s), "round trip of {s:?}");
+                    let bytes = record::encode(&s);
+                    assert_eq!(record::decode(&bytes), Ok(s), "round trip of {s:?}");
                 }
             }
-            let c = Checked::new(s);
+            let c = Checked::new(s, true);
             check_pulses(c.ctl.settings(), &c.ctl.pulses_us(), "start-up");
         }
     }
@@ -349,10 +355,7 @@ pub fn settings(data: &[u8]) {
 
 /// Runs one structured session through a [`Checked`] controller.
 pub fn run_session(session: &Session) {
-    let mut c = Checked::new(Settings {
-        echo: session.echo,
-        ..Settings::default()
-    });
+    let mut c = Checked::new(Settings::default(), session.echo);
     for op in session.ops.iter().take(MAX_OPS) {
         match op {
             Op::Line(cmd, sep, upper, end) => c.line(&cmd.text(*sep, *upper), end.bytes()),
@@ -396,7 +399,7 @@ pub fn controller(data: &[u8]) {
 
 /// Feeds a script of lines, running the motion to its end after each line end.
 pub fn script(data: &[u8]) {
-    let mut c = Checked::new(Settings::default());
+    let mut c = Checked::new(Settings::default(), true);
     for &b in data {
         c.byte(b);
         if b == b'\r' || b == b'\n' {

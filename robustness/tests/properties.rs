@@ -134,7 +134,7 @@ proptest! {
             servo.max_us = (trim + half_window).min(2600.0);
         }
         prop_assume!(settings.validate().is_ok());
-        let mut c = Checked::new(settings); // checks the power-on pulses
+        let mut c = Checked::new(settings, true); // checks the power-on pulses
         for _ in 0..frames {
             prop_assert_eq!(c.ctl.on_frame(), trims);
         }

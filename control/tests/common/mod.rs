@@ -1,7 +1,7 @@
-//! A test session: bytes in, text out, with helpers to pick replies apart.
+//! A test host on one link: bytes in, text out, with helpers to pick replies apart.
 #![allow(dead_code)] // each test file uses a different subset
 
-use control::{Controller, Settings};
+use control::{Controller, Session, Settings};
 
 /// True for a final reply line (`ok...` or `error:...`).
 pub fn is_final(line: &str) -> bool {
@@ -15,24 +15,27 @@ pub fn code_of(line: &str) -> &str {
         .unwrap_or_else(|| panic!("not an error reply: {line:?}"))
 }
 
-pub struct Session {
+pub struct Host {
     pub ctl: Controller,
+    /// The host's link.
+    pub link: Session,
     /// Everything written so far.
     pub log: String,
 }
 
-impl Session {
+impl Host {
     /// Echo off (as a program would talk to it).
-    pub fn quiet() -> Session {
-        Session::with(Settings {
-            echo: false,
-            ..Settings::default()
-        })
+    pub fn quiet() -> Host {
+        let mut host = Host::with(Settings::default());
+        host.link.set_echo(false);
+        host
     }
 
-    pub fn with(settings: Settings) -> Session {
-        Session {
+    /// Echo on (as a terminal would talk to it).
+    pub fn with(settings: Settings) -> Host {
+        Host {
             ctl: Controller::new(settings),
+            link: Session::new(),
             log: String::new(),
         }
     }
@@ -41,7 +44,7 @@ impl Session {
     pub fn feed(&mut self, bytes: &[u8]) -> String {
         let mut out = String::new();
         for &b in bytes {
-            self.ctl.on_byte(b, &mut out);
+            self.ctl.on_byte(&mut self.link, b, &mut out);
         }
         self.log.push_str(&out);
         out
@@ -93,6 +96,14 @@ impl Session {
     /// The error code a line gets.
     pub fn code(&mut self, line: &str) -> String {
         code_of(&self.err(line)).to_owned()
+    }
+
+    /// The notices this link has not shown yet, as the board writes them.
+    pub fn notices(&mut self) -> String {
+        let mut out = String::new();
+        self.ctl.write_notices(&mut self.link, &mut out);
+        self.log.push_str(&out);
+        out
     }
 
     /// Runs `n` frames; returns their pulses.

@@ -1,0 +1,339 @@
+//! The settings record: [`Settings`] as a fixed-size, versioned, checksummed block of bytes for
+//! flash, and back. Writing it to flash is the board's job.
+//!
+//! [`ENCODED_LEN`] bytes, little-endian (format version [`FORMAT_VERSION`]):
+//!
+//! | offset | size | content |
+//! | --- | --- | --- |
+//! | 0 | 4 | magic `HXPS` |
+//! | 4 | 2 | format version |
+//! | 6 | 2 | payload length ([`PAYLOAD_LEN`]) |
+//! | 8 | 2 | `frame_hz` (u16) |
+//! | 10 | 2 | reserved, 0 |
+//! | 12 | 12 | `speed_mm_s`, `speed_deg_s`, `link_timeout_s` (f32) |
+//! | 24 | 24 | layout: base radius, base half angle, platform radius, platform half angle, arm, rod (f32) |
+//! | 48 | 6 x 20 | per servo: trim, rate, min, max (f32), direction (0 normal, 1 reversed), 3 reserved 0 |
+//! | 168 | 4 | CRC-32 (IEEE 802.3) of bytes 0..168 |
+//!
+//! The link settings (`baud`, `echo`) are not in it: they belong to the links, not the platform.
+//! Decoding checks magic, version, length, checksum, every enumerated byte and finally
+//! [`Settings::validate`], so decoded settings are always usable.
+
+use kinematics_core::{Direction, ServoSet};
+
+use crate::settings::{LayoutParam, SettingError, Settings};
+
+/// Binary format version (1 also held the link settings; it was never written to a board).
+pub const FORMAT_VERSION: u16 = 2;
+/// Bytes between the header and the checksum.
+pub const PAYLOAD_LEN: usize = 160;
+/// Bytes of an encoded [`Settings`].
+pub const ENCODED_LEN: usize = HEADER_LEN + PAYLOAD_LEN + 4;
+const HEADER_LEN: usize = 8;
+const MAGIC: [u8; 4] = *b"HXPS";
+const SERVO_RECORD_LEN: usize = 20;
+
+/// Why stored bytes are not a usable [`Settings`].
+#[derive(Debug, Clone, PartialEq)]
+pub enum DecodeError {
+    /// Fewer than [`ENCODED_LEN`] bytes.
+    TooShort,
+    /// Not settings at all (erased flash reads as `0xFF`).
+    BadMagic,
+    /// Written by a different format version.
+    UnsupportedVersion(u16),
+    /// The stored payload length does not match this version's.
+    BadLength(u16),
+    /// The checksum does not match: the data is damaged.
+    BadChecksum,
+    /// A byte that must be 0/1 (direction) or reserved 0 is not.
+    BadField {
+        /// Offset of the byte.
+        offset: usize,
+    },
+    /// Intact, but the values are not valid settings.
+    Invalid(SettingError),
+}
+
+/// CRC-32 (IEEE 802.3, reflected, polynomial 0xEDB88320), bit by bit: small and fast enough
+/// for a 172-byte record.
+pub fn crc32(bytes: &[u8]) -> u32 {
+    let mut crc = 0xFFFF_FFFFu32;
+    for &b in bytes {
+        crc ^= u32::from(b);
+        for _ in 0..8 {
+            let mask = (crc & 1).wrapping_neg();
+            crc = (crc >> 1) ^ (0xEDB8_8320 & mask);
+        }
+    }
+    !crc
+}
+
+struct Writer<'a> {
+    buf: &'a mut [u8; ENCODED_LEN],
+    at: usize,
+}
+
+impl Writer<'_> {
+    fn bytes(&mut self, b: &[u8]) {
+        self.buf[self.at..self.at + b.len()].copy_from_slice(b);
+        self.at += b.len();
+    }
+    fn f32(&mut self, v: f32) {
+        self.bytes(&v.to_le_bytes());
+    }
+}
+
+struct Reader<'a> {
+    buf: &'a [u8],
+    at: usize,
+}
+
+impl Reader<'_> {
+    fn take<const N: usize>(&mut self) -> [u8; N] {
+        let mut out = [0u8; N];
+        out.copy_from_slice(&self.buf[self.at..self.at + N]);
+        self.at += N;
+        out
+    }
+    fn u8(&mut self) -> u8 {
+        self.take::<1>()[0]
+    }
+    fn f32(&mut self) -> f32 {
+        f32::from_le_bytes(self.take())
+    }
+    /// A byte that must be 0 or 1.
+    fn bit(&mut self) -> Result<bool, DecodeError> {
+        let offset = self.at;
+        match self.u8() {
+            0 => Ok(false),
+            1 => Ok(true),
+            _ => Err(DecodeError::BadField { offset }),
+        }
+    }
+    fn zeros(&mut self, n: usize) -> Result<(), DecodeError> {
+        for _ in 0..n {
+            let offset = self.at;
+            if self.u8() != 0 {
+                return Err(DecodeError::BadField { offset });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The record of `settings` (see the module docs).
+pub fn encode(settings: &Settings) -> [u8; ENCODED_LEN] {
+    let mut buf = [0u8; ENCODED_LEN];
+    let mut w = Writer {
+        buf: &mut buf,
+        at: 0,
+    };
+    w.bytes(&MAGIC);
+    w.bytes(&FORMAT_VERSION.to_le_bytes());
+    w.bytes(&(PAYLOAD_LEN as u16).to_le_bytes());
+    w.bytes(&settings.frame_hz.to_le_bytes());
+    w.bytes(&[0, 0]);
+    w.f32(settings.speed_mm_s);
+    w.f32(settings.speed_deg_s);
+    w.f32(settings.link_timeout_s);
+    for p in LayoutParam::ALL {
+        w.f32(p.get(&settings.layout));
+    }
+    for s in &settings.servos.0 {
+        w.f32(s.home_us);
+        w.f32(s.rate_us_per_rad);
+        w.f32(s.min_us);
+        w.f32(s.max_us);
+        let dir = match s.direction {
+            Direction::Normal => 0,
+            Direction::Reversed => 1,
+        };
+        w.bytes(&[dir, 0, 0, 0]);
+    }
+    let end = w.at;
+    debug_assert_eq!(end, HEADER_LEN + PAYLOAD_LEN);
+    let crc = crc32(&buf[..end]);
+    buf[end..].copy_from_slice(&crc.to_le_bytes());
+    buf
+}
+
+/// Reads a record back (trailing bytes are ignored), refusing anything damaged, foreign or
+/// invalid.
+pub fn decode(bytes: &[u8]) -> Result<Settings, DecodeError> {
+    if bytes.len() < ENCODED_LEN {
+        return Err(DecodeError::TooShort);
+    }
+    let bytes = &bytes[..ENCODED_LEN];
+    if bytes[..4] != MAGIC {
+        return Err(DecodeError::BadMagic);
+    }
+    let version = u16::from_le_bytes([bytes[4], bytes[5]]);
+    if version != FORMAT_VERSION {
+        return Err(DecodeError::UnsupportedVersion(version));
+    }
+    let len = u16::from_le_bytes([bytes[6], bytes[7]]);
+    if usize::from(len) != PAYLOAD_LEN {
+        return Err(DecodeError::BadLength(len));
+    }
+    let end = HEADER_LEN + PAYLOAD_LEN;
+    let stored = u32::from_le_bytes([bytes[end], bytes[end + 1], bytes[end + 2], bytes[end + 3]]);
+    if crc32(&bytes[..end]) != stored {
+        return Err(DecodeError::BadChecksum);
+    }
+    let mut r = Reader {
+        buf: bytes,
+        at: HEADER_LEN,
+    };
+    let frame_hz = u16::from_le_bytes(r.take());
+    r.zeros(2)?;
+    let speed_mm_s = r.f32();
+    let speed_deg_s = r.f32();
+    let link_timeout_s = r.f32();
+    let mut settings = Settings {
+        servos: ServoSet::default(),
+        speed_mm_s,
+        speed_deg_s,
+        link_timeout_s,
+        frame_hz,
+        ..Settings::default()
+    };
+    for p in LayoutParam::ALL {
+        *p.slot(&mut settings.layout) = r.f32();
+    }
+    for s in settings.servos.0.iter_mut() {
+        s.home_us = r.f32();
+        s.rate_us_per_rad = r.f32();
+        s.min_us = r.f32();
+        s.max_us = r.f32();
+        s.direction = if r.bit()? {
+            Direction::Reversed
+        } else {
+            Direction::Normal
+        };
+        r.zeros(SERVO_RECORD_LEN - 17)?;
+    }
+    settings.validate().map_err(DecodeError::Invalid)?;
+    Ok(settings)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn encoding_roundtrips() {
+        let mut s = Settings {
+            frame_hz: 200,
+            speed_mm_s: 0.0,
+            speed_deg_s: 12.5,
+            link_timeout_s: 3.0,
+            ..Settings::default()
+        };
+        s.layout.rod_mm = 125.0;
+        s.servos.0[4].home_us = 1523.25;
+        s.servos.0[0].direction = Direction::Normal;
+        s.servos.0[5].min_us = 1000.0;
+        s.validate().unwrap();
+        let bytes = encode(&s);
+        assert_eq!(bytes.len(), ENCODED_LEN);
+        assert_eq!(&bytes[..4], b"HXPS");
+        assert_eq!(decode(&bytes), Ok(s));
+        assert_eq!(
+            decode(&encode(&Settings::default())),
+            Ok(Settings::default())
+        );
+        // Trailing bytes (a flash page) are ignored.
+        let mut page = [0xFFu8; 256];
+        page[..ENCODED_LEN].copy_from_slice(&bytes);
+        assert_eq!(decode(&page), Ok(s));
+    }
+
+    #[test]
+    fn checksum_is_standard_crc32() {
+        assert_eq!(crc32(b"123456789"), 0xCBF4_3926);
+        assert_eq!(crc32(b""), 0);
+    }
+
+    #[test]
+    fn any_single_bit_flip_is_rejected() {
+        let bytes = encode(&Settings::default());
+        for i in 0..ENCODED_LEN {
+            for bit in 0..8 {
+                let mut damaged = bytes;
+                damaged[i] ^= 1 << bit;
+                assert!(decode(&damaged).is_err(), "byte {i} bit {bit}");
+            }
+        }
+    }
+
+    #[test]
+    fn foreign_and_short_data_are_rejected() {
+        assert_eq!(decode(&[0xFF; ENCODED_LEN]), Err(DecodeError::BadMagic));
+        assert_eq!(decode(&[0; 10]), Err(DecodeError::TooShort));
+        let mut bytes = encode(&Settings::default());
+        bytes[4] = 1;
+        assert_eq!(decode(&bytes), Err(DecodeError::UnsupportedVersion(1)));
+        let mut bytes = encode(&Settings::default());
+        bytes[6] = 1;
+        assert!(matches!(decode(&bytes), Err(DecodeError::BadLength(_))));
+    }
+
+    /// Re-seals damaged contents with a correct checksum, as a buggy writer would.
+    fn reseal(mut bytes: [u8; ENCODED_LEN]) -> [u8; ENCODED_LEN] {
+        let end = HEADER_LEN + PAYLOAD_LEN;
+        let crc = crc32(&bytes[..end]);
+        bytes[end..].copy_from_slice(&crc.to_le_bytes());
+        bytes
+    }
+
+    #[test]
+    fn intact_but_invalid_contents_are_rejected() {
+        use crate::settings::SettingId;
+        let default = encode(&Settings::default());
+        let mut bytes = default;
+        bytes[8..10].copy_from_slice(&10u16.to_le_bytes()); // frame_hz 10
+        assert!(matches!(
+            decode(&reseal(bytes)),
+            Err(DecodeError::Invalid(SettingError::OutOfRange {
+                setting: SettingId::FrameHz,
+                ..
+            }))
+        ));
+        let mut bytes = default;
+        bytes[12..16].copy_from_slice(&f32::NAN.to_le_bytes()); // speed NaN
+        assert!(matches!(
+            decode(&reseal(bytes)),
+            Err(DecodeError::Invalid(_))
+        ));
+        let mut bytes = default;
+        bytes[10] = 7; // reserved
+        assert_eq!(
+            decode(&reseal(bytes)),
+            Err(DecodeError::BadField { offset: 10 })
+        );
+        let mut bytes = default;
+        bytes[48 + 16] = 2; // servo 1 direction
+        assert_eq!(
+            decode(&reseal(bytes)),
+            Err(DecodeError::BadField { offset: 64 })
+        );
+        let mut bytes = default;
+        bytes[24 + 20..24 + 24].copy_from_slice(&5.0f32.to_le_bytes()); // rod 5 mm
+        assert!(matches!(
+            decode(&reseal(bytes)),
+            Err(DecodeError::Invalid(SettingError::BadGeometry(_)))
+        ));
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn decoding_arbitrary_bytes_never_panics(
+            bytes in proptest::collection::vec(proptest::num::u8::ANY, 0..300)
+        ) {
+            if let Ok(s) = decode(&bytes) {
+                proptest::prop_assert!(s.validate().is_ok());
+            }
+        }
+    }
+}

@@ -1,0 +1,485 @@
+//! The error vocabulary: the `error:<code>` of every refusal and its message, worded once for
+//! every error type of the firmware (the line's, the parser's, the settings', the kinematics'
+//! and the motion's). The message names the field, leg, servo or limit at fault, in the names a
+//! user types (`servo4.trim_us`, `rod_mm`, `leg 3`).
+
+use core::fmt::{self, Display, Formatter};
+
+use kinematics_core::geometry::{GeometryError, Length};
+use kinematics_core::ik::IkError;
+use kinematics_core::servo::{
+    ServoError, ServoField, MAX_PULSE_US, MAX_RATE_US_PER_RAD, MIN_PULSE_US, MIN_RATE_US_PER_RAD,
+};
+
+use super::format::Fixed;
+use crate::command::{Missing, ParseError, Verb};
+use crate::error::Error;
+use crate::protocol::{Spoiled, MAX_LINE};
+use crate::settings::{Expected, SettingError};
+
+/// The error codes, one per kind of refusal. `error:<code>` is what programs match on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Code {
+    /// The line was longer than [`MAX_LINE`] characters.
+    LineTooLong,
+    /// The receive queue overflowed while the line arrived.
+    RxOverflow,
+    /// The line contained a byte that is not printable ASCII.
+    BadCharacter,
+    /// The first word is not a command.
+    UnknownCommand,
+    /// A value the command needs is missing.
+    MissingField,
+    /// There is more on the line than the command takes.
+    ExtraField,
+    /// A value is not a decimal number.
+    BadNumber,
+    /// A value is NaN or infinity.
+    NotFinite,
+    /// A value does not fit (e.g. `1e39`).
+    NumberTooLarge,
+    /// `move`/`nudge` named something that is not an axis.
+    UnknownAxis,
+    /// `move`/`nudge` named an axis twice.
+    DuplicateAxis,
+    /// `move`/`nudge` got a word that is not `axis=value`.
+    BadAssignment,
+    /// `set` named something that is not a setting.
+    UnknownSetting,
+    /// A setting value has the wrong form (e.g. `echo maybe`).
+    BadValue,
+    /// A setting value is outside its range.
+    OutOfRange,
+    /// The resulting servo settings are inconsistent.
+    BadServoConfig,
+    /// The resulting geometry is not a buildable platform.
+    BadGeometry,
+    /// A leg cannot reach the target pose.
+    Unreachable,
+    /// The target pose needs a pulse outside a servo's limits.
+    ServoLimit,
+    /// A rotation beyond +-180 degrees.
+    AngleTooLarge,
+    /// A computed pose coordinate is not finite.
+    PoseNotFinite,
+    /// The straight path to the target leaves the workspace or a servo limit.
+    PathBlocked,
+    /// With the new settings the current pose could not be held.
+    PoseConflict,
+    /// Not possible while moving.
+    Busy,
+}
+
+impl Code {
+    /// Every code, for documentation checks.
+    pub const ALL: [Code; 24] = [
+        Code::LineTooLong,
+        Code::RxOverflow,
+        Code::BadCharacter,
+        Code::UnknownCommand,
+        Code::MissingField,
+        Code::ExtraField,
+        Code::BadNumber,
+        Code::NotFinite,
+        Code::NumberTooLarge,
+        Code::UnknownAxis,
+        Code::DuplicateAxis,
+        Code::BadAssignment,
+        Code::UnknownSetting,
+        Code::BadValue,
+        Code::OutOfRange,
+        Code::BadServoConfig,
+        Code::BadGeometry,
+        Code::Unreachable,
+        Code::ServoLimit,
+        Code::AngleTooLarge,
+        Code::PoseNotFinite,
+        Code::PathBlocked,
+        Code::PoseConflict,
+        Code::Busy,
+    ];
+
+    /// The code as written after `error:`.
+    pub const fn as_str(self) -> &'static str {
+        match self {
+            Code::LineTooLong => "line-too-long",
+            Code::RxOverflow => "rx-overflow",
+            Code::BadCharacter => "bad-character",
+            Code::UnknownCommand => "unknown-command",
+            Code::MissingField => "missing-field",
+            Code::ExtraField => "extra-field",
+            Code::BadNumber => "bad-number",
+            Code::NotFinite => "not-finite",
+            Code::NumberTooLarge => "number-too-large",
+            Code::UnknownAxis => "unknown-axis",
+            Code::DuplicateAxis => "duplicate-axis",
+            Code::BadAssignment => "bad-assignment",
+            Code::UnknownSetting => "unknown-setting",
+            Code::BadValue => "bad-value",
+            Code::OutOfRange => "out-of-range",
+            Code::BadServoConfig => "bad-servo-config",
+            Code::BadGeometry => "bad-geometry",
+            Code::Unreachable => "unreachable",
+            Code::ServoLimit => "servo-limit",
+            Code::AngleTooLarge => "angle-too-large",
+            Code::PoseNotFinite => "pose-not-finite",
+            Code::PathBlocked => "path-blocked",
+            Code::PoseConflict => "pose-conflict",
+            Code::Busy => "busy",
+        }
+    }
+}
+
+impl Display for Code {
+    fn fmt(&self, f: &mut Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+impl Error {
+    /// The code of this refusal.
+    pub fn code(&self) -> Code {
+        match self {
+            Error::Spoiled(s) => spoiled_code(*s),
+            Error::Parse(e) => e.code(),
+            Error::Setting(e) => e.code(),
+            Error::Pose(e) => ik_code(e),
+            Error::PathBlocked { .. } => Code::PathBlocked,
+            Error::PoseConflict { .. } => Code::PoseConflict,
+            Error::Busy => Code::Busy,
+        }
+    }
+}
+
+fn spoiled_code(s: Spoiled) -> Code {
+    match s {
+        Spoiled::TooLong => Code::LineTooLong,
+        Spoiled::BadByte(_) => Code::BadCharacter,
+        Spoiled::RxOverflow(_) => Code::RxOverflow,
+    }
+}
+
+fn ik_code(e: &IkError) -> Code {
+    match e {
+        IkError::NonFinite { .. } => Code::PoseNotFinite,
+        IkError::AngleTooLarge { .. } => Code::AngleTooLarge,
+        IkError::Unreachable { .. } => Code::Unreachable,
+        IkError::ServoLimit { .. } => Code::ServoLimit,
+    }
+}
+
+impl ParseError {
+    /// The code of this refusal.
+    pub fn code(&self) -> Code {
+        match self {
+            ParseError::Spoiled(s) => spoiled_code(*s),
+            ParseError::UnknownCommand { .. } => Code::UnknownCommand,
+            ParseError::MissingField { .. } => Code::MissingField,
+            ParseError::ExtraField { .. } => Code::ExtraField,
+            ParseError::BadNumber { .. } => Code::BadNumber,
+            ParseError::NotFinite { .. } => Code::NotFinite,
+            ParseError::NumberTooLarge { .. } => Code::NumberTooLarge,
+            ParseError::UnknownAxis { .. } => Code::UnknownAxis,
+            ParseError::DuplicateAxis { .. } => Code::DuplicateAxis,
+            ParseError::BadAssignment { .. } => Code::BadAssignment,
+            ParseError::UnknownSetting { .. } => Code::UnknownSetting,
+            ParseError::Setting(e) => e.code(),
+        }
+    }
+}
+
+impl SettingError {
+    /// The code of this refusal.
+    pub fn code(&self) -> Code {
+        match self {
+            SettingError::BadNumber { .. } => Code::BadNumber,
+            SettingError::NotFinite { .. } => Code::NotFinite,
+            SettingError::NumberTooLarge { .. } => Code::NumberTooLarge,
+            SettingError::BadValue { .. } | SettingError::NotOneOf { .. } => Code::BadValue,
+            SettingError::OutOfRange { .. } => Code::OutOfRange,
+            SettingError::BadServoConfig(_) => Code::BadServoConfig,
+            SettingError::BadGeometry(_) => Code::BadGeometry,
+        }
+    }
+}
+
+/// How a command is used, as `missing-field` and `extra-field` messages show it.
+pub const fn usage(verb: Verb) -> &'static str {
+    match verb {
+        Verb::Pose => "pose <x> <y> <z> <roll> <pitch> <yaw>",
+        Verb::Check => "check <x> <y> <z> <roll> <pitch> <yaw>",
+        Verb::Move => "move <axis>=<value> ... (axes x y z roll pitch yaw)",
+        Verb::Nudge => "nudge <axis>=<delta> ... (axes x y z roll pitch yaw)",
+        Verb::Set => "set <name> <value> (names as listed by config)",
+        // The others take nothing: their usage is their name.
+        other => other.name(),
+    }
+}
+
+/// The message of a refused line: `Display` writes it without the code (see
+/// [`super::refusal`] for the whole reply line).
+impl Display for Error {
+    fn fmt(&self, f: &mut Formatter<'_>) -> fmt::Result {
+        match self {
+            Error::Spoiled(s) => SpoiledMessage(*s).fmt(f),
+            Error::Parse(e) => e.fmt(f),
+            Error::Setting(e) => e.fmt(f),
+            Error::Pose(e) => IkMessage(e).fmt(f),
+            Error::PathBlocked { percent, cause } => write!(
+                f,
+                "the straight path from the current pose is blocked {}% of the way: {}; nothing moved",
+                Fixed(*percent, 1),
+                IkMessage(cause)
+            ),
+            Error::PoseConflict { cause } => write!(
+                f,
+                "with that setting the current pose could not be held: {}; send home first",
+                IkMessage(cause)
+            ),
+            Error::Busy => f.write_str("the platform is moving; wait for it or send stop first"),
+        }
+    }
+}
+
+struct SpoiledMessage(Spoiled);
+
+impl Display for SpoiledMessage {
+    fn fmt(&self, f: &mut Formatter<'_>) -> fmt::Result {
+        match self.0 {
+            Spoiled::TooLong => write!(
+                f,
+                "line longer than {MAX_LINE} characters; it was discarded"
+            ),
+            Spoiled::RxOverflow(dropped) => write!(
+                f,
+                "receive queue overflowed, {dropped} bytes lost; the line was discarded (wait for each reply before sending more)"
+            ),
+            Spoiled::BadByte(byte) => write!(
+                f,
+                "byte 0x{byte:02X} is not printable ASCII; the line was discarded"
+            ),
+        }
+    }
+}
+
+/// The parser's message (without the code).
+impl Display for ParseError {
+    fn fmt(&self, f: &mut Formatter<'_>) -> fmt::Result {
+        match self {
+            ParseError::Spoiled(s) => SpoiledMessage(*s).fmt(f),
+            ParseError::UnknownCommand { word } => {
+                write!(f, "'{word}' is not a command; type help")
+            }
+            ParseError::MissingField { what, verb } => {
+                let what = match what {
+                    Missing::Axis(axis) => axis.name(),
+                    Missing::AxisValue => "axis=value",
+                    Missing::SettingName => "name",
+                    Missing::SettingValue => "value",
+                };
+                write!(f, "missing {what}; usage: {}", usage(*verb))
+            }
+            ParseError::ExtraField { word, verb } => {
+                write!(f, "unexpected '{word}'; usage: {}", usage(*verb))
+            }
+            ParseError::BadNumber { axis, word } => {
+                write!(f, "{}: '{word}' is not a decimal number", axis.name())
+            }
+            ParseError::NotFinite { axis, word } => {
+                write!(f, "{}: '{word}' is not a finite number", axis.name())
+            }
+            ParseError::NumberTooLarge { axis, word } => {
+                write!(f, "{}: '{word}' is too large", axis.name())
+            }
+            ParseError::UnknownAxis { word } => {
+                write!(f, "'{word}' is not an axis; axes are x y z roll pitch yaw")
+            }
+            ParseError::DuplicateAxis { axis } => write!(f, "{} is given twice", axis.name()),
+            ParseError::BadAssignment { word } => {
+                write!(f, "'{word}' should be axis=value, for example z=10")
+            }
+            ParseError::UnknownSetting { word } => {
+                write!(f, "'{word}' is not a setting; type config for the list")
+            }
+            ParseError::Setting(e) => e.fmt(f),
+        }
+    }
+}
+
+/// The settings' message (without the code).
+impl Display for SettingError {
+    fn fmt(&self, f: &mut Formatter<'_>) -> fmt::Result {
+        match self {
+            SettingError::BadNumber { setting, word } => {
+                write!(f, "{setting}: '{word}' is not a decimal number")
+            }
+            SettingError::NotFinite { setting, word } => {
+                write!(f, "{setting}: '{word}' is not a finite number")
+            }
+            SettingError::NumberTooLarge { setting, word } => {
+                write!(f, "{setting}: '{word}' is too large")
+            }
+            SettingError::BadValue {
+                setting,
+                word,
+                expected,
+            } => {
+                let expected = match expected {
+                    Expected::WholeNumber => "a whole number",
+                    Expected::OnOrOff => "on or off",
+                    Expected::NormalOrReversed => "normal or reversed",
+                };
+                write!(f, "{setting}: '{word}' is not {expected}")
+            }
+            SettingError::NotOneOf {
+                setting,
+                value,
+                allowed,
+            } => {
+                write!(f, "{setting}: '{value}' is not one of")?;
+                for v in allowed.iter() {
+                    write!(f, " {v}")?;
+                }
+                Ok(())
+            }
+            SettingError::OutOfRange {
+                setting,
+                value,
+                min,
+                max,
+                unit,
+                off_allowed,
+            } => {
+                write!(f, "{setting} {value} is outside {min}..{max}")?;
+                if !unit.is_empty() {
+                    write!(f, " {unit}")?;
+                }
+                if *off_allowed {
+                    f.write_str(" (or 0/off)")?;
+                }
+                Ok(())
+            }
+            SettingError::BadServoConfig(e) => write!(f, "{}; nothing changed", ServoMessage(e)),
+            SettingError::BadGeometry(e) => write!(f, "{}; nothing changed", GeometryMessage(e)),
+        }
+    }
+}
+
+/// The message for an IK refusal (shared by direct, path and conflict errors and faults).
+pub(super) struct IkMessage<'a>(pub &'a IkError);
+
+impl Display for IkMessage<'_> {
+    fn fmt(&self, f: &mut Formatter<'_>) -> fmt::Result {
+        match *self.0 {
+            IkError::NonFinite { axis } => write!(f, "{} is not a finite number", axis.name()),
+            IkError::AngleTooLarge { axis, value_rad } => write!(
+                f,
+                "{} {} deg is beyond +-180 deg",
+                axis.name(),
+                Fixed(value_rad.to_degrees(), 3)
+            ),
+            IkError::Unreachable { leg } => write!(
+                f,
+                "leg {leg} cannot reach (arm and rod cannot meet the platform joint)"
+            ),
+            IkError::ServoLimit {
+                servo,
+                pulse_us,
+                min_us,
+                max_us,
+            } => write!(
+                f,
+                "servo {servo} would need {} us, outside its limits {}..{} us",
+                Fixed(pulse_us, 2),
+                Fixed(min_us, 2),
+                Fixed(max_us, 2)
+            ),
+        }
+    }
+}
+
+/// The message for a refused servo set, in the names `set` uses.
+struct ServoMessage<'a>(&'a ServoError);
+
+impl Display for ServoMessage<'_> {
+    fn fmt(&self, f: &mut Formatter<'_>) -> fmt::Result {
+        match *self.0 {
+            ServoError::PulseOutOfRange {
+                servo,
+                field,
+                value_us,
+            } => {
+                let name = match field {
+                    ServoField::Home => "trim_us",
+                    ServoField::Min => "min_us",
+                    ServoField::Max => "max_us",
+                };
+                write!(
+                    f,
+                    "servo{servo}.{name} {} us is outside {}..{} us",
+                    Fixed(value_us, 2),
+                    Fixed(MIN_PULSE_US, 2),
+                    Fixed(MAX_PULSE_US, 2)
+                )
+            }
+            ServoError::RateOutOfRange { servo, value } => write!(
+                f,
+                "servo{servo}.rate_us_rad {} is outside {}..{} us/rad",
+                Fixed(value, 3),
+                Fixed(MIN_RATE_US_PER_RAD, 3),
+                Fixed(MAX_RATE_US_PER_RAD, 3)
+            ),
+            ServoError::HomeOutsideLimits {
+                servo,
+                home_us,
+                min_us,
+                max_us,
+            } => write!(
+                f,
+                "servo{servo}.trim_us {} us must lie within servo{servo}.min_us..max_us = {}..{} us",
+                Fixed(home_us, 2),
+                Fixed(min_us, 2),
+                Fixed(max_us, 2)
+            ),
+        }
+    }
+}
+
+/// The message for a refused geometry, in the names `set` uses.
+struct GeometryMessage<'a>(&'a GeometryError);
+
+impl Display for GeometryMessage<'_> {
+    fn fmt(&self, f: &mut Formatter<'_>) -> fmt::Result {
+        match *self.0 {
+            GeometryError::NonFiniteLeg { leg } => {
+                write!(f, "leg {leg} has a coordinate that is not a finite number")
+            }
+            GeometryError::BadLength { which, value_mm } => {
+                let name = match which {
+                    Length::Arm => "arm_mm",
+                    Length::Rod => "rod_mm",
+                    Length::BaseRadius => "base_radius_mm",
+                    Length::PlatformRadius => "platform_radius_mm",
+                };
+                write!(f, "{name} must be a positive length, not {value_mm}")
+            }
+            GeometryError::NoHomeHeight { leg } => write!(
+                f,
+                "leg {leg}: arm and rod cannot stand at right angles under the platform (rod_mm too short for the joint spacing)"
+            ),
+            GeometryError::LegsDisagree {
+                leg,
+                home_height_mm,
+                leg1_home_height_mm,
+            } => write!(
+                f,
+                "legs disagree on the home height: leg {leg} gives {} mm, leg 1 gives {} mm",
+                Fixed(home_height_mm, 3),
+                Fixed(leg1_home_height_mm, 3)
+            ),
+            GeometryError::HomeUnreachable { leg } => {
+                write!(f, "leg {leg}: the arm cannot reach its rod at the home pose")
+            }
+        }
+    }
+}

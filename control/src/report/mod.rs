@@ -1,0 +1,253 @@
+//! Everything the user reads, worded in one place: final replies, error codes and messages,
+//! data lines, notices, help, the banner and the echo. Nothing below the controller imports
+//! it; host programs print the board's own words through it ([`refusal`], [`write_error`]).
+//!
+//! - [`errors`](self::Code): the error vocabulary, the code and message of every refusal;
+//! - `format`: how numbers, poses and setting values are written;
+//! - `replies`: the writers of every reply, data line and notice.
+//!
+//! # Output conventions
+//!
+//! - Every output line ends with CR LF.
+//! - Every completed, non-empty input line gets exactly one **final reply**, always the last
+//!   line written for it:
+//!   - `ok` - done (any data came before it, on `# ` lines);
+//!   - `error:<code> <message>` - refused; nothing happened. `<code>` is one of the
+//!     [`Code`]s (lowercase words joined by `-`); the message names the field, leg, servo or
+//!     limit involved.
+//! - Every other line starts with `# `: data (`# key: value`), help text, the banner and
+//!   notices about things that happened on their own (`# fault: ...`, `# link lost: ...`).
+//!   A program can therefore read lines until one starts with `ok` or `error:`, and ignore
+//!   or parse the `# ` lines before it.
+//! - A blank line gets no reply (with echo on, just a fresh prompt).
+//! - With echo on (the default, for terminals) typed characters are echoed, the line end is
+//!   echoed as CR LF and a prompt `> ` follows every reply. `set echo off` turns off echo and
+//!   prompt on that link, for programs.
+//!
+//! Numbers: poses in mm and degrees with 3 decimals, arm angles in degrees with 3 decimals,
+//! pulse widths in microseconds with 2 decimals.
+
+mod errors;
+mod format;
+mod replies;
+
+pub use errors::{usage, Code};
+pub use format::{degrees, Fixed, PoseText, Six, ValueText, Vector};
+pub use replies::{
+    refusal, write_banner, write_check, write_config, write_echo, write_error, write_geometry,
+    write_help, write_notice, write_ok, write_prompt, write_status, Fault, MotionReport, Notice,
+    StatusReport, EOL, HELP, PROMPT, VERSION,
+};
+
+#[cfg(test)]
+mod tests {
+    use kinematics_core::geometry::GeometryError;
+    use kinematics_core::ik::IkError;
+    use kinematics_core::pose::Axis;
+    use kinematics_core::servo::{ServoError, ServoField};
+
+    use super::*;
+    use crate::command::{Missing, ParseError, Verb};
+    use crate::error::Error;
+    use crate::protocol::Spoiled;
+    use crate::settings::{
+        Expected, LayoutParam, ServoParam, ServoSel, SettingError, SettingId, BAUD_RATES,
+    };
+    use crate::word::word;
+
+    /// One error of every kind.
+    pub(crate) fn one_of_each() -> std::vec::Vec<Error> {
+        let setting = SettingId::FrameHz;
+        std::vec![
+            Error::Spoiled(Spoiled::TooLong),
+            Error::Spoiled(Spoiled::RxOverflow(3)),
+            Error::Spoiled(Spoiled::BadByte(0xC2)),
+            Error::Parse(ParseError::UnknownCommand { word: word("fly") }),
+            Error::Parse(ParseError::MissingField {
+                what: Missing::Axis(Axis::Yaw),
+                verb: Verb::Pose,
+            }),
+            Error::Parse(ParseError::ExtraField {
+                word: word("7"),
+                verb: Verb::Home,
+            }),
+            Error::Parse(ParseError::BadNumber {
+                axis: Axis::X,
+                word: word("abc"),
+            }),
+            Error::Parse(ParseError::NotFinite {
+                axis: Axis::Roll,
+                word: word("nan"),
+            }),
+            Error::Parse(ParseError::NumberTooLarge {
+                axis: Axis::Z,
+                word: word("1e39"),
+            }),
+            Error::Parse(ParseError::UnknownAxis { word: word("w") }),
+            Error::Parse(ParseError::DuplicateAxis { axis: Axis::Z }),
+            Error::Parse(ParseError::BadAssignment { word: word("z") }),
+            Error::Parse(ParseError::UnknownSetting {
+                word: word("colour")
+            }),
+            Error::Setting(SettingError::BadValue {
+                setting: SettingId::Echo,
+                word: word("maybe"),
+                expected: Expected::OnOrOff,
+            }),
+            Error::Setting(SettingError::NotOneOf {
+                setting: SettingId::Baud,
+                value: 100_000,
+                allowed: &BAUD_RATES,
+            }),
+            Error::Setting(SettingError::OutOfRange {
+                setting,
+                value: 20.0,
+                min: 50.0,
+                max: 333.0,
+                unit: "Hz",
+                off_allowed: false,
+            }),
+            Error::Setting(SettingError::BadServoConfig(ServoError::PulseOutOfRange {
+                servo: 2,
+                field: ServoField::Max,
+                value_us: 3000.0,
+            })),
+            Error::Setting(SettingError::BadGeometry(GeometryError::NoHomeHeight {
+                leg: 1
+            })),
+            Error::Pose(IkError::Unreachable { leg: 3 }),
+            Error::Pose(IkError::ServoLimit {
+                servo: 2,
+                pulse_us: 1950.0,
+                min_us: 1100.0,
+                max_us: 1900.0,
+            }),
+            Error::Pose(IkError::AngleTooLarge {
+                axis: Axis::Pitch,
+                value_rad: 4.0,
+            }),
+            Error::Pose(IkError::NonFinite { axis: Axis::Y }),
+            Error::PathBlocked {
+                percent: 42.0,
+                cause: IkError::Unreachable { leg: 5 },
+            },
+            Error::PoseConflict {
+                cause: IkError::ServoLimit {
+                    servo: 1,
+                    pulse_us: 1000.0,
+                    min_us: 1100.0,
+                    max_us: 1900.0,
+                },
+            },
+            Error::Busy,
+        ]
+    }
+
+    #[test]
+    fn every_error_code_is_distinct_and_every_code_is_used() {
+        let codes: std::vec::Vec<&str> = Code::ALL.iter().map(|c| c.as_str()).collect();
+        let mut sorted = codes.clone();
+        sorted.sort_unstable();
+        sorted.dedup();
+        assert_eq!(sorted.len(), codes.len(), "duplicate code in {codes:?}");
+        let used: std::vec::Vec<Code> = one_of_each().iter().map(Error::code).collect();
+        for code in Code::ALL {
+            assert!(used.contains(&code), "no example error for {code}");
+        }
+        for code in codes {
+            assert!(
+                code.bytes().all(|b| b.is_ascii_lowercase() || b == b'-'),
+                "{code}"
+            );
+        }
+    }
+
+    #[test]
+    fn error_replies_are_one_line_with_code_and_message() {
+        for e in one_of_each() {
+            let mut s = std::string::String::new();
+            write_error(&mut s, &e);
+            let expected_start = std::format!("error:{} ", e.code());
+            assert!(s.starts_with(&expected_start), "{s}");
+            assert!(s.ends_with("\r\n") && s.matches('\n').count() == 1, "{s:?}");
+            assert!(
+                s.len() > expected_start.len() + 10,
+                "message too short: {s}"
+            );
+            assert!(s.is_ascii(), "{s}");
+            assert_eq!(s, std::format!("{}\r\n", refusal(&e)));
+        }
+    }
+
+    #[test]
+    fn the_same_refusal_reads_the_same_whichever_layer_it_comes_from() {
+        // A setting value refused while parsing and one refused by validation.
+        let parsed = Error::from(ParseError::Setting(SettingError::NotOneOf {
+            setting: SettingId::Baud,
+            value: 7,
+            allowed: &BAUD_RATES,
+        }));
+        let direct = Error::from(SettingError::NotOneOf {
+            setting: SettingId::Baud,
+            value: 7,
+            allowed: &BAUD_RATES,
+        });
+        assert_eq!(parsed, direct);
+        let text = std::format!("{}", refusal(&direct));
+        assert_eq!(
+            text,
+            "error:bad-value baud: '7' is not one of 9600 19200 38400 57600 115200 230400 460800 921600"
+        );
+        assert_eq!(
+            Error::from(ParseError::Spoiled(Spoiled::TooLong)),
+            Error::Spoiled(Spoiled::TooLong)
+        );
+    }
+
+    #[test]
+    fn messages_name_what_is_wrong() {
+        let text = |e: Error| std::format!("{e}");
+        assert!(text(Error::Pose(IkError::Unreachable { leg: 3 })).contains("leg 3"));
+        let limit = text(Error::Pose(IkError::ServoLimit {
+            servo: 2,
+            pulse_us: 1950.123,
+            min_us: 1100.0,
+            max_us: 1900.0,
+        }));
+        assert!(
+            limit.contains("servo 2") && limit.contains("1950.12") && limit.contains("1900.00")
+        );
+        let field = text(Error::Setting(SettingError::NotFinite {
+            setting: SettingId::Servo(ServoSel::One(4), ServoParam::TrimUs),
+            word: word("inf"),
+        }));
+        assert!(
+            field.contains("servo4.trim_us") && field.contains("'inf'"),
+            "{field}"
+        );
+        let layout = text(Error::Setting(SettingError::BadNumber {
+            setting: SettingId::Layout(LayoutParam::RodMm),
+            word: word("x"),
+        }));
+        assert!(layout.starts_with("rod_mm:"), "{layout}");
+        let missing = text(Error::Parse(ParseError::MissingField {
+            what: Missing::Axis(Axis::Pitch),
+            verb: Verb::Pose,
+        }));
+        assert_eq!(
+            missing,
+            "missing pitch; usage: pose <x> <y> <z> <roll> <pitch> <yaw>"
+        );
+        assert_eq!(
+            text(Error::Setting(SettingError::OutOfRange {
+                setting: SettingId::SpeedMmS,
+                value: 5000.0,
+                min: 0.1,
+                max: 1000.0,
+                unit: "mm/s",
+                off_allowed: true,
+            })),
+            "speed_mm_s 5000 is outside 0.1..1000 mm/s (or 0/off)"
+        );
+    }
+}

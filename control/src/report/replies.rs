@@ -1,0 +1,344 @@
+//! The reply writers: final replies, the data lines of `status`, `check`, `geometry`,
+//! `config` and `help`, the banner, notices, and the echo of typed characters.
+
+use core::fmt::{self, Display, Formatter, Write};
+
+use kinematics_core::ik::IkError;
+use kinematics_core::{Geometry, Pose, LEGS};
+
+use super::errors::IkMessage;
+use super::format::{degrees, Fixed, PoseText, Six, ValueText, Vector};
+use crate::error::Error;
+use crate::protocol::Feed;
+use crate::settings::{LinkSettings, ServoParam, ServoSel, SettingId, Settings};
+
+/// Line end for everything written.
+pub const EOL: &str = "\r\n";
+/// Prompt written after each reply when echo is on.
+pub const PROMPT: &str = "> ";
+/// What the echo writes to erase one character on a terminal.
+const ERASE: &str = "\x08 \x08";
+
+/// Firmware name and version for the banner.
+pub const VERSION: &str = env!("CARGO_PKG_VERSION");
+
+/// Writes `ok` (the success reply).
+pub fn write_ok(out: &mut impl Write) {
+    let _ = write!(out, "ok{EOL}");
+}
+
+/// The whole reply line of a refusal, `error:<code> <message>` without the line end: the one
+/// way a refusal is worded, by the firmware and by host programs alike.
+pub fn refusal(error: &Error) -> impl Display + '_ {
+    struct Refusal<'a>(&'a Error);
+    impl Display for Refusal<'_> {
+        fn fmt(&self, f: &mut Formatter<'_>) -> fmt::Result {
+            write!(f, "error:{} {}", self.0.code(), self.0)
+        }
+    }
+    Refusal(error)
+}
+
+/// Writes `error:<code> <message>` (the failure reply).
+pub fn write_error(out: &mut impl Write, error: &Error) {
+    let _ = write!(out, "{}{EOL}", refusal(error));
+}
+
+/// Writes one data line: `# ` + the text + line end.
+fn line(out: &mut impl Write, args: fmt::Arguments<'_>) {
+    let _ = write!(out, "# {args}{EOL}");
+}
+
+/// Writes the prompt.
+pub fn write_prompt(out: &mut impl Write) {
+    let _ = out.write_str(PROMPT);
+}
+
+/// Echoes what one received byte did to the line being typed (for a link with echo on).
+pub fn write_echo(out: &mut impl Write, feed: Feed) {
+    let _ = match feed {
+        Feed::Added(b) => out.write_char(char::from(b)),
+        Feed::Erased => out.write_str(ERASE),
+        Feed::ErasedLine(n) => (0..n).try_for_each(|_| out.write_str(ERASE)),
+        Feed::Cancelled => out.write_str("^C").and_then(|()| out.write_str(EOL)),
+        // Bell: the rest of the line is ignored.
+        Feed::Overflowed => out.write_char('\x07'),
+        Feed::Empty | Feed::Line | Feed::Spoiled(_) => out.write_str(EOL),
+        Feed::Nothing => Ok(()),
+    };
+}
+
+/// The greeting written at start-up.
+pub fn write_banner(out: &mut impl Write) {
+    line(
+        out,
+        format_args!("hexapod control {VERSION}: poses in mm and degrees; type help"),
+    );
+}
+
+/// The command list for `help`.
+pub const HELP: &[&str] = &[
+    "commands (case does not matter; mm and degrees; each line ends with ok or error:<code>):",
+    "  pose <x> <y> <z> <roll> <pitch> <yaw>  move to this pose (absolute)",
+    "  move <axis>=<value> ...                move the named axes to these values (absolute)",
+    "  nudge <axis>=<delta> ...               move the named axes by these amounts (relative)",
+    "  check <x> <y> <z> <roll> <pitch> <yaw> would pose accept this? pulses and duration; nothing moves",
+    "  home                                   move back to the home pose",
+    "  stop                                   freeze where it is now",
+    "  status (or ?)                          pose, target, motion, arm angles, pulse widths",
+    "  geometry                               the active geometry",
+    "  config                                 list the settings",
+    "  set <name> <value>                     change a setting (names as in config)",
+    "  defaults                               restore the default settings (except baud and echo)",
+    "  help                                   this list",
+    "axes: x y z (mm, z from the home height) roll pitch yaw (degrees, applied yaw-pitch-roll)",
+    "moves run in a straight line at speed_mm_s / speed_deg_s (0 or off: jump)",
+    "servo settings: servo<1-6>.<trim_us|rate_us_rad|dir|min_us|max_us>, servos.<...> sets all six",
+    "editing: backspace erases, ctrl-u erases the line, ctrl-c abandons it; set echo off for programs",
+];
+
+/// Writes the help text.
+pub fn write_help(out: &mut impl Write) {
+    for text in HELP {
+        line(out, format_args!("{text}"));
+    }
+}
+
+/// What the motion is doing, for `status`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum MotionReport {
+    /// Standing still.
+    Idle,
+    /// Moving to the target.
+    Moving {
+        /// Seconds done.
+        elapsed_s: f32,
+        /// Seconds in total.
+        duration_s: f32,
+    },
+    /// Returning home because no command arrived within the link timeout.
+    ReturningHome {
+        /// Seconds done.
+        elapsed_s: f32,
+        /// Seconds in total.
+        duration_s: f32,
+    },
+}
+
+/// Something that went wrong on its own (not in reply to a line).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Fault {
+    /// The IK failed on a frame: the platform holds the last good pose.
+    IkFailed {
+        /// Why.
+        cause: IkError,
+        /// Where it stopped.
+        held: Pose,
+    },
+    /// The link timed out but the way home is blocked: the platform holds its pose.
+    HomeBlocked {
+        /// Why.
+        cause: IkError,
+    },
+}
+
+impl Display for Fault {
+    fn fmt(&self, f: &mut Formatter<'_>) -> fmt::Result {
+        match self {
+            Fault::IkFailed { cause, held } => write!(
+                f,
+                "motion stopped: {}; holding {}",
+                IkMessage(cause),
+                PoseText(held)
+            ),
+            Fault::HomeBlocked { cause } => write!(
+                f,
+                "link lost but the way home is blocked: {}; holding",
+                IkMessage(cause)
+            ),
+        }
+    }
+}
+
+/// A line written on the firmware's own initiative, to every link
+/// (see [`crate::Controller::write_notices`]).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Notice {
+    /// A fault happened.
+    Fault(Fault),
+    /// No command within the link timeout: returning home.
+    LinkLost {
+        /// The timeout, s.
+        timeout_s: f32,
+    },
+    /// A receive queue overflowed (the line being received on that link will be refused).
+    RxOverflow {
+        /// Bytes lost.
+        dropped: u32,
+    },
+    /// The settings given at start-up were invalid; the defaults are used.
+    SettingsRejected(Error),
+}
+
+/// Writes a notice line.
+pub fn write_notice(out: &mut impl Write, notice: &Notice) {
+    match notice {
+        Notice::Fault(fault) => line(out, format_args!("fault: {fault}")),
+        Notice::LinkLost { timeout_s } => line(
+            out,
+            format_args!("link lost: no command for {timeout_s} s; returning home"),
+        ),
+        Notice::RxOverflow { dropped } => line(
+            out,
+            format_args!("warning: receive queue overflowed, {dropped} bytes lost"),
+        ),
+        Notice::SettingsRejected(e) => line(
+            out,
+            format_args!(
+                "warning: stored settings refused (error:{} {e}); using defaults",
+                e.code()
+            ),
+        ),
+    }
+}
+
+/// Everything `status` shows.
+#[derive(Debug, Clone, Copy)]
+pub struct StatusReport<'a> {
+    /// What the motion is doing.
+    pub motion: MotionReport,
+    /// The pose commanded on the last frame.
+    pub pose: &'a Pose,
+    /// Where it is going.
+    pub target: &'a Pose,
+    /// Arm angles of the last frame, rad.
+    pub arm_rad: &'a [f32; LEGS],
+    /// Pulse widths of the last frame, us.
+    pub pulse_us: &'a [f32; LEGS],
+    /// The last fault, until the next accepted move.
+    pub fault: Option<&'a Fault>,
+}
+
+/// Writes the `status` data lines.
+pub fn write_status(out: &mut impl Write, s: &StatusReport<'_>) {
+    match s.motion {
+        MotionReport::Idle => line(out, format_args!("state: idle")),
+        MotionReport::Moving {
+            elapsed_s,
+            duration_s,
+        } => line(
+            out,
+            format_args!(
+                "state: moving {} of {} s",
+                Fixed(elapsed_s, 3),
+                Fixed(duration_s, 3)
+            ),
+        ),
+        MotionReport::ReturningHome {
+            elapsed_s,
+            duration_s,
+        } => line(
+            out,
+            format_args!(
+                "state: returning home (link lost) {} of {} s",
+                Fixed(elapsed_s, 3),
+                Fixed(duration_s, 3)
+            ),
+        ),
+    }
+    line(out, format_args!("pose: {}", PoseText(s.pose)));
+    line(out, format_args!("target: {}", PoseText(s.target)));
+    line(
+        out,
+        format_args!("arm_deg: {}", Six(&degrees(s.arm_rad), 3)),
+    );
+    line(out, format_args!("pulse_us: {}", Six(s.pulse_us, 2)));
+    if let Some(fault) = s.fault {
+        line(out, format_args!("fault: {fault}"));
+    }
+}
+
+/// Writes the `check` data lines for an acceptable pose.
+pub fn write_check(
+    out: &mut impl Write,
+    arm_rad: &[f32; LEGS],
+    pulse_us: &[f32; LEGS],
+    duration_s: f32,
+) {
+    line(out, format_args!("arm_deg: {}", Six(&degrees(arm_rad), 3)));
+    line(out, format_args!("pulse_us: {}", Six(pulse_us, 2)));
+    line(out, format_args!("duration_s: {}", Fixed(duration_s, 3)));
+}
+
+/// Writes the `geometry` data lines.
+pub fn write_geometry(out: &mut impl Write, settings: &Settings, geometry: &Geometry) {
+    let l = &settings.layout;
+    line(
+        out,
+        format_args!(
+            "layout: paired base_radius_mm={} base_half_angle_deg={} platform_radius_mm={} platform_half_angle_deg={}",
+            Fixed(l.base_radius_mm, 3),
+            Fixed(l.base_half_angle_deg, 3),
+            Fixed(l.platform_radius_mm, 3),
+            Fixed(l.platform_half_angle_deg, 3)
+        ),
+    );
+    line(
+        out,
+        format_args!("arm_mm (a): {}", Fixed(geometry.arm_mm(), 3)),
+    );
+    line(
+        out,
+        format_args!("rod_mm (s): {}", Fixed(geometry.rod_mm(), 3)),
+    );
+    line(
+        out,
+        format_args!(
+            "home_height_mm (h0): {}",
+            Fixed(geometry.home_height_mm(), 3)
+        ),
+    );
+    for (i, leg) in geometry.legs().iter().enumerate() {
+        line(
+            out,
+            format_args!(
+                "leg {}: b_mm={} p_mm={} beta_deg={} alpha0_deg={}",
+                i + 1,
+                Vector(&leg.base_mm),
+                Vector(&leg.platform_mm),
+                Fixed(leg.beta_rad.to_degrees(), 3),
+                Fixed(geometry.alpha0_rad(i).to_degrees(), 3)
+            ),
+        );
+    }
+}
+
+/// Writes the `config` data lines: `# name: value` (the platform's settings and the link
+/// settings, in [`SettingId::GLOBAL`] order), then the servos one line each.
+pub fn write_config(out: &mut impl Write, settings: &Settings, link: &LinkSettings) {
+    for id in SettingId::GLOBAL {
+        if let Some(value) = settings.get(id).or_else(|| link.get(id)) {
+            line(out, format_args!("{id}: {}", ValueText(id, value)));
+        }
+    }
+    for servo in 1..=LEGS as u8 {
+        line(out, format_args!("{}", ServoLine(settings, servo)));
+    }
+}
+
+/// `servoN: trim_us=.. rate_us_rad=.. dir=.. min_us=.. max_us=..`
+struct ServoLine<'a>(&'a Settings, u8);
+
+impl Display for ServoLine<'_> {
+    fn fmt(&self, f: &mut Formatter<'_>) -> fmt::Result {
+        let ServoLine(settings, servo) = *self;
+        write!(f, "servo{servo}:")?;
+        for param in ServoParam::ALL {
+            let id = SettingId::Servo(ServoSel::One(servo), param);
+            if let Some(value) = settings.get(id) {
+                write!(f, " {}={}", param.name(), ValueText(id, value))?;
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,94 @@
+//! One serial link's session: line assembly and editing ([`crate::protocol`]), the link's echo
+//! and prompt, and which notices it has been shown. The board keeps one [`Session`] per link
+//! (UART0, USB) and hands it to the controller with every byte, so each link types its own
+//! lines, a reply goes to the link that asked, and notices reach every link once.
+
+use core::fmt::Write;
+
+use crate::protocol::{Feed, LineBuffer, MAX_LINE};
+use crate::report;
+
+/// The state of one link.
+#[derive(Debug, Clone)]
+pub struct Session {
+    line: LineBuffer,
+    echo: bool,
+    /// Sequence number of the first notice this link has not been shown.
+    next_notice: u32,
+}
+
+impl Default for Session {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// A completed line, copied out of the line buffer.
+pub(crate) type Line = heapless::String<MAX_LINE>;
+
+impl Session {
+    /// A link with echo on (for a terminal), nothing typed yet, every notice still to show.
+    pub const fn new() -> Self {
+        Session {
+            line: LineBuffer::new(),
+            echo: true,
+            next_notice: 0,
+        }
+    }
+
+    /// Whether typed characters are echoed and a prompt follows every reply.
+    pub fn echo(&self) -> bool {
+        self.echo
+    }
+
+    /// Turns echo and prompt on or off (`set echo`).
+    pub fn set_echo(&mut self, on: bool) {
+        self.echo = on;
+    }
+
+    /// What has been typed of the current line.
+    pub fn typed(&self) -> &str {
+        self.line.line()
+    }
+
+    /// Feeds one received byte to the line, echoing it when echo is on.
+    pub(crate) fn feed(&mut self, byte: u8, out: &mut impl Write) -> Feed {
+        let feed = self.line.feed(byte);
+        if self.echo {
+            report::write_echo(out, feed);
+        }
+        feed
+    }
+
+    /// The completed line (after [`Feed::Line`]); the buffer is free again.
+    pub(crate) fn take_line(&mut self) -> Line {
+        let mut copy = Line::new();
+        // The buffer holds at most MAX_LINE characters: this always fits.
+        let _ = copy.push_str(self.line.line());
+        self.line.clear();
+        copy
+    }
+
+    /// Bytes were lost on this link's way in: the line being received is refused when it ends.
+    pub(crate) fn rx_overflow(&mut self, dropped: u32) {
+        self.line.rx_overflow(dropped);
+    }
+
+    /// Writes the prompt if echo is on.
+    pub(crate) fn prompt(&self, out: &mut impl Write) {
+        if self.echo {
+            report::write_prompt(out);
+        }
+    }
+
+    /// Whether notice number `seq` has not been shown on this link yet.
+    pub(crate) fn has_not_seen(&self, seq: u32) -> bool {
+        // Sequence numbers wrap; only the last few notices are kept, so the difference is small.
+        (seq.wrapping_sub(self.next_notice) as i32) >= 0
+    }
+
+    /// Every notice before number `next` has been shown.
+    pub(crate) fn saw_notices_until(&mut self, next: u32) {
+        self.next_notice = next;
+    }
+}
