@@ -9,8 +9,8 @@
 //!
 //! so both limits hold and the slower group sets the pace. A limit of 0 means "no limit"; with
 //! both off a move is a jump (one frame). The duration is rounded up to whole frames, so the
-//! speeds are never exceeded (beyond f32 rounding, at most 0.001 %); frame `k` of `N` commands `P(k / N)` and the last frame commands
-//! `P1` exactly.
+//! speeds are never exceeded (beyond f32 rounding, at most 0.001 %); frame `k` of `N` commands
+//! `P(k / N)` and the last frame commands `P1` exactly.
 //!
 //! Before a move starts, [`Segment::check_path`] runs a caller-supplied check (the IK) along
 //! the path. Checked poses, with `S` = path length / (0.5 mm or 0.25 deg, whichever needs more

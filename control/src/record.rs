@@ -11,8 +11,8 @@
 //! | 8 | 2 | `frame_hz` (u16) |
 //! | 10 | 2 | reserved, 0 |
 //! | 12 | 12 | `speed_mm_s`, `speed_deg_s`, `link_timeout_s` (f32) |
-//! | 24 | 24 | layout: base radius, base half angle, platform radius, platform half angle, arm, rod (f32) |
-//! | 48 | 6 x 20 | per servo: trim, rate, min, max (f32), direction (0 normal, 1 reversed), 3 reserved 0 |
+//! | 24 | 24 | layout (f32): base radius, base half angle, platform radius and half angle, a, s |
+//! | 48 | 6 x 20 | per servo: trim, rate, min, max (f32), dir (0 normal, 1 reversed), 3 x 0 |
 //! | 168 | 4 | CRC-32 (IEEE 802.3) of bytes 0..168 |
 //!
 //! The link settings (`baud`, `echo`) are not in it: they belong to the links, not the platform.

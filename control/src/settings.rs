@@ -20,9 +20,9 @@
 //! | `echo` | this link: `on` / `off` (echo and prompt, for terminals) | on |
 //! | `speed_mm_s` | linear speed limit 0.1..=1000 mm/s, `0`/`off` = jump | 50 |
 //! | `speed_deg_s` | angular speed limit 0.1..=3600 deg/s, `0`/`off` = jump | 60 |
-//! | `link_timeout_s` | return home after this long without a command, 0.1..=3600 s, `0`/`off` | off |
+//! | `link_timeout_s` | home after this long without a command, 0.1..=3600 s, `0`/`off` | off |
 //! | `base_radius_mm`, `platform_radius_mm` | joint circle radii, 1..=1000 mm | 75, 60 |
-//! | `base_half_angle_deg`, `platform_half_angle_deg` | half the angle within a pair, 0..=60 deg | 20, 20 |
+//! | `base_half_angle_deg`, `platform_half_angle_deg` | half a pair's angle, 0..=60 deg | 20, 20 |
 //! | `arm_mm`, `rod_mm` | servo arm `a` 1..=500 mm, rod `s` 1..=2000 mm | 20, 120 |
 //! | `servoN.trim_us` | home pulse `W0` of servo N (1..=6), 400..=2600 us | 1500 |
 //! | `servoN.rate_us_rad` | servo rate `r`, 100..=5000 us/rad | 1600/pi |

@@ -26,7 +26,7 @@ const FLASH_START = 0x10000000;
 const FLASH_BYTES = 16 * 1024 * 1024; // what rp2040js models; the Pico has 2 MiB
 /** Every command line gets exactly one final reply: `ok` or `error:...`. */
 export const FINAL_REPLY = /^(ok|error:)/;
-/** The boot banner's line, e.g. `hexapod-fw 0.1.0 ready - type 'help'`. */
+/** The boot banner's line, e.g. `# hexapod control 0.1.0: poses in mm and degrees; type help`. */
 export const BANNER = /hexapod\b.*\bhelp\b/;
 /** How often `runUntil` looks at its condition, besides on every received line. */
 const CHECK_EVERY_NANOS = 100_000;

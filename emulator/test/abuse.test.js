@@ -4,7 +4,8 @@
 // gets at most one final reply (exactly one where one is due), and the next good command
 // works. Bytes the firmware cannot take in time are reported, never lost silently.
 //
-// Expected replies come from the documented protocol and error codes (control/README.md);
+// Expected replies come from the documented protocol and error codes (README.md, "Command
+// reference" and "Error codes");
 // expected pulse widths come from measurement: the pins before the abuse, or a separate
 // reference board that was only ever sent the good command.
 

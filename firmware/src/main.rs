@@ -1,9 +1,10 @@
 //! hexapod-fw: the RP2040 board layer.
 //!
 //! Data flows one way: UART0 bytes -> controller (lines, commands, motion) -> six pulse
-//! widths per servo frame (and right after a command that jumps) -> PWM registers. This file only wires the pieces together:
-//! clocks and watchdog, UART0 ([`serial`]), the six servo outputs ([`servo_pwm`]) and the
-//! hardware-independent [`control::Controller`], which runs on the boot ROM's float routines
+//! widths per servo frame (and right after a command that jumps) -> PWM registers. This file
+//! only wires the pieces together: clocks and watchdog, UART0 ([`serial`]) with its link
+//! [`control::Session`], the six servo outputs ([`servo_pwm`]) and the hardware-independent
+//! [`control::Controller`], which runs on the boot ROM's float routines
 //! ([`firmware::rom_math`]).
 
 #![no_std]

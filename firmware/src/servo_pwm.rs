@@ -162,9 +162,9 @@ impl ServoPwm {
     }
 
     /// How many frames started since the last call (or since the last
-    /// [`ServoPwm::set_frame_pulse_widths_us`], which counts frames that started while its widths were
-    /// being computed as served): 0 = none yet, 1 = the normal case, more = the main loop
-    /// missed frames.
+    /// [`ServoPwm::set_frame_pulse_widths_us`], which counts frames that started while its
+    /// widths were being computed as served): 0 = none yet, 1 = the normal case, more = the
+    /// main loop missed frames.
     pub fn frames_since_last_poll(&mut self) -> u32 {
         let started = FRAMES_STARTED.load(Ordering::Relaxed);
         let new = started.wrapping_sub(self.frames_seen);
