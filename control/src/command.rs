@@ -129,6 +129,8 @@ pub enum ParseError {
         /// What was typed.
         word: Word,
     },
+    /// The line holds nothing but separators (commas among the spaces).
+    NoCommand,
     /// A value the command needs is missing.
     MissingField {
         /// What is missing.
@@ -338,7 +340,7 @@ pub fn parse(line: &str) -> Result<Command, ParseError> {
     let line = core::str::from_utf8(lower).map_err(|_| ParseError::Spoiled(Spoiled::BadByte(0)))?;
 
     let mut words = Words::new(line);
-    let name = words.next().unwrap_or("");
+    let name = words.next().ok_or(ParseError::NoCommand)?;
     let verb = Verb::parse(name).ok_or(ParseError::UnknownCommand { word: word(name) })?;
     let simple = |cmd: Command, words: &mut Words<'_>| no_more(words, verb).map(|()| cmd);
     match verb {
@@ -579,6 +581,9 @@ mod tests {
             parse("fly 1 2"),
             Err(ParseError::UnknownCommand { word: word("fly") })
         );
+        // Separators only: not blank (commas are not spaces), but no command either.
+        assert_eq!(parse(" , ,"), Err(ParseError::NoCommand));
+        assert_eq!(parse(","), Err(ParseError::NoCommand));
         assert_eq!(
             err(&"x".repeat(MAX_LINE + 1)),
             ParseError::Spoiled(Spoiled::TooLong)

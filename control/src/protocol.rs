@@ -3,11 +3,15 @@
 //! - A line ends at CR, LF or CRLF (the LF right after a CR is swallowed, so CRLF is one end).
 //! - Backspace (0x08) and DEL (0x7F) erase the last character; Ctrl-U (0x15) erases the whole
 //!   line; Ctrl-C (0x03) and Ctrl-X (0x18) abandon the line (no reply: it never completed).
-//! - Tab counts as a space. Other control characters are ignored, and so are terminal escape
-//!   sequences (arrow and function keys: ESC, then `[` or `O` and parameters, then a final
-//!   byte; Alt-key: ESC and one printable byte), so a stray arrow key does not put garbage
-//!   into the line. Any byte other than printable ASCII ends an escape sequence and then
-//!   counts on its own: a line end always ends the line.
+//! - Tab counts as a space. Other control characters are ignored, and so are the escape
+//!   sequences terminals send for arrow, editing and function keys, whole: CSI (ESC `[`, then
+//!   parameter and intermediate bytes 0x20..=0x3F, then a final byte 0x40..=0x7E: arrows
+//!   `ESC [ A`, Delete `ESC [ 3 ~`, F5 `ESC [ 1 5 ~`, Ctrl-Right `ESC [ 1 ; 5 C`, the
+//!   bracketed-paste markers `ESC [ 2 0 0 ~`) and SS3 (ESC `O` and one byte: F1 `ESC O P`,
+//!   arrows in application mode `ESC O A`). ESC followed by anything else is a lone ESC (the
+//!   Esc key): it is ignored and the next byte counts as typed, so `ESC home` is `home`.
+//!   Any byte other than printable ASCII ends a sequence and then counts on its own: a line
+//!   end always ends the line.
 //! - At most [`MAX_LINE`] characters are kept. A longer line is discarded up to its end and
 //!   then reported once as too long. A byte outside printable ASCII, or bytes lost by the UART
 //!   queue, spoil the line the same way.
@@ -66,8 +70,10 @@ enum Escape {
     None,
     /// After ESC.
     Started,
-    /// After ESC `[` or ESC `O`, until the final byte.
-    Sequence,
+    /// After ESC `[`, until the final byte.
+    Csi,
+    /// After ESC `O`: one more byte.
+    Ss3,
 }
 
 /// Assembles bytes into lines.
@@ -130,28 +136,36 @@ impl LineBuffer {
     pub fn feed(&mut self, byte: u8) -> Feed {
         let after_cr = core::mem::replace(&mut self.after_cr, byte == b'\r');
         match self.escape {
-            Escape::Started => {
-                if (0x20..=0x7E).contains(&byte) {
-                    self.escape = if byte == b'[' || byte == b'O' {
-                        Escape::Sequence
-                    } else {
-                        Escape::None // ESC + key (Alt-key): both ignored
-                    };
+            Escape::Started => match byte {
+                b'[' => {
+                    self.escape = Escape::Csi;
                     return Feed::Nothing;
                 }
-                // Any other byte (a line end above all) ends the escape and counts on its own,
-                // so Esc then Enter still ends the line.
-                self.escape = Escape::None;
-            }
-            Escape::Sequence => {
-                if (0x40..=0x7E).contains(&byte) {
-                    self.escape = Escape::None;
+                b'O' => {
+                    self.escape = Escape::Ss3;
+                    return Feed::Nothing;
                 }
+                // ESC ESC: the first was a lone ESC, the second may start a sequence.
+                ESCAPE => return Feed::Nothing,
+                // A lone ESC (the Esc key): ignored, and this byte counts as typed. A line end
+                // above all: Esc then Enter still ends the line.
+                _ => self.escape = Escape::None,
+            },
+            Escape::Csi => {
                 if (0x20..=0x7E).contains(&byte) {
+                    if byte >= 0x40 {
+                        self.escape = Escape::None; // the final byte
+                    }
                     return Feed::Nothing;
                 }
                 // A control byte inside a sequence ends it and counts on its own.
                 self.escape = Escape::None;
+            }
+            Escape::Ss3 => {
+                self.escape = Escape::None;
+                if (0x20..=0x7E).contains(&byte) {
+                    return Feed::Nothing;
+                }
             }
             Escape::None => {}
         }
@@ -293,12 +307,47 @@ mod tests {
     }
 
     #[test]
-    fn escape_sequences_are_ignored() {
-        // Up arrow, left arrow, F1 (ESC O P), Delete key (ESC [ 3 ~), Alt-x.
+    fn escape_sequences_are_ignored_whole() {
+        // Up arrow, left arrow, F1 (ESC O P), Delete key (ESC [ 3 ~).
         assert_eq!(
-            lines(b"ho\x1b[A\x1b[Dme\x1bOP\x1b[3~\x1bx\n"),
+            lines(b"ho\x1b[A\x1b[Dme\x1bOP\x1b[3~\n"),
             [Ok("home".into())]
         );
+        // What terminals send for other keys: Home/End in both modes, PgUp, F5, F12,
+        // Ctrl-Right, Shift-F3, application-mode arrows, bracketed paste around a line.
+        let keys: [&[u8]; 12] = [
+            b"\x1b[H",
+            b"\x1b[F",
+            b"\x1b[1~",
+            b"\x1b[4~",
+            b"\x1b[5~",
+            b"\x1b[15~",
+            b"\x1b[24~",
+            b"\x1b[1;5C",
+            b"\x1b[1;2R",
+            b"\x1bOA",
+            b"\x1bOH",
+            b"\x1b[200~",
+        ];
+        for key in keys {
+            let mut input = b"st".to_vec();
+            input.extend_from_slice(key);
+            input.extend_from_slice(b"op\r");
+            assert_eq!(lines(&input), [Ok("stop".into())], "{key:?}");
+        }
+        assert_eq!(
+            lines(b"\x1b[200~pose 1 2 3 4 5 6\x1b[201~\n"),
+            [Ok("pose 1 2 3 4 5 6".into())]
+        );
+    }
+
+    #[test]
+    fn a_lone_esc_is_ignored_and_what_follows_is_typed() {
+        // The Esc key, then a command: nothing of the command is swallowed.
+        assert_eq!(lines(b"\x1bhome\n"), [Ok("home".into())]);
+        assert_eq!(lines(b"st\x1batus\n"), [Ok("status".into())]);
+        assert_eq!(lines(b"\x1b\x1b\x1bstop\n"), [Ok("stop".into())]);
+        assert_eq!(lines(b"\x1b1 \x1b?\n"), [Ok("1 ?".into())]);
         // A line end inside a sequence still ends the line.
         assert_eq!(lines(b"stop\x1b[\n"), [Ok("stop".into())]);
         // So does one right after ESC (Esc, then Enter): it is not swallowed as an Alt-key,
@@ -314,6 +363,9 @@ mod tests {
         );
         // ESC ESC: the second starts a new sequence.
         assert_eq!(lines(b"ho\x1b\x1b[Ame\n"), [Ok("home".into())]);
+        // Ctrl-X abandons the line like Ctrl-C: what follows is a new line.
+        assert_eq!(lines(b"home\x18\n"), [Err(Feed::Empty)]);
+        assert_eq!(lines(b"st\x18atus\n"), [Ok("atus".into())]);
     }
 
     #[test]

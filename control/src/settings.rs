@@ -362,12 +362,12 @@ pub enum SettingError {
         /// What is accepted.
         expected: Expected,
     },
-    /// A whole number that is not one of the values the setting allows (`baud`).
+    /// A number that is not one of the values the setting allows (`baud`).
     NotOneOf {
         /// The setting.
         setting: SettingId,
-        /// The value given.
-        value: u32,
+        /// The value given, as typed.
+        word: Word,
         /// The values allowed.
         allowed: &'static [u32],
     },
@@ -539,7 +539,38 @@ impl SettingId {
             expected,
         };
         let value = match self.kind() {
-            Kind::Whole { .. } => SettingValue::Whole(parse_u32(text).map_err(number_error)?),
+            Kind::Whole {
+                min,
+                max,
+                list,
+                unit,
+            } => match parse_u32(text) {
+                Ok(v) => SettingValue::Whole(v),
+                // A number, but not a whole one: a negative or fractional number outside the
+                // range is out of range (named as such); in range, it is not whole.
+                Err(NumberError::NotWhole) => {
+                    let v = parse_f32(text).unwrap_or(0.0);
+                    return Err(if !list.is_empty() {
+                        SettingError::NotOneOf {
+                            setting,
+                            word: word(text),
+                            allowed: list,
+                        }
+                    } else if !(min as f32..=max as f32).contains(&v) {
+                        SettingError::OutOfRange {
+                            setting,
+                            value: v,
+                            min: min as f32,
+                            max: max as f32,
+                            unit,
+                            off_allowed: false,
+                        }
+                    } else {
+                        number_error(NumberError::NotWhole)
+                    });
+                }
+                Err(e) => return Err(number_error(e)),
+            },
             Kind::Number { off_allowed, .. } => {
                 if off_allowed && text == "off" {
                     SettingValue::Number(0.0)
@@ -579,9 +610,12 @@ impl SettingId {
                     return if list.contains(&v) {
                         Ok(())
                     } else {
+                        let mut text = heapless::String::<10>::new();
+                        // u32::MAX has 10 digits: this always fits.
+                        let _ = fmt::write(&mut text, format_args!("{v}"));
                         Err(SettingError::NotOneOf {
                             setting,
-                            value: v,
+                            word: word(&text),
                             allowed: list,
                         })
                     };
@@ -823,7 +857,26 @@ mod tests {
             value_err("baud", "1000000"),
             E::NotOneOf {
                 setting: SettingId::Baud,
-                value: 1_000_000,
+                word: word("1000000"),
+                allowed: &BAUD_RATES,
+            }
+        );
+        // A negative or fractional number is a number: out of range where it is, not "not a
+        // whole number".
+        assert!(matches!(
+            err("frame_hz", "-50"),
+            E::OutOfRange { value, min: 50.0, max: 333.0, .. } if value == -50.0
+        ));
+        assert!(matches!(err("frame_hz", "20.5"), E::OutOfRange { .. }));
+        assert!(matches!(
+            err("frame_hz", "-0"),
+            E::OutOfRange { value, .. } if value == 0.0
+        ));
+        assert_eq!(
+            value_err("baud", "-9600"),
+            E::NotOneOf {
+                setting: SettingId::Baud,
+                word: word("-9600"),
                 allowed: &BAUD_RATES,
             }
         );

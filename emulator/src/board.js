@@ -9,6 +9,7 @@ import { RP2040 } from 'rp2040js';
 
 import { loadBootrom } from './bootrom.js';
 import { loadSegments } from './elf.js';
+import { attachLoopMeter } from './loop-meter.js';
 import {
   onWatchdogExpiry,
   PacedUartInput,
@@ -114,6 +115,9 @@ export class EmulatedBoard {
     // UART0: what the firmware sends, split into lines; what we send, paced.
     mcu.uart[0].onByte = (byte) => this.received(byte);
     this.input = new PacedUartInput(mcu, mcu.uart[0]);
+
+    /** The main loop's longest pass and the longest interrupt handler (see loop-meter.js). */
+    this.loop = attachLoopMeter(mcu);
 
     this.servoMeter = new ServoPulseMeter(mcu);
     if (this.servoChangeListener) {

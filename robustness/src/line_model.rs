@@ -8,9 +8,11 @@
 //! - BS / DEL erase the last character, Ctrl-U the whole line (not on a refused line);
 //!   Ctrl-C / Ctrl-X abandon the line (no reply);
 //! - tab is a space; other control bytes are ignored;
-//! - ESC starts an escape sequence: ESC + one printable byte (Alt-key), or ESC `[` / ESC `O`,
-//!   parameters (0x20..=0x3F) and a final byte (0x40..=0x7E). Printable bytes inside are
-//!   swallowed; any other byte ends the sequence and then counts on its own;
+//! - ESC `[` starts a CSI sequence: parameter and intermediate bytes (0x20..=0x3F) and a final
+//!   byte (0x40..=0x7E), all swallowed; ESC `O` swallows one more printable byte (SS3); ESC
+//!   followed by anything else is a lone ESC, dropped, and that byte counts as typed (ESC ESC:
+//!   the second ESC starts anew). A byte that is not printable ends a sequence and then counts
+//!   on its own;
 //! - at most 128 characters are kept; a longer line is refused (`line-too-long`) once it ends;
 //! - a byte outside printable ASCII refuses the line (`bad-character`);
 //! - bytes lost by the receive queue refuse the line (`rx-overflow`, which wins over the
@@ -67,8 +69,10 @@ enum Esc {
     Off,
     /// Just after ESC.
     Start,
-    /// Inside ESC [ ... or ESC O ...
-    Params,
+    /// Inside ESC [ ...
+    Csi,
+    /// After ESC O.
+    Ss3,
 }
 
 /// The model's state.
@@ -115,22 +119,22 @@ impl LineModel {
     pub fn byte(&mut self, b: u8) -> LineEnd {
         let previous_was_cr = self.previous_was_cr;
         self.previous_was_cr = b == b'\r';
-        let printable = (0x20..=0x7E).contains(&b);
-        match self.esc {
-            Esc::Start if printable => {
-                self.esc = if b == b'[' || b == b'O' {
-                    Esc::Params
-                } else {
-                    Esc::Off
-                };
+        match (self.esc, b) {
+            (Esc::Start, b'[') => {
+                self.esc = Esc::Csi;
                 return LineEnd::None;
             }
-            Esc::Params if printable => {
-                if (0x40..=0x7E).contains(&b) {
-                    self.esc = Esc::Off;
-                }
+            (Esc::Start, b'O') => {
+                self.esc = Esc::Ss3;
                 return LineEnd::None;
             }
+            (Esc::Csi, 0x20..=0x3F) => return LineEnd::None,
+            (Esc::Csi, 0x40..=0x7E) | (Esc::Ss3, 0x20..=0x7E) => {
+                self.esc = Esc::Off;
+                return LineEnd::None;
+            }
+            // Off, a lone ESC before any other byte, or a control byte ending a sequence: the
+            // byte counts on its own (an ESC below starts anew).
             _ => self.esc = Esc::Off,
         }
         match b {
@@ -238,7 +242,9 @@ mod tests {
         assert_eq!(ends(b"hoxx\x08\x7fme\r"), [line("home")]);
         assert_eq!(ends(b"junk\x15stop\n"), [line("stop")]);
         assert_eq!(ends(b"pose\x03\n"), [LineEnd::Blank]);
-        assert_eq!(ends(b"ho\x1b[Ame\x1bOP\x1b[3~\x1bx\n"), [line("home")]);
+        assert_eq!(ends(b"ho\x1b[Ame\x1bOP\x1b[3~\x1b[1;5C\n"), [line("home")]);
+        assert_eq!(ends(b"\x1bhome\x1b\x1b\n"), [line("home")]);
+        assert_eq!(ends(b"st\x18atus\n"), [line("atus")]);
         assert_eq!(ends(b"\x1b\r"), [LineEnd::Blank]);
         let long = [b'x'; 129];
         assert_eq!(ends(&long), []);

@@ -173,7 +173,7 @@ impl ParseError {
     pub fn code(&self) -> Code {
         match self {
             ParseError::Spoiled(s) => spoiled_code(*s),
-            ParseError::UnknownCommand { .. } => Code::UnknownCommand,
+            ParseError::UnknownCommand { .. } | ParseError::NoCommand => Code::UnknownCommand,
             ParseError::MissingField { .. } => Code::MissingField,
             ParseError::ExtraField { .. } => Code::ExtraField,
             ParseError::BadNumber { .. } => Code::BadNumber,
@@ -270,6 +270,7 @@ impl Display for ParseError {
             ParseError::UnknownCommand { word } => {
                 write!(f, "'{word}' is not a command; type help")
             }
+            ParseError::NoCommand => f.write_str("only separators, no command; type help"),
             ParseError::MissingField { what, verb } => {
                 let what = match what {
                     Missing::Axis(axis) => axis.name(),
@@ -333,10 +334,10 @@ impl Display for SettingError {
             }
             SettingError::NotOneOf {
                 setting,
-                value,
+                word,
                 allowed,
             } => {
-                write!(f, "{setting}: '{value}' is not one of")?;
+                write!(f, "{setting}: '{word}' is not one of")?;
                 for v in allowed.iter() {
                     write!(f, " {v}")?;
                 }

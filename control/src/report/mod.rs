@@ -96,7 +96,7 @@ mod tests {
             }),
             Error::Setting(SettingError::NotOneOf {
                 setting: SettingId::Baud,
-                value: 100_000,
+                word: word("100000"),
                 allowed: &BAUD_RATES,
             }),
             Error::Setting(SettingError::OutOfRange {
@@ -184,12 +184,12 @@ mod tests {
         // A setting value refused while parsing and one refused by validation.
         let parsed = Error::from(ParseError::Setting(SettingError::NotOneOf {
             setting: SettingId::Baud,
-            value: 7,
+            word: word("7"),
             allowed: &BAUD_RATES,
         }));
         let direct = Error::from(SettingError::NotOneOf {
             setting: SettingId::Baud,
-            value: 7,
+            word: word("7"),
             allowed: &BAUD_RATES,
         });
         assert_eq!(parsed, direct);
@@ -248,6 +248,21 @@ mod tests {
                 off_allowed: true,
             })),
             "speed_mm_s 5000 is outside 0.1..1000 mm/s (or 0/off)"
+        );
+        assert_eq!(
+            text(Error::Setting(SettingError::OutOfRange {
+                setting: SettingId::FrameHz,
+                value: -50.0,
+                min: 50.0,
+                max: 333.0,
+                unit: "Hz",
+                off_allowed: false,
+            })),
+            "frame_hz -50 is outside 50..333 Hz"
+        );
+        assert_eq!(
+            text(Error::Parse(ParseError::NoCommand)),
+            "only separators, no command; type help"
         );
     }
 }
