@@ -21,6 +21,9 @@
 use core::f32::consts::PI;
 use core::fmt;
 
+use crate::fixed::{
+    to_fixed, to_fixed_sq, MAX_FIXED_MM, MAX_FIXED_ROD_TERM_MM2, MAX_FIXED_TWO_ARM_MM, MM_FRAC,
+};
 use crate::ik;
 use crate::math::{Libm, Math, Real};
 use crate::pose::Pose;
@@ -56,7 +59,7 @@ pub(crate) struct LegConstants {
     pub n_y_mm: f32,
     /// Home arm angle alpha0, rad.
     pub alpha0_rad: f32,
-    /// `p_i` (x, y) and `offset` in fixed point, 2^-20 mm (`ik::MM_FRAC`).
+    /// `p_i` (x, y) and `offset` in fixed point, 2^-20 mm (`fixed::MM_FRAC`).
     pub platform_q: [i32; 2],
     pub offset_q: [i32; 3],
     /// `n_x`, `n_y` in fixed point, 2^-20 mm.
@@ -74,9 +77,9 @@ pub struct Geometry {
     pub(crate) rod_sq_minus_arm_sq: f32,
     /// `2a`, mm (the factor in `M` and `N` of eq. 9).
     pub(crate) two_arm_mm: f32,
-    /// `s^2 - a^2` in fixed point, 2^-36 mm^2 (`ik::SQ_FRAC`), from the lengths in `f64`.
+    /// `s^2 - a^2` in fixed point, 2^-36 mm^2 (`fixed::SQ_FRAC`), from the lengths in `f64`.
     pub(crate) rod_term_q: i64,
-    /// `2a` in fixed point, 2^-20 mm (`ik::MM_FRAC`).
+    /// `2a` in fixed point, 2^-20 mm (`fixed::MM_FRAC`).
     pub(crate) two_arm_q: i32,
     pub(crate) constants: [LegConstants; LEGS],
     /// Every platform joint has `z = 0` (true of every circular layout): `R p` skips a column.
@@ -84,7 +87,7 @@ pub struct Geometry {
     /// Every base joint has the same `z` (true of every circular layout): the `z` of
     /// `(x, y, z) + offset` is the same for all legs, so the IK adds it once.
     pub(crate) flat_base: bool,
-    /// Planar, every `p_i` and offset coordinate within `ik::MAX_FIXED_MM`, `2a` and
+    /// Planar, every `p_i` and offset coordinate within `fixed::MAX_FIXED_MM`, `2a` and
     /// `s^2 - a^2` within their bounds: the IK may compute `l`, `L`, `M`, `N` in fixed point.
     pub(crate) fixed_point: bool,
 }
@@ -246,11 +249,11 @@ impl Geometry {
         let two_arm_mm = geometry.two_arm_mm;
         let rod_term_mm2 =
             f64::from(rod_mm) * f64::from(rod_mm) - f64::from(arm_mm) * f64::from(arm_mm);
-        let fixed_lengths = two_arm_mm < ik::MAX_FIXED_TWO_ARM_MM
-            && libm::fabs(rod_term_mm2) < f64::from(ik::MAX_FIXED_ROD_TERM_MM2);
+        let fixed_lengths = two_arm_mm < MAX_FIXED_TWO_ARM_MM
+            && libm::fabs(rod_term_mm2) < f64::from(MAX_FIXED_ROD_TERM_MM2);
         if fixed_lengths {
-            geometry.two_arm_q = ik::to_fixed(two_arm_mm, ik::MM_FRAC);
-            geometry.rod_term_q = libm::round(rod_term_mm2 * (1u64 << ik::SQ_FRAC) as f64) as i64;
+            geometry.two_arm_q = to_fixed(two_arm_mm, MM_FRAC);
+            geometry.rod_term_q = to_fixed_sq(rod_term_mm2);
         }
         for (c, leg) in geometry.constants.iter_mut().zip(legs.iter()) {
             let (sin_beta, cos_beta) = libm::sincosf(leg.beta_rad);
@@ -264,11 +267,11 @@ impl Geometry {
             ];
             c.n_x_mm = two_arm_mm * cos_beta;
             c.n_y_mm = two_arm_mm * sin_beta;
-            c.platform_q = [0, 1].map(|k| ik::to_fixed(c.platform_mm[k], ik::MM_FRAC));
-            c.offset_q = [0, 1, 2].map(|k| ik::to_fixed(c.offset_mm[k], ik::MM_FRAC));
+            c.platform_q = [0, 1].map(|k| to_fixed(c.platform_mm[k], MM_FRAC));
+            c.offset_q = [0, 1, 2].map(|k| to_fixed(c.offset_mm[k], MM_FRAC));
             if fixed_lengths {
                 // |n_x|, |n_y| <= 2a: within `to_fixed`'s range.
-                c.n_q = [c.n_x_mm, c.n_y_mm].map(|v| ik::to_fixed(v, ik::MM_FRAC));
+                c.n_q = [c.n_x_mm, c.n_y_mm].map(|v| to_fixed(v, MM_FRAC));
             }
         }
         geometry.fixed_point = geometry.planar_platform
@@ -277,7 +280,7 @@ impl Geometry {
                 c.platform_mm
                     .iter()
                     .chain(c.offset_mm.iter())
-                    .all(|v| v.abs() < ik::MAX_FIXED_MM)
+                    .all(|v| v.abs() < MAX_FIXED_MM)
             });
         // Eq. 12 is eq. 9 at the home pose (with eq. 9's naming: M0 = 2a(h0 + z_p - z_b),
         // N0 = 2a[cos(beta)(x_p - x_b) + sin(beta)(y_p - y_b)], L0 = 2a^2 when the legs agree

@@ -24,6 +24,9 @@
 use core::f32::consts::PI;
 use core::fmt;
 
+use crate::fixed::{
+    from_fixed_sq, mul_mm, rotate_mm, to_fixed, MAX_FIXED_MM, MAX_ROTATION_ENTRY, MM_FRAC, ROT_FRAC,
+};
 use crate::geometry::{wrap_angle_rad, Geometry};
 use crate::math::{Math, Real};
 use crate::pose::{Axis, Pose};
@@ -154,139 +157,8 @@ fn twice<M: Math>(x: f32) -> f32 {
     }
 }
 
-/// Fraction bits of the rotation entries `R_kj` in the fixed-point part of eq. 2, 3.
-const ROT_FRAC: u32 = 30;
-/// Fraction bits of lengths (mm) in the fixed-point part: steps of 2^-20 mm ~ 1e-6 mm, finer
-/// than an `f32` of the leg lengths (~100 mm, ulp 7.6e-6 mm) resolves.
-pub(crate) const MM_FRAC: u32 = 20;
-/// Bound (exclusive) on `|p_i|`, `|offset_i|` (per coordinate) and on `|x|, |y|, |z|` for the
-/// fixed-point part, mm. With `|R_kj| <= 1 + 2^-10`, `|l_k| < 2 * 1.001 * 384 + 384 + 384
-/// < 1540 mm`, inside the 2048 mm an `i32` with [`MM_FRAC`] fraction bits holds. Larger
-/// geometries and poses take the float path (such a pose is far outside any workspace anyway).
-pub(crate) const MAX_FIXED_MM: f32 = 384.0;
-/// Fraction bits of the squared lengths (mm^2) `|l|^2`, `L`, `M`, `N` of eq. 9 in the
-/// fixed-point part: the exact products of two [`MM_FRAC`] numbers (2^-40 mm^2) cut to 2^-36
-/// mm^2 (3e-11 mm^2, while an `f32` of ~1e4 mm^2 has steps of 1e-3 mm^2), which leaves an
-/// `i64` room for every sum: `|l|^2 < 3 * 1540^2 mm^2` is below 2^59 of these steps.
-pub(crate) const SQ_FRAC: u32 = 36;
-/// Bound (exclusive) on `2a` for the fixed-point part, mm: `|N|, |M| < 2a |l| < 2^21 mm^2`.
-pub(crate) const MAX_FIXED_TWO_ARM_MM: f32 = 2.0 * MAX_FIXED_MM;
-/// Bound (exclusive) on `|s^2 - a^2|` for the fixed-point part, mm^2 (a rod up to ~6 m):
-/// `|L +- N| < 2^23 + 4e7 + 2^21 < 2^26 mm^2`, which is 2^62 steps of [`SQ_FRAC`].
-pub(crate) const MAX_FIXED_ROD_TERM_MM2: f32 = 4.0e7;
-
-/// Bound on `|R_kj|` for the fixed-point part: 1 plus far more than any rounding.
-const MAX_ROTATION_ENTRY: f32 = 1.0 + 1.0 / 1024.0;
-
-/// `x * 2^frac` rounded to the nearest integer (halves away from zero), in integer
-/// instructions. `|x| * 2^frac` must be below 2^31 (the callers bound `x` first).
-pub(crate) fn to_fixed(x: f32, frac: u32) -> i32 {
-    let bits = x.to_bits();
-    let exponent = ((bits >> 23) & 0xff) as i32;
-    if exponent == 0 {
-        return 0; // zero or subnormal: far below 2^-frac
-    }
-    let mantissa = ((bits & 0x7f_ffff) | 0x80_0000) as i32;
-    // x = mantissa * 2^(exponent - 150).
-    let shift = exponent - 150 + frac as i32;
-    let magnitude = if shift >= 0 {
-        mantissa << shift
-    } else if shift > -26 {
-        ((mantissa >> (-shift - 1)) + 1) >> 1
-    } else {
-        0
-    };
-    if bits >> 31 != 0 {
-        -magnitude
-    } else {
-        magnitude
-    }
-}
-
-/// `a * b` exactly, for `|a|, |b| < 2^31`, from four 16 x 16 -> 32-bit products: the M0+
-/// multiplies 32 x 32 -> 32 bits in one cycle, while the library's 64-bit multiply takes ~55.
-#[inline]
-fn wide_mul(a: i32, b: i32) -> i64 {
-    let negative = (a ^ b) < 0;
-    let (a, b) = (a.unsigned_abs(), b.unsigned_abs());
-    let (a_hi, a_lo) = (a >> 16, a & 0xffff);
-    let (b_hi, b_lo) = (b >> 16, b & 0xffff);
-    // a_hi, b_hi < 2^15: the middle sum stays below 2^32.
-    let middle = a_hi * b_lo + a_lo * b_hi;
-    let product =
-        (u64::from(a_hi * b_hi) << 32) + (u64::from(middle) << 16) + u64::from(a_lo * b_lo);
-    if negative {
-        -(product as i64)
-    } else {
-        product as i64
-    }
-}
-
-/// `m` shifted so its leading one is bit 31, and the shift. `m != 0`. (The M0+ has no
-/// count-leading-zeros instruction; the library's takes longer than these five steps.)
-#[inline(always)]
-fn normalise(mut m: u32) -> (u32, u32) {
-    let mut shift = 0;
-    if m < 1 << 16 {
-        m <<= 16;
-        shift += 16;
-    }
-    if m < 1 << 24 {
-        m <<= 8;
-        shift += 8;
-    }
-    if m < 1 << 28 {
-        m <<= 4;
-        shift += 4;
-    }
-    if m < 1 << 30 {
-        m <<= 2;
-        shift += 2;
-    }
-    if m < 1 << 31 {
-        m <<= 1;
-        shift += 1;
-    }
-    (m, shift)
-}
-
-/// The `f32` nearest (ties to even) to `sign * m * 2^(exponent - 158)`, where `m` has its
-/// leading one in bit 31, `sticky` says whether non-zero bits were cut off below `m`, and the
-/// result is a normal number. In integer instructions: a carry out of the mantissa moves into
-/// the exponent field, which is then right.
-#[inline(always)]
-fn pack(sign: u32, m: u32, sticky: bool, exponent: u32) -> f32 {
-    let mut mantissa = m >> 8;
-    let rest = m & 0xff;
-    if rest > 0x80 || (rest == 0x80 && (sticky || mantissa & 1 == 1)) {
-        mantissa += 1;
-    }
-    f32::from_bits(sign | ((exponent << 23) + mantissa - (1 << 23)))
-}
-
-/// `v * 2^-SQ_FRAC` rounded to the nearest `f32` (ties to even), in integer instructions.
-fn from_fixed_sq(v: i64) -> f32 {
-    let sign = (v >> 32) as u32 & 0x8000_0000;
-    let magnitude = v.unsigned_abs();
-    let (high, low) = ((magnitude >> 32) as u32, magnitude as u32);
-    if high == 0 {
-        if low == 0 {
-            return 0.0;
-        }
-        let (m, shift) = normalise(low);
-        return pack(sign, m, false, 127 + 31 - SQ_FRAC - shift);
-    }
-    let (_, shift) = normalise(high);
-    let (m, sticky) = if shift == 0 {
-        (high, low != 0)
-    } else {
-        ((high << shift) | (low >> (32 - shift)), low << shift != 0)
-    };
-    pack(sign, m, sticky, 127 + 63 - SQ_FRAC - shift)
-}
-
-/// The pose's part of eq. 2, 3 in fixed point: the first two columns of `R` ([`ROT_FRAC`]
-/// fraction bits) and `(x, y, z)` ([`MM_FRAC`]).
+/// The pose's part of eq. 2, 3 in fixed point: the first two columns of `R` (`fixed::ROT_FRAC`
+/// fraction bits) and `(x, y, z)` (`fixed::MM_FRAC`).
 struct FixedPose {
     rows: [[i32; 2]; 3],
     position: [i32; 3],
@@ -294,7 +166,7 @@ struct FixedPose {
 
 /// The fixed-point pose, or `None` where the float path must run: a geometry that is not
 /// planar or too large ([`Geometry::fixed_point`]), or a position or rotation beyond the
-/// bounds of [`MAX_FIXED_MM`].
+/// bounds of `fixed::MAX_FIXED_MM`.
 fn fixed_pose(geometry: &Geometry, pose: &Pose, r: &crate::Mat3) -> Option<FixedPose> {
     if !geometry.fixed_point {
         return None;
@@ -318,9 +190,9 @@ fn fixed_pose(geometry: &Geometry, pose: &Pose, r: &crate::Mat3) -> Option<Fixed
 /// then `L`, `M`, `N` and the half-angle root, float arithmetic through `M` ([`Real`]).
 /// With `L - N` and `L + N` at hand, the discriminant is `D = M^2 - (L - N)(L + N)`.
 ///
-/// For a planar platform within [`MAX_FIXED_MM`] (every usual build) and a pose within it,
-/// `l` (eq. 2, 3) and then `|l|^2`, `M`, `L - N`, `L + N` are computed in fixed point
-/// instead: `R` with 30 fraction bits, lengths with 20 (2^-20 mm), squared lengths with 36,
+/// For a planar platform within `fixed::MAX_FIXED_MM` (every usual build) and a pose within
+/// it, `l` (eq. 2, 3) and then `|l|^2`, `M`, `L - N`, `L + N` are computed in fixed point
+/// ([`crate::fixed`]) instead: `R` with 30 fraction bits, lengths with 20 (2^-20 mm), squared lengths with 36,
 /// exact integer products and sums but for one rounding of `l` to 2^-20 mm and one cut of each
 /// product to 2^-36 mm^2, then one rounding to `f32` of each of the three terms. That is more
 /// accurate than the `f32` arithmetic it replaces (an `f32` of ~100 mm has steps of 7.6e-6 mm,
@@ -350,17 +222,14 @@ pub(crate) fn arm_angles_raw<M: Math>(geometry: &Geometry, pose: &Pose) -> Resul
             // l (eq. 2, 3) in 2^-20 mm: R p rounded to nearest (halves up), then the
             // translation, exactly.
             let l: [i32; 3] = core::array::from_fn(|k| {
-                let rp = wide_mul(fixed.rows[k][0], c.platform_q[0])
-                    + wide_mul(fixed.rows[k][1], c.platform_q[1]);
-                (((rp >> (ROT_FRAC - 1)) + 1) >> 1) as i32 + fixed.position[k] + c.offset_q[k]
+                rotate_mm(fixed.rows[k], c.platform_q) + fixed.position[k] + c.offset_q[k]
             });
             // Products of two 2^-20 mm numbers, cut to 2^-36 mm^2.
-            let sq = |a: i32, b: i32| wide_mul(a, b) >> (2 * MM_FRAC - SQ_FRAC);
-            let leg_sq = sq(l[0], l[0]) + sq(l[1], l[1]) + sq(l[2], l[2]);
+            let leg_sq = mul_mm(l[0], l[0]) + mul_mm(l[1], l[1]) + mul_mm(l[2], l[2]);
             let big_l = leg_sq - geometry.rod_term_q;
-            let big_n = sq(c.n_q[0], l[0]) + sq(c.n_q[1], l[1]);
+            let big_n = mul_mm(c.n_q[0], l[0]) + mul_mm(c.n_q[1], l[1]);
             (
-                real(from_fixed_sq(sq(geometry.two_arm_q, l[2]))),
+                real(from_fixed_sq(mul_mm(geometry.two_arm_q, l[2]))),
                 real(from_fixed_sq(big_l - big_n)),
                 real(from_fixed_sq(big_l + big_n)),
             )
@@ -465,62 +334,7 @@ mod tests {
     use super::*;
     use crate::geometry::Leg;
     use crate::math::Libm;
-
-    /// The next number of a xorshift32 sequence (seeded, reproducible test inputs).
-    fn xorshift(seed: &mut u32) -> u32 {
-        *seed ^= *seed << 13;
-        *seed ^= *seed >> 17;
-        *seed ^= *seed << 5;
-        *seed
-    }
-
-    #[test]
-    fn fixed_point_conversions_and_products_are_exact() {
-        let mut seed = 0x1234_5678_u32;
-        let mut next = || xorshift(&mut seed);
-        for _ in 0..100_000 {
-            let (a, b) = (next() as i32 >> (next() % 8), next() as i32 >> (next() % 8));
-            if a == i32::MIN || b == i32::MIN {
-                continue;
-            }
-            assert_eq!(wide_mul(a, b), i64::from(a) * i64::from(b), "{a} * {b}");
-            let scale = f64::from(1u32 << MM_FRAC);
-            // `i64 as f32` rounds once, to nearest even; the power of two scales exactly.
-            let w = ((u64::from(next()) << 32 | u64::from(next())) as i64) >> (next() % 64);
-            let expected = w as f32 * (-(SQ_FRAC as f32)).exp2();
-            assert_eq!(from_fixed_sq(w).to_bits(), expected.to_bits(), "{w}");
-            let x = f32::from_bits(next()) % MAX_FIXED_MM;
-            if x.is_finite() {
-                let expected = (f64::from(x) * scale).round() as i32;
-                assert_eq!(to_fixed(x, MM_FRAC), expected, "{x}");
-                let r = x / MAX_FIXED_MM;
-                let expected = (f64::from(r) * f64::from(1u32 << ROT_FRAC)).round() as i32;
-                assert_eq!(to_fixed(r, ROT_FRAC), expected, "{r}");
-            }
-        }
-    }
-
-    #[test]
-    fn wide_conversion_rounds_ties_to_even() {
-        // 2^40 + 2^16 (a tie, even stays), + 1 (above the tie), 2^40 + 3 * 2^16 (a tie, odd
-        // rounds up), and the extremes.
-        for w in [
-            (1i64 << 40) + (1 << 16),
-            (1i64 << 40) + (1 << 16) + 1,
-            (1i64 << 40) + 3 * (1 << 16),
-            -((1i64 << 40) + 3 * (1 << 16)),
-            i64::MAX,
-            -i64::MAX,
-            1,
-            -1,
-            0,
-            (1 << 32) - 1,
-            1 << 32,
-        ] {
-            let expected = w as f32 * (-(SQ_FRAC as f32)).exp2();
-            assert_eq!(from_fixed_sq(w).to_bits(), expected.to_bits(), "{w}");
-        }
-    }
+    use crate::test_support::xorshift;
 
     /// Eq. 9 (half-angle form, as in [`arm_angles_raw`]) for one leg in `f64`, rad.
     fn arm_angle_f64(g: &Geometry, pose: &Pose, leg: usize) -> f64 {

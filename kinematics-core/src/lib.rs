@@ -13,12 +13,15 @@
 //! - [`ik`]: pose -> arm angles -> pulse widths, all-or-nothing with errors naming the leg/servo.
 //! - [`math`]: the few transcendental functions the IK needs, behind a trait so the firmware can
 //!   supply the RP2040 boot ROM's fast routines while the host uses `libm`.
+//! - `fixed` (private): the fixed-point arithmetic of the IK's hot loop (integer instructions for
+//!   a chip without an FPU).
 //!
 //! Legs and servos are numbered 1..=6 in everything a user sees (errors, reports) and indexed
 //! 0..=5 in arrays. Leg `i` is driven by servo `i`.
 #![cfg_attr(not(test), no_std)]
 #![deny(missing_docs)]
 
+mod fixed;
 pub mod geometry;
 pub mod ik;
 pub mod math;
@@ -38,3 +41,15 @@ pub const LEGS: usize = 6;
 pub type Vec3 = nalgebra::Vector3<f32>;
 /// A 3x3 rotation matrix.
 pub type Mat3 = nalgebra::Matrix3<f32>;
+
+/// Helpers shared by the unit tests.
+#[cfg(test)]
+mod test_support {
+    /// The next number of a xorshift32 sequence (seeded, reproducible test inputs).
+    pub(crate) fn xorshift(seed: &mut u32) -> u32 {
+        *seed ^= *seed << 13;
+        *seed ^= *seed >> 17;
+        *seed ^= *seed << 5;
+        *seed
+    }
+}
