@@ -50,11 +50,11 @@ const NOTICE_QUEUE: usize = 4;
 
 /// Solves the IK with the chosen math.
 fn solve<M: Math>(
-    geometry: &Geometry,
+    solver: &ik::Solver,
     servos: &ServoSet,
     pose: &Pose,
 ) -> Result<Solution, IkError> {
-    ik::solve::<M>(geometry, servos, pose)
+    solver.solve::<M>(servos, pose)
 }
 
 /// The hardware-independent firmware: feed it bytes and frames.
@@ -66,6 +66,8 @@ pub struct Controller<M: Math = Libm> {
     settings: Settings,
     generation: u32,
     geometry: Geometry,
+    /// The IK of `geometry` (built with it).
+    solver: ik::Solver,
     line: LineBuffer,
     motion: Motion,
     /// The last good IK result (what the servos are being given).
@@ -110,11 +112,13 @@ impl<M: Math> Controller<M> {
     /// A controller with these settings, or why they cannot be used.
     pub fn try_with_math(settings: Settings) -> Result<Self, Error> {
         let geometry = settings.validate()?;
-        let solution = solve::<M>(&geometry, &settings.servos, &Pose::HOME)?;
+        let solver = ik::Solver::new(&geometry);
+        let solution = solve::<M>(&solver, &settings.servos, &Pose::HOME)?;
         Ok(Controller {
             settings,
             generation: 0,
             geometry,
+            solver,
             line: LineBuffer::new(),
             motion: Motion::new(Pose::HOME),
             solution,
@@ -298,7 +302,7 @@ impl<M: Math> Controller<M> {
             return self.safe_pulses();
         }
         let next = self.motion.next_pose();
-        match solve::<M>(&self.geometry, &self.settings.servos, &next) {
+        match solve::<M>(&self.solver, &self.settings.servos, &next) {
             Ok(solution) => {
                 self.motion.commit();
                 self.solution = solution;
@@ -416,7 +420,7 @@ impl<M: Math> Controller<M> {
     /// Checks a target and the straight path to it from the current pose.
     fn plan(&self, target: Pose, limits: SpeedLimits) -> Result<(Solution, Segment), Error> {
         // The target itself first: its error is the most useful one.
-        let solution = solve::<M>(&self.geometry, &self.settings.servos, &target)?;
+        let solution = solve::<M>(&self.solver, &self.settings.servos, &target)?;
         let segment = Segment::plan(
             *self.motion.pose(),
             target,
@@ -428,7 +432,7 @@ impl<M: Math> Controller<M> {
                 if *p == target {
                     return Ok(()); // solved above
                 }
-                solve::<M>(&self.geometry, &self.settings.servos, p).map(|_| ())
+                solve::<M>(&self.solver, &self.settings.servos, p).map(|_| ())
             })
             .map_err(|e| Error::PathBlocked {
                 percent: e.fraction * 100.0,
@@ -462,11 +466,13 @@ impl<M: Math> Controller<M> {
 
     fn change_settings(&mut self, candidate: Settings) -> Result<(), Error> {
         let geometry = candidate.validate()?;
+        let solver = ik::Solver::new(&geometry);
         // The pose being held must stay drivable (and the pulses change right away).
-        let solution = solve::<M>(&geometry, &candidate.servos, self.motion.pose())
+        let solution = solve::<M>(&solver, &candidate.servos, self.motion.pose())
             .map_err(|cause| Error::PoseConflict { cause })?;
         self.settings = candidate;
         self.geometry = geometry;
+        self.solver = solver;
         self.new_pulses |= solution.pulse_us != self.solution.pulse_us;
         self.solution = solution;
         self.generation = self.generation.wrapping_add(1);
@@ -629,7 +635,7 @@ mod tests {
         // Start the blocked move without its path check, as if the check had missed it.
         let segment = Segment::plan(*c.pose(), pose(TO), c.speed_limits(), 50.0);
         assert!(segment
-            .check_path(|p| solve::<Libm>(&c.geometry, &c.settings.servos, p).map(|_| ()))
+            .check_path(|p| solve::<Libm>(&c.solver, &c.settings.servos, p).map(|_| ()))
             .is_err());
         c.start(segment);
         let mut last_good = c.pulses_us();
@@ -674,7 +680,7 @@ mod tests {
         // Put the platform at a reachable pose from which the line home is not.
         let stuck = pose([40.0, 20.0, -18.5, -5.0, -16.0, -26.0]);
         c.motion = Motion::new(stuck);
-        c.solution = solve::<Libm>(&c.geometry, &c.settings.servos, &stuck).unwrap();
+        c.solution = solve::<Libm>(&c.solver, &c.settings.servos, &stuck).unwrap();
         for _ in 0..20 {
             let pulses = c.on_frame();
             assert!(within_limits(&c, &pulses));

@@ -10,7 +10,8 @@
 //!   arm angles `alpha0` (eq. 12).
 //! - [`pose`]: the platform pose and its rotation matrix.
 //! - [`servo`]: per-servo pulse mapping (home pulse, rate, direction, limits).
-//! - [`ik`]: pose -> arm angles -> pulse widths, all-or-nothing with errors naming the leg/servo.
+//! - [`ik`]: pose -> arm angles -> pulse widths, all-or-nothing with errors naming the leg/servo;
+//!   an [`ik::Solver`] holds what it computes once per geometry.
 //! - [`math`]: the few transcendental functions the IK needs, behind a trait so the firmware can
 //!   supply the RP2040 boot ROM's fast routines while the host uses `libm`.
 //! - `fixed` (private): the fixed-point arithmetic of the IK's hot loop (integer instructions for
@@ -29,7 +30,7 @@ pub mod pose;
 pub mod servo;
 
 pub use geometry::{Geometry, GeometryError, Leg};
-pub use ik::{IkError, Solution};
+pub use ik::{IkError, Solution, Solver};
 pub use math::{Libm, Math};
 pub use pose::Pose;
 pub use servo::{Direction, ServoConfig, ServoError, ServoSet};
