@@ -55,6 +55,8 @@ pub struct Geometry {
 }
 
 /// Which length of a geometry a [`GeometryError`] is about.
+///
+/// `Display` gives its name for developers; the wording users see is `control::report`'s.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Length {
     /// The servo arm (horn) length `a`.
@@ -79,6 +81,9 @@ impl fmt::Display for Length {
 }
 
 /// Why a set of build numbers is not a usable geometry.
+///
+/// `Display` gives one short line for developers (the case and its values, in the units of the
+/// fields); the wording users see is `control::report`'s.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum GeometryError {
     /// A coordinate or angle of leg `leg` (1..=6) is NaN or infinite.
@@ -120,29 +125,30 @@ impl fmt::Display for GeometryError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {
             GeometryError::NonFiniteLeg { leg } => {
-                write!(f, "leg {leg} has a coordinate that is not a finite number")
+                write!(f, "leg {leg}: non-finite coordinate or angle")
             }
             GeometryError::BadLength { which, value_mm } => {
-                write!(f, "{which} must be a positive number of mm, not {value_mm}")
+                write!(f, "{which} not a positive finite length: {value_mm} mm")
             }
-            GeometryError::NoHomeHeight { leg } => write!(
-                f,
-                "leg {leg}: no home height with arm and rod at right angles (rod too short or joints too far apart)"
-            ),
+            GeometryError::NoHomeHeight { leg } => {
+                write!(f, "leg {leg}: no home height (no real root of eq. 10)")
+            }
             GeometryError::LegsDisagree {
                 leg,
                 home_height_mm,
                 leg1_home_height_mm,
             } => write!(
                 f,
-                "legs disagree on the home height: leg {leg} gives {home_height_mm:.3} mm, leg 1 gives {leg1_home_height_mm:.3} mm"
+                "leg {leg}: home height {home_height_mm} mm, leg 1: {leg1_home_height_mm} mm"
             ),
             GeometryError::HomeUnreachable { leg } => {
-                write!(f, "leg {leg}: the arm cannot reach the rod at the home pose")
+                write!(f, "leg {leg}: home pose unreachable (no root of eq. 9)")
             }
         }
     }
 }
+
+impl core::error::Error for GeometryError {}
 
 fn check_length(which: Length, value_mm: f32) -> Result<f32, GeometryError> {
     if value_mm.is_finite() && value_mm > 0.0 {

@@ -52,6 +52,9 @@ pub struct Solution {
 }
 
 /// Why a pose cannot be driven.
+///
+/// `Display` gives one short line for developers (the case and its values, in the units of the
+/// fields); the wording users see is `control::report`'s.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum IkError {
     /// A pose coordinate is NaN or infinite.
@@ -87,16 +90,11 @@ pub enum IkError {
 impl fmt::Display for IkError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {
-            IkError::NonFinite { axis } => write!(f, "{} is not a finite number", axis.name()),
-            IkError::AngleTooLarge { axis, value_rad } => write!(
-                f,
-                "{} {:.3} deg is beyond +-180 deg",
-                axis.name(),
-                value_rad.to_degrees()
-            ),
-            IkError::Unreachable { leg } => {
-                write!(f, "leg {leg} cannot reach: pose is outside the workspace")
+            IkError::NonFinite { axis } => write!(f, "non-finite pose coordinate {}", axis.name()),
+            IkError::AngleTooLarge { axis, value_rad } => {
+                write!(f, "{} = {value_rad} rad, beyond +-pi", axis.name())
             }
+            IkError::Unreachable { leg } => write!(f, "leg {leg}: unreachable (no root of eq. 9)"),
             IkError::ServoLimit {
                 servo,
                 pulse_us,
@@ -104,11 +102,13 @@ impl fmt::Display for IkError {
                 max_us,
             } => write!(
                 f,
-                "servo {servo} would need {pulse_us:.2} us, outside its limits {min_us:.2}..{max_us:.2} us"
+                "servo {servo}: pulse {pulse_us} us outside its limits {min_us}..={max_us} us"
             ),
         }
     }
 }
+
+impl core::error::Error for IkError {}
 
 /// Checks that a pose is made of usable numbers.
 pub fn check_pose(pose: &Pose) -> Result<(), IkError> {

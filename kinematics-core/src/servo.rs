@@ -184,6 +184,8 @@ impl ServoSet {
 }
 
 /// Which pulse setting of a servo a [`ServoError`] is about.
+///
+/// `Display` gives its name for developers; the wording users see is `control::report`'s.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ServoField {
     /// Home pulse `W0`.
@@ -205,6 +207,9 @@ impl fmt::Display for ServoField {
 }
 
 /// Why a servo configuration is refused.
+///
+/// `Display` gives one short line for developers (the case and its values, in the units of the
+/// fields); the wording users see is `control::report`'s.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum ServoError {
     /// A pulse setting is not a number within [`MIN_PULSE_US`]..=[`MAX_PULSE_US`].
@@ -245,11 +250,12 @@ impl fmt::Display for ServoError {
                 value_us,
             } => write!(
                 f,
-                "servo {servo}: {field} {value_us} us is outside {MIN_PULSE_US}..{MAX_PULSE_US} us"
+                "servo {servo}: {field} {value_us} us outside {MIN_PULSE_US}..={MAX_PULSE_US} us"
             ),
             ServoError::RateOutOfRange { servo, value } => write!(
                 f,
-                "servo {servo}: rate {value} us/rad is outside {MIN_RATE_US_PER_RAD}..{MAX_RATE_US_PER_RAD} us/rad"
+                "servo {servo}: rate {value} us/rad outside \
+                 {MIN_RATE_US_PER_RAD}..={MAX_RATE_US_PER_RAD} us/rad"
             ),
             ServoError::HomeOutsideLimits {
                 servo,
@@ -258,11 +264,13 @@ impl fmt::Display for ServoError {
                 max_us,
             } => write!(
                 f,
-                "servo {servo}: home pulse {home_us} us must lie within its limits {min_us}..{max_us} us"
+                "servo {servo}: home pulse {home_us} us outside its limits {min_us}..={max_us} us"
             ),
         }
     }
 }
+
+impl core::error::Error for ServoError {}
 
 #[cfg(test)]
 mod tests {
