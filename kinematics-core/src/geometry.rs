@@ -7,11 +7,11 @@
 //! - `p_i`: the rod's joint on the platform (platform frame);
 //! - `beta_i`: the angle of the arm's plane of rotation from the base x axis, chosen so that
 //!   the arm tip at arm angle `alpha` is `b_i + a (cos(alpha) cos(beta_i),
-//!   cos(alpha) sin(beta_i), sin(alpha))` (seed 001, eq. 4-6). The two servos of a pair are
-//!   mirror images: in [`PairedLayout`] each arm is tangent to the base circle and points away
-//!   from the pair's centre, so their `beta` differ by 180 degrees plus the angle between the
-//!   two shafts. Their opposite sense of rotation is a property of the servo, see
-//!   [`crate::servo::Direction`].
+//!   cos(alpha) sin(beta_i), sin(alpha))` ("The Mathematics of the Stewart Platform", eq. 4-6).
+//!   The two servos of a pair are mirror images: in [`PairedLayout`] each arm is tangent to the
+//!   base circle and points away from the pair's centre, so their `beta` differ by 180 degrees
+//!   plus the angle between the two shafts. Their opposite sense of rotation is a property of
+//!   the servo, see [`crate::servo::Direction`].
 //!
 //! All legs share the arm (horn) length `a` and the rod length `s`.
 //!
@@ -255,8 +255,9 @@ impl Default for Geometry {
     }
 }
 
-/// Joints on two circles at given angles (seed 000, "general configuration"), each leg with its
-/// own arm-plane angle. Angles in degrees, as users measure them.
+/// Joints on two circles at given angles (the "general configuration" of the Stewart platform
+/// Simscape model documentation), each leg with its own arm-plane angle. Angles in degrees, as
+/// users measure them.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CircularLayout {
     /// Radius of the circle through the servo shaft centres, mm.

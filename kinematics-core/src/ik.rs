@@ -1,6 +1,6 @@
 //! Inverse kinematics: pose -> six arm angles (rad) -> six pulse widths (us).
 //!
-//! For each leg (seed 001):
+//! For each leg ("The Mathematics of the Stewart Platform"):
 //! - eq. 1: `R = Rz(yaw) Ry(pitch) Rx(roll)`;
 //! - eq. 2, 3: platform joint `q_i = T + R p_i` with `T = (x, y, h0 + z)`, leg `l_i = q_i - b_i`;
 //! - eq. 9: the arm tip `A(alpha) = b + a (cos(alpha) cos(beta), cos(alpha) sin(beta), sin(alpha))`

@@ -1,7 +1,8 @@
 //! Inverse kinematics of a six-servo Stewart platform ("hexapod"), `no_std`, `f32`, no allocation.
 //!
-//! The maths follows seed 001 ("The Mathematics of the Stewart Platform"); equation numbers in
-//! comments are that document's. Data flows one way:
+//! The maths follows "The Mathematics of the Stewart Platform" (a rotary RC-servo platform);
+//! equation numbers in comments are that document's. The general circular layout follows the
+//! Stewart platform Simscape model documentation. Data flows one way:
 //!
 //! [`Pose`] (mm, rad) -> rotation `R` (eq. 1) -> platform joints `q_i` and leg vectors `l_i`
 //! (eq. 2, 3) -> servo arm angles `alpha_i` (eq. 9) -> pulse widths `W_i` (eq. 13, 14).
