@@ -62,6 +62,8 @@ pub struct Controller<M: Math = Libm> {
     baud: u32,
     generation: u32,
     geometry: Geometry,
+    /// The IK of `geometry` (built with it).
+    solver: ik::Solver,
     motion: Motion,
     /// The last good IK result (what the servos are being given).
     solution: Solution,
@@ -108,12 +110,14 @@ impl<M: Math> Controller<M> {
     /// A controller with these settings, or why they cannot be used.
     pub fn try_with_math(settings: Settings) -> Result<Self, Error> {
         let geometry = settings.validate()?;
-        let solution = ik::solve::<M>(&geometry, &settings.servos, &Pose::HOME)?;
+        let solver = ik::Solver::new(&geometry);
+        let solution = solver.solve::<M>(&settings.servos, &Pose::HOME)?;
         Ok(Controller {
             settings,
             baud: DEFAULT_BAUD,
             generation: 0,
             geometry,
+            solver,
             motion: Motion::new(Pose::HOME),
             solution,
             returning_home: false,
@@ -264,7 +268,7 @@ impl<M: Math> Controller<M> {
             return self.safe_pulses();
         }
         let next = self.motion.next_pose();
-        match ik::solve::<M>(&self.geometry, &self.settings.servos, &next) {
+        match self.solver.solve::<M>(&self.settings.servos, &next) {
             Ok(solution) => {
                 self.motion.commit();
                 self.solution = solution;
@@ -397,7 +401,7 @@ impl<M: Math> Controller<M> {
     /// Checks a target and the straight path to it from the current pose.
     fn plan(&self, target: Pose, limits: SpeedLimits) -> Result<(Solution, Segment), Error> {
         // The target itself first: its error is the most useful one.
-        let solution = ik::solve::<M>(&self.geometry, &self.settings.servos, &target)?;
+        let solution = self.solver.solve::<M>(&self.settings.servos, &target)?;
         let segment = Segment::plan(
             *self.motion.pose(),
             target,
@@ -409,7 +413,7 @@ impl<M: Math> Controller<M> {
                 if *p == target {
                     return Ok(()); // solved above
                 }
-                ik::solve::<M>(&self.geometry, &self.settings.servos, p).map(|_| ())
+                self.solver.solve::<M>(&self.settings.servos, p).map(|_| ())
             })
             .map_err(|e| Error::PathBlocked {
                 percent: e.fraction * 100.0,
@@ -443,11 +447,13 @@ impl<M: Math> Controller<M> {
 
     fn change_settings(&mut self, candidate: Settings) -> Result<(), Error> {
         let geometry = candidate.validate()?;
+        let solver = ik::Solver::new(&geometry);
         // The pose being held must stay drivable (and the pulses change right away).
-        let solution = ik::solve::<M>(&geometry, &candidate.servos, self.motion.pose())
+        let solution = solver.solve::<M>(&candidate.servos, self.motion.pose())
             .map_err(|cause| Error::PoseConflict { cause })?;
         self.settings = candidate;
         self.geometry = geometry;
+        self.solver = solver;
         self.new_pulses |= solution.pulse_us != self.solution.pulse_us;
         self.solution = solution;
         self.generation = self.generation.wrapping_add(1);
@@ -626,7 +632,7 @@ mod tests {
         // Start the blocked move without its path check, as if the check had missed it.
         let segment = Segment::plan(*c.pose(), pose(TO), c.speed_limits(), 50.0);
         assert!(segment
-            .check_path(|p| ik::solve::<Libm>(&c.geometry, &c.settings.servos, p).map(|_| ()))
+            .check_path(|p| c.solver.solve::<Libm>(&c.settings.servos, p).map(|_| ()))
             .is_err());
         c.start(segment);
         let mut last_good = c.pulses_us();
@@ -670,7 +676,7 @@ mod tests {
         // Put the platform at a reachable pose from which the line home is not.
         let stuck = pose([40.0, 20.0, -18.5, -5.0, -16.0, -26.0]);
         c.motion = Motion::new(stuck);
-        c.solution = ik::solve::<Libm>(&c.geometry, &c.settings.servos, &stuck).unwrap();
+        c.solution = c.solver.solve::<Libm>(&c.settings.servos, &stuck).unwrap();
         for _ in 0..20 {
             let pulses = c.on_frame();
             assert!(within_limits(&c, &pulses));

@@ -123,12 +123,12 @@ fn pose_moves_there_and_status_reports_it() {
         [3.0, -2.0, 5.0, 4.0, -3.0, 6.0]
     );
     // The pulses are what the IK says for that pose.
-    let expected = ik::solve::<Libm>(
-        &PairedLayout::default().build().unwrap(),
-        &ServoSet::default(),
-        &Pose::from_degrees(3.0, -2.0, 5.0, 4.0, -3.0, 6.0),
-    )
-    .unwrap();
+    let expected = ik::Solver::new(&PairedLayout::default().build().unwrap())
+        .solve::<Libm>(
+            &ServoSet::default(),
+            &Pose::from_degrees(3.0, -2.0, 5.0, 4.0, -3.0, 6.0),
+        )
+        .unwrap();
     let shown = six(&s.status_field("pulse_us"));
     let given = s.ctl.on_frame();
     for i in 0..6 {
@@ -199,12 +199,12 @@ fn check_reports_pulses_and_nothing_moves() {
             .unwrap()
             .to_owned()
     };
-    let expected = ik::solve::<Libm>(
-        &PairedLayout::default().build().unwrap(),
-        &ServoSet::default(),
-        &Pose::from_degrees(5.0, 0.0, -3.0, 2.0, 0.0, -4.0),
-    )
-    .unwrap();
+    let expected = ik::Solver::new(&PairedLayout::default().build().unwrap())
+        .solve::<Libm>(
+            &ServoSet::default(),
+            &Pose::from_degrees(5.0, 0.0, -3.0, 2.0, 0.0, -4.0),
+        )
+        .unwrap();
     let pulses = six(&field("pulse_us"));
     let arm = six(&field("arm_deg"));
     for i in 0..6 {
@@ -487,7 +487,8 @@ fn path_through_unreachable_space_is_refused_before_anything_moves() {
     let to: Vec<f32> = BLOCKED_TO.split(' ').map(|v| v.parse().unwrap()).collect();
     let target = Pose::from_degrees(to[0], to[1], to[2], to[3], to[4], to[5]);
     let geometry = PairedLayout::default().build().unwrap();
-    assert!(ik::solve::<Libm>(&geometry, &ServoSet::default(), &target).is_ok());
+    let solver = ik::Solver::new(&geometry);
+    assert!(solver.solve::<Libm>(&ServoSet::default(), &target).is_ok());
     // ... but the straight line to it from here is not.
     let e = s.err(&format!("pose {BLOCKED_TO}"));
     assert_eq!(code_of(&e), "path-blocked");

@@ -142,12 +142,13 @@ be slower on a cache miss; code in the cache or in RAM matches).
 
 ## IK: pose -> six pulse widths
 
-The firmware's own IK (\`kinematics_core::ik::solve\` with \`firmware::rom_math::RomMath\`, the code
-path \`control::Controller\` runs for every pose: rotation, six legs, six pulse widths, limits)
-in a benchmark firmware (\`firmware/src/bin/bench.rs\`) that shares the same code. GP16 is high
-exactly while one IK runs; the harness reads the emulator's cycle counter at its edges and
-subtracts an empty bracket (the marker's own cost). ${ik.poses} random poses reachable within the
-default servo limits (seed ${args.seed}, from \`cargo run -p host-tests --example bench_poses\`).
+The firmware's own IK (\`kinematics_core::ik::Solver::solve\` with
+\`firmware::rom_math::RomMath\`, the code path \`control::Controller\` runs for every pose:
+rotation, six legs, six pulse widths, limits) in a benchmark firmware
+(\`firmware/src/bin/bench.rs\`) that shares the same code. GP16 is high exactly while one IK
+runs; the harness reads the emulator's cycle counter at its edges and subtracts an empty bracket
+(the marker's own cost). ${ik.poses} random poses reachable within the default servo limits
+(seed ${args.seed}, from \`cargo run -p host-tests --example bench_poses\`).
 
 | | cycles per IK, mean | min | max | us at 125 MHz (mean) |
 |---|---:|---:|---:|---:|

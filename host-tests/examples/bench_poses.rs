@@ -23,6 +23,7 @@ fn main() {
     let count: usize = args.next().and_then(|a| a.parse().ok()).unwrap_or(200);
     let seed: u64 = args.next().and_then(|a| a.parse().ok()).unwrap_or(1);
     let geometry = Geometry::default();
+    let solver = ik::Solver::new(&geometry);
     let servos = ServoSet::default();
     let reference = RefGeometry::from_core(&geometry);
     let mut rng = Rng::new(seed);
@@ -33,7 +34,7 @@ fn main() {
         let clear = (0..6).all(|i| {
             expected.leg_margin_mm(i) > MARGIN_MM && expected.limit_margin_us[i] > MARGIN_US
         });
-        let Ok(host) = ik::solve::<Libm>(&geometry, &servos, &pose) else {
+        let Ok(host) = solver.solve::<Libm>(&servos, &pose) else {
             continue;
         };
         if !clear {

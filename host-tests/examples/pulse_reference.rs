@@ -38,6 +38,8 @@ use kinematics_core::{Direction, Geometry, Libm, Pose, ServoConfig, ServoSet, LE
 struct Reference {
     layout: PairedLayout,
     geometry: Geometry,
+    /// The IK of `geometry` (built with it).
+    solver: ik::Solver,
     servos: ServoSet,
 }
 
@@ -86,9 +88,11 @@ fn numbers<const N: usize>(words: &[&str]) -> Result<[f32; N], String> {
 impl Reference {
     fn new() -> Reference {
         let layout = PairedLayout::default();
+        let geometry = layout.build().expect("the default layout builds");
         Reference {
             layout,
-            geometry: layout.build().expect("the default layout builds"),
+            solver: ik::Solver::new(&geometry),
+            geometry,
             servos: ServoSet::default(),
         }
     }
@@ -117,6 +121,7 @@ impl Reference {
         };
         let geometry = layout.build().map_err(|e| format!("geometry: {e}"))?;
         self.layout = layout;
+        self.solver = ik::Solver::new(&geometry);
         self.geometry = geometry;
         Ok("{\"ok\":true}".to_owned())
     }
@@ -147,7 +152,7 @@ impl Reference {
 
     fn solve(&self, [x, y, z, roll, pitch, yaw]: [f32; 6]) -> String {
         let pose = Pose::from_degrees(x, y, z, roll, pitch, yaw);
-        match ik::solve::<Libm>(&self.geometry, &self.servos, &pose) {
+        match self.solver.solve::<Libm>(&self.servos, &pose) {
             Ok(solution) => format!(
                 "{{\"ok\":true,\"arm_deg\":{},\"pulse_us\":{}}}",
                 nums(&solution.arm_rad.map(f32::to_degrees)),

@@ -73,9 +73,11 @@ impl Tally {
     }
 }
 
-/// Checks `ik::solve` for one pose against the reference; returns a description on failure.
+/// Checks `ik::Solver::solve` for one pose against the reference; returns a description on
+/// failure. `solver` is the IK of `case.geometry`.
 fn check_solve(
     case: &Case,
+    solver: &ik::Solver,
     reference: &RefGeometry,
     servos: &ServoSet,
     pose: &Pose,
@@ -92,7 +94,7 @@ fn check_solve(
     if reach.contains(&Judged::Either) || limit.contains(&Judged::Either) {
         tally.in_band += 1;
     }
-    let got = ik::solve::<Libm>(&case.geometry, servos, pose);
+    let got = solver.solve::<Libm>(servos, pose);
     tally.poses += 1;
     match got {
         Ok(sol) => {
@@ -221,13 +223,14 @@ fn solve_agrees_with_the_numeric_reference_over_realistic_poses() {
     eprintln!("\nsolve() vs the numeric f64 reference (default servos, +-45 deg travel):");
     for (n, case) in cases().iter().enumerate() {
         let reference = RefGeometry::from_core(&case.geometry);
+        let solver = ik::Solver::new(&case.geometry);
         // The default geometry gets the most poses; the others a few thousand each.
         let samples = if n == 0 { 9000 } else { 2500 };
         let mut rng = Rng::new(0x5EED_0001 + n as u64);
         let mut tally = Tally::default();
         for _ in 0..samples {
             let pose = rng.pose(&case.range);
-            if let Err(why) = check_solve(case, &reference, &servos, &pose, &mut tally) {
+            if let Err(why) = check_solve(case, &solver, &reference, &servos, &pose, &mut tally) {
                 panic!("{}: pose {pose:?}: {why}", case.name);
             }
         }
@@ -252,12 +255,13 @@ fn solve_names_the_right_leg_or_servo_outside_the_realistic_range() {
     let servos = ServoSet::default();
     for (n, case) in cases().iter().enumerate() {
         let reference = RefGeometry::from_core(&case.geometry);
+        let solver = ik::Solver::new(&case.geometry);
         let mut rng = Rng::new(0x5EED_0100 + n as u64);
         let range = case.range.map(|r| 2.0 * r);
         let mut tally = Tally::default();
         for _ in 0..1500 {
             let pose = rng.pose(&range);
-            if let Err(why) = check_solve(case, &reference, &servos, &pose, &mut tally) {
+            if let Err(why) = check_solve(case, &solver, &reference, &servos, &pose, &mut tally) {
                 panic!("{}: pose {pose:?}: {why}", case.name);
             }
         }
@@ -269,10 +273,11 @@ fn solve_names_the_right_leg_or_servo_outside_the_realistic_range() {
     }
 }
 
-/// Checks `ik::arm_angles` (no servo limits) against the reference: same reachability (up to
-/// the band), the first unreachable leg named, angles to the f32 resolution of the joint.
+/// Checks `ik::Solver::arm_angles` (no servo limits) against the reference: same reachability
+/// (up to the band), the first unreachable leg named, angles to the f32 resolution of the
+/// joint.
 fn check_arm_angles(
-    case: &Case,
+    solver: &ik::Solver,
     reference: &RefGeometry,
     pose: &Pose,
     tally: &mut Tally,
@@ -288,7 +293,7 @@ fn check_arm_angles(
         tally.in_band += 1;
     }
     tally.poses += 1;
-    match ik::arm_angles::<Libm>(&case.geometry, pose) {
+    match solver.arm_angles::<Libm>(pose) {
         Ok(alpha) => {
             tally.ok += 1;
             if let Some(i) = (0..LEGS).find(|&i| reach[i] == Judged::No) {
@@ -340,12 +345,13 @@ fn arm_angles_reach_exactly_where_the_reference_does() {
     eprintln!("\narm_angles() (no servo limits) vs the reference, wide random poses:");
     for (n, case) in cases().iter().enumerate() {
         let reference = RefGeometry::from_core(&case.geometry);
+        let solver = ik::Solver::new(&case.geometry);
         let mut rng = Rng::new(0x5EED_0200 + n as u64);
         let range = case.range.map(|r| 1.8 * r);
         let mut tally = Tally::default();
         for _ in 0..1500 {
             let pose = rng.pose(&range);
-            if let Err(why) = check_arm_angles(case, &reference, &pose, &mut tally) {
+            if let Err(why) = check_arm_angles(&solver, &reference, &pose, &mut tally) {
                 panic!("{}: pose {pose:?}: {why}", case.name);
             }
         }
@@ -363,6 +369,7 @@ fn workspace_boundary_is_where_the_reference_puts_it() {
     eprintln!("\nworkspace boundary probes:");
     for (n, case) in cases().iter().enumerate() {
         let reference = RefGeometry::from_core(&case.geometry);
+        let solver = ik::Solver::new(&case.geometry);
         let mut rng = Rng::new(0x5EED_0300 + n as u64);
         let mut tally = Tally::default();
         let mut disagreements = 0;
@@ -390,7 +397,7 @@ fn workspace_boundary_is_where_the_reference_puts_it() {
                 for side in [-1.0, 1.0] {
                     let pose = at(lo * (1.0 + side * 10f64.powi(-k))).to_core();
                     let before = (tally.ok, tally.unreachable);
-                    if let Err(why) = check_arm_angles(case, &reference, &pose, &mut tally) {
+                    if let Err(why) = check_arm_angles(&solver, &reference, &pose, &mut tally) {
                         panic!("{}: pose {pose:?}: {why}", case.name);
                     }
                     let core_ok = tally.ok > before.0;
@@ -452,12 +459,7 @@ fn one_leg_agrees_with_the_reference_wherever_its_joint_can_be() {
         let leg = *case.geometry.leg(n % LEGS);
         let g = single_leg(leg, case.geometry.arm_mm(), case.geometry.rod_mm());
         let reference = RefGeometry::from_core(&g);
-        let one = Case {
-            name: case.name,
-            geometry: g,
-            range: case.range,
-            angle_tol_deg: case.angle_tol_deg,
-        };
+        let solver = ik::Solver::new(&g);
         let (a, s) = (reference.arm, reference.rod);
         let b = reference.legs[0].b;
         let mut rng = Rng::new(0x5EED_0400 + n as u64);
@@ -475,7 +477,7 @@ fn one_leg_agrees_with_the_reference_wherever_its_joint_can_be() {
                 below += 1;
             }
             let pose = pose_for_joint(&reference, q);
-            if let Err(why) = check_arm_angles(&one, &reference, &pose, &mut tally) {
+            if let Err(why) = check_arm_angles(&solver, &reference, &pose, &mut tally) {
                 panic!(
                     "{} (leg {} alone): joint at {q:?}: {why}",
                     case.name,
@@ -506,12 +508,7 @@ fn half_angle_singularity_below_the_shaft_is_handled() {
     let u = [leg.beta.cos(), leg.beta.sin(), 0.0];
     let v = [-leg.beta.sin(), leg.beta.cos(), 0.0];
     let mut tally = Tally::default();
-    let one = Case {
-        name: "leg 1 alone",
-        geometry: g,
-        range: [0.0; 6],
-        angle_tol_deg: 0.0,
-    };
+    let solver = ik::Solver::new(&g);
     for phi_deg in [
         -2.0, -5.0, -10.0, -20.0, -22.0, -30.0, -45.0, -60.0, -80.0, -89.0,
     ] {
@@ -528,7 +525,7 @@ fn half_angle_singularity_below_the_shaft_is_handled() {
                     + if c == 2 { rho * phi.sin() } else { 0.0 }
             });
             let pose = pose_for_joint(&reference, q);
-            if let Err(why) = check_arm_angles(&one, &reference, &pose, &mut tally) {
+            if let Err(why) = check_arm_angles(&solver, &reference, &pose, &mut tally) {
                 panic!(
                     "phi {phi_deg} deg, w {w} mm (true alpha ~ {} deg): {why}",
                     2.0 * phi_deg

@@ -107,6 +107,7 @@ fn core_matches_the_golden_table() {
     let pulses = table(&tables, "Pulse widths");
     let constants = table(&tables, "Derived constants");
     let g = Geometry::default();
+    let solver = ik::Solver::new(&g);
     let servos = ServoSet::default();
 
     let h0 = constants["h0 (mm)"][0];
@@ -132,7 +133,8 @@ fn core_matches_the_golden_table() {
             v[4] as f32,
             v[5] as f32,
         );
-        let sol = ik::solve::<Libm>(&g, &servos, &pose)
+        let sol = solver
+            .solve::<Libm>(&servos, &pose)
             .unwrap_or_else(|e| panic!("{name}: the core refuses a golden pose: {e}"));
         for i in 0..LEGS {
             let a = f64::from(sol.arm_rad[i]).to_degrees();

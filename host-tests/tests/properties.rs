@@ -107,7 +107,7 @@ proptest! {
     fn rods_close_for_every_ok_pose(case in 0..cases().len(), pose in pose_in(1.4)) {
         let case = &cases()[case];
         let reference = RefGeometry::from_core(&case.geometry);
-        if let Ok(alpha) = ik::arm_angles::<Libm>(&case.geometry, &pose) {
+        if let Ok(alpha) = ik::Solver::new(&case.geometry).arm_angles::<Libm>(&pose) {
             let alpha = alpha.map(f64::from);
             let residual = reference.rod_closure_errors(&RefPose::from_core(&pose), &alpha);
             for (i, r) in residual.iter().enumerate() {
@@ -120,7 +120,7 @@ proptest! {
     /// valid geometries.
     #[test]
     fn home_gives_exactly_the_home_pulses(servos in servo_set(), (_, geometry) in paired_geometry()) {
-        let sol = ik::solve::<Libm>(&geometry, &servos, &Pose::HOME);
+        let sol = ik::Solver::new(&geometry).solve::<Libm>(&servos, &Pose::HOME);
         let sol = sol.map_err(|e| TestCaseError::fail(format!("{e:?}")))?;
         for i in 0..LEGS {
             prop_assert_eq!(sol.pulse_us[i], servos.0[i].home_us, "servo {}", i + 1);
@@ -133,9 +133,10 @@ proptest! {
     #[test]
     fn pure_heave_moves_odd_and_even_pulses_as_mirror_images(z in -25.0f32..25.0) {
         let g = Geometry::default();
+        let solver = ik::Solver::new(&g);
         let servos = ServoSet::default();
         let pose = Pose { z_mm: z, ..Pose::HOME };
-        let Ok(sol) = ik::solve::<Libm>(&g, &servos, &pose) else {
+        let Ok(sol) = solver.solve::<Libm>(&servos, &pose) else {
             // Beyond the servo travel: the reference must agree.
             let e = Expectation::new(&RefGeometry::from_core(&g), &servos, &RefPose::from_core(&pose));
             prop_assert!(e.limit_margin_us.iter().any(|m| m.is_nan() || *m <= 0.01), "z = {z}");
@@ -158,10 +159,11 @@ proptest! {
     #[test]
     fn mirrored_pose_mirrors_the_legs(pose in pose_in(1.5)) {
         let g = Geometry::default();
+        let solver = ik::Solver::new(&g);
         let servos = ServoSet::default();
         let mirror = Pose { y_mm: -pose.y_mm, roll_rad: -pose.roll_rad, yaw_rad: -pose.yaw_rad, ..pose };
         let partner = [1, 0, 5, 4, 3, 2];
-        match (ik::arm_angles::<Libm>(&g, &pose), ik::arm_angles::<Libm>(&g, &mirror)) {
+        match (solver.arm_angles::<Libm>(&pose), solver.arm_angles::<Libm>(&mirror)) {
             (Ok(a), Ok(b)) => {
                 for i in 0..LEGS {
                     let d = f64::from(a[i] - b[partner[i]]).abs().to_degrees();
@@ -169,7 +171,8 @@ proptest! {
                     // degrees) only to the rounding of their coordinates.
                     prop_assert!(d <= 2e-4, "leg {} vs {}: {d:e} deg", i + 1, partner[i] + 1);
                 }
-                if let (Ok(s), Ok(t)) = (ik::solve::<Libm>(&g, &servos, &pose), ik::solve::<Libm>(&g, &servos, &mirror)) {
+                let mirrored = solver.solve::<Libm>(&servos, &mirror);
+                if let (Ok(s), Ok(t)) = (solver.solve::<Libm>(&servos, &pose), mirrored) {
                     for (i, &j) in partner.iter().enumerate() {
                         let sum = f64::from(s.pulse_us[i] - 1500.0) + f64::from(t.pulse_us[j] - 1500.0);
                         prop_assert!(sum.abs() <= 2e-3, "servo {}: {} vs {}", i + 1, s.pulse_us[i], t.pulse_us[j]);
@@ -193,6 +196,7 @@ proptest! {
     #[test]
     fn yaw_by_120_degrees_permutes_the_legs(pose in pose_in(1.5), turns in 1usize..3) {
         let g = Geometry::default();
+        let solver = ik::Solver::new(&g);
         let servos = ServoSet::default();
         let reference = RefGeometry::from_core(&g);
         let turned = turn_pose(&pose, turns);
@@ -201,7 +205,7 @@ proptest! {
         // are 3-fold symmetric only to rounding) moves the exact answer, per the reference.
         let exact = reference.arm_angles(&RefPose::from_core(&pose));
         let exact_turned = reference.arm_angles(&RefPose::from_core(&turned));
-        match (ik::solve::<Libm>(&g, &servos, &pose), ik::solve::<Libm>(&g, &servos, &turned)) {
+        match (solver.solve::<Libm>(&servos, &pose), solver.solve::<Libm>(&servos, &turned)) {
             (Ok(a), Ok(b)) => {
                 for i in 0..LEGS {
                     let (Ok(e), Ok(f)) = (exact[i], exact_turned[shift(i)]) else {
@@ -238,9 +242,10 @@ proptest! {
         proptest::array::uniform6(tame_f32()),
     ]) {
         let g = Geometry::default();
+        let solver = ik::Solver::new(&g);
         let servos = ServoSet::default();
         let pose = Pose::from_array(v);
-        let got = ik::solve::<Libm>(&g, &servos, &pose);
+        let got = solver.solve::<Libm>(&servos, &pose);
         let axes = Axis::ALL;
         if let Some(k) = v.iter().position(|x| !x.is_finite()) {
             prop_assert_eq!(got, Err(IkError::NonFinite { axis: axes[k] }));
@@ -273,7 +278,8 @@ proptest! {
     #[test]
     fn ok_pulses_are_finite_and_within_each_servos_limits(servos in servo_set(), pose in pose_in(0.8)) {
         let g = Geometry::default();
-        match ik::solve::<Libm>(&g, &servos, &pose) {
+        let solver = ik::Solver::new(&g);
+        match solver.solve::<Libm>(&servos, &pose) {
             Ok(sol) => {
                 let reference = RefGeometry::from_core(&g);
                 let e = Expectation::new(&reference, &servos, &RefPose::from_core(&pose));
@@ -300,8 +306,9 @@ proptest! {
     #[test]
     fn a_tightened_limit_names_exactly_that_servo(pose in pose_in(1.0), k in 0..LEGS) {
         let g = Geometry::default();
+        let solver = ik::Solver::new(&g);
         let servos = ServoSet::default();
-        let Ok(sol) = ik::solve::<Libm>(&g, &servos, &pose) else { return Ok(()) };
+        let Ok(sol) = solver.solve::<Libm>(&servos, &pose) else { return Ok(()) };
         let need = sol.pulse_us[k];
         let mut tight = servos;
         if need >= servos.0[k].home_us {
@@ -309,7 +316,7 @@ proptest! {
         } else {
             tight.0[k].min_us = need + 0.05;
         }
-        match ik::solve::<Libm>(&g, &tight, &pose) {
+        match solver.solve::<Libm>(&tight, &pose) {
             Err(IkError::ServoLimit { servo, pulse_us, min_us, max_us }) => {
                 prop_assert_eq!(usize::from(servo), k + 1);
                 prop_assert_eq!(pulse_us, need);
@@ -421,12 +428,13 @@ fn platform_joints_and_legs_match_eq_2_and_3() {
 #[test]
 fn angle_limit_is_180_degrees_inclusive() {
     let g = Geometry::default();
+    let solver = ik::Solver::new(&g);
     let servos = ServoSet::default();
     for axis in [Axis::Roll, Axis::Pitch, Axis::Yaw] {
         for v in [PI, -PI] {
             let mut pose = Pose::HOME;
             pose.set(axis, v);
-            let got = ik::solve::<Libm>(&g, &servos, &pose);
+            let got = solver.solve::<Libm>(&servos, &pose);
             assert!(
                 !matches!(got, Err(IkError::AngleTooLarge { .. })),
                 "{axis:?} {v}: {got:?}"
@@ -435,7 +443,7 @@ fn angle_limit_is_180_degrees_inclusive() {
         let mut pose = Pose::HOME;
         pose.set(axis, f32::from_bits(PI.to_bits() + 1));
         assert!(matches!(
-            ik::solve::<Libm>(&g, &servos, &pose),
+            solver.solve::<Libm>(&servos, &pose),
             Err(IkError::AngleTooLarge { axis: a, .. }) if a == axis
         ));
     }

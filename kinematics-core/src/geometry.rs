@@ -7,23 +7,22 @@
 //! - `p_i`: the rod's joint on the platform (platform frame);
 //! - `beta_i`: the angle of the arm's plane of rotation from the base x axis, chosen so that
 //!   the arm tip at arm angle `alpha` is `b_i + a (cos(alpha) cos(beta_i),
-//!   cos(alpha) sin(beta_i), sin(alpha))` (seed 001, eq. 4-6). The two servos of a pair are
-//!   mirror images: in [`PairedLayout`] each arm is tangent to the base circle and points away
-//!   from the pair's centre, so their `beta` differ by 180 degrees plus the angle between the
-//!   two shafts. Their opposite sense of rotation is a property of the servo, see
-//!   [`crate::servo::Direction`].
+//!   cos(alpha) sin(beta_i), sin(alpha))` ("The Mathematics of the Stewart Platform", eq. 4-6).
+//!   The two servos of a pair are mirror images: in [`PairedLayout`] each arm is tangent to the
+//!   base circle and points away from the pair's centre, so their `beta` differ by 180 degrees
+//!   plus the angle between the two shafts. Their opposite sense of rotation is a property of
+//!   the servo, see [`crate::servo::Direction`].
 //!
 //! All legs share the arm (horn) length `a` and the rod length `s`.
 //!
 //! From these, [`Geometry::new`] derives the home height `h0` (eq. 10) and each leg's home arm
-//! angle `alpha0` (eq. 12), and caches the per-leg constants the IK needs on every pose.
+//! angle `alpha0` (eq. 12, which asks the IK for the arm angles at the home pose). A geometry
+//! is a description of the build and nothing else: what the IK computes from it once per
+//! geometry lives in [`crate::ik::Solver`].
 
-use core::f32::consts::PI;
 use core::fmt;
 
 use crate::ik;
-use crate::math::{Libm, Math, Real};
-use crate::pose::Pose;
 use crate::{Vec3, LEGS};
 
 /// Largest disagreement between the legs' home heights (eq. 10) that a geometry may have, mm.
@@ -42,54 +41,22 @@ pub struct Leg {
     pub beta_rad: f32,
 }
 
-/// Per-leg constants computed once per geometry for the IK hot path.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub(crate) struct LegConstants {
-    pub cos_beta: f32,
-    pub sin_beta: f32,
-    /// `p_i`, mm.
-    pub platform_mm: [f32; 3],
-    /// `(0, 0, h0) - b_i`: the leg vector is `l_i = R p_i + (x, y, z) + offset`, mm.
-    pub offset_mm: [f32; 3],
-    /// `2a cos(beta)`, `2a sin(beta)`: `N = n_x l_x + n_y l_y` (eq. 9), mm.
-    pub n_x_mm: f32,
-    pub n_y_mm: f32,
-    /// Home arm angle alpha0, rad.
-    pub alpha0_rad: f32,
-    /// `p_i` (x, y) and `offset` in fixed point, 2^-20 mm (`ik::MM_FRAC`).
-    pub platform_q: [i32; 2],
-    pub offset_q: [i32; 3],
-    /// `n_x`, `n_y` in fixed point, 2^-20 mm.
-    pub n_q: [i32; 2],
-}
-
-/// A validated platform geometry with its derived constants.
+/// A validated platform geometry: the build (legs, arm and rod lengths) and what follows from
+/// it alone, the home height `h0` and the home arm angles `alpha0`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Geometry {
     legs: [Leg; LEGS],
     arm_mm: f32,
     rod_mm: f32,
+    /// `h0` (eq. 10), mm.
     home_height_mm: f32,
-    /// `s^2 - a^2`, mm^2 (the constant in `L` of eq. 9).
-    pub(crate) rod_sq_minus_arm_sq: f32,
-    /// `2a`, mm (the factor in `M` and `N` of eq. 9).
-    pub(crate) two_arm_mm: f32,
-    /// `s^2 - a^2` in fixed point, 2^-36 mm^2 (`ik::SQ_FRAC`), from the lengths in `f64`.
-    pub(crate) rod_term_q: i64,
-    /// `2a` in fixed point, 2^-20 mm (`ik::MM_FRAC`).
-    pub(crate) two_arm_q: i32,
-    pub(crate) constants: [LegConstants; LEGS],
-    /// Every platform joint has `z = 0` (true of every circular layout): `R p` skips a column.
-    pub(crate) planar_platform: bool,
-    /// Every base joint has the same `z` (true of every circular layout): the `z` of
-    /// `(x, y, z) + offset` is the same for all legs, so the IK adds it once.
-    pub(crate) flat_base: bool,
-    /// Planar, every `p_i` and offset coordinate within `ik::MAX_FIXED_MM`, `2a` and
-    /// `s^2 - a^2` within their bounds: the IK may compute `l`, `L`, `M`, `N` in fixed point.
-    pub(crate) fixed_point: bool,
+    /// `alpha0` of each leg (eq. 12), rad.
+    alpha0_rad: [f32; LEGS],
 }
 
 /// Which length of a geometry a [`GeometryError`] is about.
+///
+/// `Display` gives its name for developers; the wording users see is `control::report`'s.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Length {
     /// The servo arm (horn) length `a`.
@@ -114,6 +81,9 @@ impl fmt::Display for Length {
 }
 
 /// Why a set of build numbers is not a usable geometry.
+///
+/// `Display` gives one short line for developers (the case and its values, in the units of the
+/// fields); the wording users see is `control::report`'s.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum GeometryError {
     /// A coordinate or angle of leg `leg` (1..=6) is NaN or infinite.
@@ -155,29 +125,30 @@ impl fmt::Display for GeometryError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {
             GeometryError::NonFiniteLeg { leg } => {
-                write!(f, "leg {leg} has a coordinate that is not a finite number")
+                write!(f, "leg {leg}: non-finite coordinate or angle")
             }
             GeometryError::BadLength { which, value_mm } => {
-                write!(f, "{which} must be a positive number of mm, not {value_mm}")
+                write!(f, "{which} not a positive finite length: {value_mm} mm")
             }
-            GeometryError::NoHomeHeight { leg } => write!(
-                f,
-                "leg {leg}: no home height with arm and rod at right angles (rod too short or joints too far apart)"
-            ),
+            GeometryError::NoHomeHeight { leg } => {
+                write!(f, "leg {leg}: no home height (no real root of eq. 10)")
+            }
             GeometryError::LegsDisagree {
                 leg,
                 home_height_mm,
                 leg1_home_height_mm,
             } => write!(
                 f,
-                "legs disagree on the home height: leg {leg} gives {home_height_mm:.3} mm, leg 1 gives {leg1_home_height_mm:.3} mm"
+                "leg {leg}: home height {home_height_mm} mm, leg 1: {leg1_home_height_mm} mm"
             ),
             GeometryError::HomeUnreachable { leg } => {
-                write!(f, "leg {leg}: the arm cannot reach the rod at the home pose")
+                write!(f, "leg {leg}: home pose unreachable (no root of eq. 9)")
             }
         }
     }
 }
+
+impl core::error::Error for GeometryError {}
 
 fn check_length(which: Length, value_mm: f32) -> Result<f32, GeometryError> {
     if value_mm.is_finite() && value_mm > 0.0 {
@@ -234,59 +205,12 @@ impl Geometry {
             arm_mm,
             rod_mm,
             home_height_mm,
-            rod_sq_minus_arm_sq: rod_mm * rod_mm - arm_mm * arm_mm,
-            two_arm_mm: 2.0 * arm_mm,
-            rod_term_q: 0,
-            two_arm_q: 0,
-            constants: [LegConstants::default(); LEGS],
-            planar_platform: legs.iter().all(|leg| leg.platform_mm.z == 0.0),
-            flat_base: legs.iter().all(|leg| leg.base_mm.z == legs[0].base_mm.z),
-            fixed_point: false,
+            alpha0_rad: [0.0; LEGS], // set below
         };
-        let two_arm_mm = geometry.two_arm_mm;
-        let rod_term_mm2 =
-            f64::from(rod_mm) * f64::from(rod_mm) - f64::from(arm_mm) * f64::from(arm_mm);
-        let fixed_lengths = two_arm_mm < ik::MAX_FIXED_TWO_ARM_MM
-            && libm::fabs(rod_term_mm2) < f64::from(ik::MAX_FIXED_ROD_TERM_MM2);
-        if fixed_lengths {
-            geometry.two_arm_q = ik::to_fixed(two_arm_mm, ik::MM_FRAC);
-            geometry.rod_term_q = libm::round(rod_term_mm2 * (1u64 << ik::SQ_FRAC) as f64) as i64;
-        }
-        for (c, leg) in geometry.constants.iter_mut().zip(legs.iter()) {
-            let (sin_beta, cos_beta) = libm::sincosf(leg.beta_rad);
-            c.sin_beta = sin_beta;
-            c.cos_beta = cos_beta;
-            c.platform_mm = leg.platform_mm.into();
-            c.offset_mm = [
-                -leg.base_mm.x,
-                -leg.base_mm.y,
-                home_height_mm - leg.base_mm.z,
-            ];
-            c.n_x_mm = two_arm_mm * cos_beta;
-            c.n_y_mm = two_arm_mm * sin_beta;
-            c.platform_q = [0, 1].map(|k| ik::to_fixed(c.platform_mm[k], ik::MM_FRAC));
-            c.offset_q = [0, 1, 2].map(|k| ik::to_fixed(c.offset_mm[k], ik::MM_FRAC));
-            if fixed_lengths {
-                // |n_x|, |n_y| <= 2a: within `to_fixed`'s range.
-                c.n_q = [c.n_x_mm, c.n_y_mm].map(|v| ik::to_fixed(v, ik::MM_FRAC));
-            }
-        }
-        geometry.fixed_point = geometry.planar_platform
-            && fixed_lengths
-            && geometry.constants.iter().all(|c| {
-                c.platform_mm
-                    .iter()
-                    .chain(c.offset_mm.iter())
-                    .all(|v| v.abs() < ik::MAX_FIXED_MM)
-            });
-        // Eq. 12 is eq. 9 at the home pose (with eq. 9's naming: M0 = 2a(h0 + z_p - z_b),
-        // N0 = 2a[cos(beta)(x_p - x_b) + sin(beta)(y_p - y_b)], L0 = 2a^2 when the legs agree
-        // exactly). Evaluating eq. 9 itself at home gives the exact alpha0 of every leg.
-        let home = ik::arm_angles_raw::<Libm>(&geometry, &Pose::HOME)
-            .map_err(|leg| GeometryError::HomeUnreachable { leg })?;
-        for (c, alpha0) in geometry.constants.iter_mut().zip(home) {
-            c.alpha0_rad = alpha0;
-        }
+        // Eq. 12: each arm's angle at the home pose, from the IK itself, so that the home pose
+        // gives exactly the home pulses.
+        geometry.alpha0_rad =
+            ik::home_arm_angles(&geometry).map_err(|leg| GeometryError::HomeUnreachable { leg })?;
         Ok(geometry)
     }
 
@@ -318,7 +242,7 @@ impl Geometry {
 
     /// Home arm angle `alpha0` (eq. 12) of leg `index` (0..=5), rad, above horizontal.
     pub fn alpha0_rad(&self, index: usize) -> f32 {
-        self.constants[index].alpha0_rad
+        self.alpha0_rad[index]
     }
 }
 
@@ -331,8 +255,9 @@ impl Default for Geometry {
     }
 }
 
-/// Joints on two circles at given angles (seed 000, "general configuration"), each leg with its
-/// own arm-plane angle. Angles in degrees, as users measure them.
+/// Joints on two circles at given angles (the "general configuration" of the Stewart platform
+/// Simscape model documentation), each leg with its own arm-plane angle. Angles in degrees, as
+/// users measure them.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CircularLayout {
     /// Radius of the circle through the servo shaft centres, mm.
@@ -453,23 +378,6 @@ impl PairedLayout {
     }
 }
 
-/// Wraps an angle into `(-pi, pi]`, rad, with `M`'s arithmetic (the IK's hot path). The angle
-/// must be finite (see [`Math::add`]).
-pub(crate) fn wrap_angle_rad<M: Math>(a: f32) -> f32 {
-    // Integer comparisons (`math::lt`, `math::le`): float ones are library calls on the chip.
-    // The correction goes through `M` too: a plain `a - 2 pi` would be computed on every call
-    // (the compiler evaluates cheap-looking float operations ahead of the branch, but on the
-    // chip it is a library call of about 100 cycles).
-    let two_pi = Real::<M>::new(2.0 * PI);
-    if crate::math::lt(PI, a) {
-        (Real::new(a) - two_pi).0
-    } else if crate::math::le(a, -PI) {
-        (Real::new(a) + two_pi).0
-    } else {
-        a
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -499,12 +407,12 @@ mod tests {
         let g = Geometry::default();
         for (i, leg) in g.legs().iter().enumerate() {
             let alpha0 = g.alpha0_rad(i);
-            let c = g.constants[i];
+            let (sin_beta, cos_beta) = libm::sincosf(leg.beta_rad);
             let tip = leg.base_mm
                 + g.arm_mm()
                     * Vec3::new(
-                        alpha0.cos() * c.cos_beta,
-                        alpha0.cos() * c.sin_beta,
+                        alpha0.cos() * cos_beta,
+                        alpha0.cos() * sin_beta,
                         alpha0.sin(),
                     );
             let joint = leg.platform_mm + Vec3::new(0.0, 0.0, g.home_height_mm());
@@ -579,12 +487,5 @@ mod tests {
             Geometry::new(legs, 20.0, 120.0),
             Err(GeometryError::NonFiniteLeg { leg: 6 })
         );
-    }
-
-    #[test]
-    fn wrap_angle_stays_in_range() {
-        assert!((wrap_angle_rad::<Libm>(3.0 * PI / 2.0) + PI / 2.0).abs() < 1e-6);
-        assert!((wrap_angle_rad::<Libm>(-3.0 * PI / 2.0) - PI / 2.0).abs() < 1e-6);
-        assert_eq!(wrap_angle_rad::<Libm>(0.5), 0.5);
     }
 }

@@ -1,6 +1,6 @@
 //! Inverse kinematics: pose -> six arm angles (rad) -> six pulse widths (us).
 //!
-//! For each leg (seed 001):
+//! For each leg ("The Mathematics of the Stewart Platform"):
 //! - eq. 1: `R = Rz(yaw) Ry(pitch) Rx(roll)`;
 //! - eq. 2, 3: platform joint `q_i = T + R p_i` with `T = (x, y, h0 + z)`, leg `l_i = q_i - b_i`;
 //! - eq. 9: the arm tip `A(alpha) = b + a (cos(alpha) cos(beta), cos(alpha) sin(beta), sin(alpha))`
@@ -20,12 +20,20 @@
 //!
 //! Eq. 13, 14 then map `alpha` to a pulse width (see [`crate::servo`]). A pose is accepted or
 //! rejected as a whole: there is never a partial or NaN result.
+//!
+//! A [`Solver`] holds what the IK needs of one [`Geometry`] on every pose: per-leg constants
+//! (mm, rad), in `f32` and, where the build allows, in fixed point (module `fixed`). Build it
+//! once per geometry, and again whenever the geometry changes.
 
 use core::f32::consts::PI;
 use core::fmt;
 
-use crate::geometry::{wrap_angle_rad, Geometry};
-use crate::math::{Math, Real};
+use crate::fixed::{
+    from_fixed_sq, mul_mm, rotate_mm, to_fixed, to_fixed_sq, MAX_FIXED_MM, MAX_FIXED_ROD_TERM_MM2,
+    MAX_FIXED_TWO_ARM_MM, MAX_ROTATION_ENTRY, MM_FRAC, ROT_FRAC,
+};
+use crate::geometry::Geometry;
+use crate::math::{Libm, Math, Real};
 use crate::pose::{Axis, Pose};
 use crate::servo::ServoSet;
 use crate::{Vec3, LEGS};
@@ -44,6 +52,9 @@ pub struct Solution {
 }
 
 /// Why a pose cannot be driven.
+///
+/// `Display` gives one short line for developers (the case and its values, in the units of the
+/// fields); the wording users see is `control::report`'s.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum IkError {
     /// A pose coordinate is NaN or infinite.
@@ -79,16 +90,11 @@ pub enum IkError {
 impl fmt::Display for IkError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {
-            IkError::NonFinite { axis } => write!(f, "{} is not a finite number", axis.name()),
-            IkError::AngleTooLarge { axis, value_rad } => write!(
-                f,
-                "{} {:.3} deg is beyond +-180 deg",
-                axis.name(),
-                value_rad.to_degrees()
-            ),
-            IkError::Unreachable { leg } => {
-                write!(f, "leg {leg} cannot reach: pose is outside the workspace")
+            IkError::NonFinite { axis } => write!(f, "non-finite pose coordinate {}", axis.name()),
+            IkError::AngleTooLarge { axis, value_rad } => {
+                write!(f, "{} = {value_rad} rad, beyond +-pi", axis.name())
             }
+            IkError::Unreachable { leg } => write!(f, "leg {leg}: unreachable (no root of eq. 9)"),
             IkError::ServoLimit {
                 servo,
                 pulse_us,
@@ -96,11 +102,13 @@ impl fmt::Display for IkError {
                 max_us,
             } => write!(
                 f,
-                "servo {servo} would need {pulse_us:.2} us, outside its limits {min_us:.2}..{max_us:.2} us"
+                "servo {servo}: pulse {pulse_us} us outside its limits {min_us}..={max_us} us"
             ),
         }
     }
 }
+
+impl core::error::Error for IkError {}
 
 /// Checks that a pose is made of usable numbers.
 pub fn check_pose(pose: &Pose) -> Result<(), IkError> {
@@ -154,375 +162,313 @@ fn twice<M: Math>(x: f32) -> f32 {
     }
 }
 
-/// Fraction bits of the rotation entries `R_kj` in the fixed-point part of eq. 2, 3.
-const ROT_FRAC: u32 = 30;
-/// Fraction bits of lengths (mm) in the fixed-point part: steps of 2^-20 mm ~ 1e-6 mm, finer
-/// than an `f32` of the leg lengths (~100 mm, ulp 7.6e-6 mm) resolves.
-pub(crate) const MM_FRAC: u32 = 20;
-/// Bound (exclusive) on `|p_i|`, `|offset_i|` (per coordinate) and on `|x|, |y|, |z|` for the
-/// fixed-point part, mm. With `|R_kj| <= 1 + 2^-10`, `|l_k| < 2 * 1.001 * 384 + 384 + 384
-/// < 1540 mm`, inside the 2048 mm an `i32` with [`MM_FRAC`] fraction bits holds. Larger
-/// geometries and poses take the float path (such a pose is far outside any workspace anyway).
-pub(crate) const MAX_FIXED_MM: f32 = 384.0;
-/// Fraction bits of the squared lengths (mm^2) `|l|^2`, `L`, `M`, `N` of eq. 9 in the
-/// fixed-point part: the exact products of two [`MM_FRAC`] numbers (2^-40 mm^2) cut to 2^-36
-/// mm^2 (3e-11 mm^2, while an `f32` of ~1e4 mm^2 has steps of 1e-3 mm^2), which leaves an
-/// `i64` room for every sum: `|l|^2 < 3 * 1540^2 mm^2` is below 2^59 of these steps.
-pub(crate) const SQ_FRAC: u32 = 36;
-/// Bound (exclusive) on `2a` for the fixed-point part, mm: `|N|, |M| < 2a |l| < 2^21 mm^2`.
-pub(crate) const MAX_FIXED_TWO_ARM_MM: f32 = 2.0 * MAX_FIXED_MM;
-/// Bound (exclusive) on `|s^2 - a^2|` for the fixed-point part, mm^2 (a rod up to ~6 m):
-/// `|L +- N| < 2^23 + 4e7 + 2^21 < 2^26 mm^2`, which is 2^62 steps of [`SQ_FRAC`].
-pub(crate) const MAX_FIXED_ROD_TERM_MM2: f32 = 4.0e7;
-
-/// Bound on `|R_kj|` for the fixed-point part: 1 plus far more than any rounding.
-const MAX_ROTATION_ENTRY: f32 = 1.0 + 1.0 / 1024.0;
-
-/// `x * 2^frac` rounded to the nearest integer (halves away from zero), in integer
-/// instructions. `|x| * 2^frac` must be below 2^31 (the callers bound `x` first).
-pub(crate) fn to_fixed(x: f32, frac: u32) -> i32 {
-    let bits = x.to_bits();
-    let exponent = ((bits >> 23) & 0xff) as i32;
-    if exponent == 0 {
-        return 0; // zero or subnormal: far below 2^-frac
-    }
-    let mantissa = ((bits & 0x7f_ffff) | 0x80_0000) as i32;
-    // x = mantissa * 2^(exponent - 150).
-    let shift = exponent - 150 + frac as i32;
-    let magnitude = if shift >= 0 {
-        mantissa << shift
-    } else if shift > -26 {
-        ((mantissa >> (-shift - 1)) + 1) >> 1
+/// Wraps an angle into `(-pi, pi]`, rad, with `M`'s arithmetic (the IK's hot path). The angle
+/// must be finite (see [`Math::add`]).
+fn wrap_angle_rad<M: Math>(a: f32) -> f32 {
+    // Integer comparisons (`math::lt`, `math::le`): float ones are library calls on the chip.
+    // The correction goes through `M` too: a plain `a - 2 pi` would be computed on every call
+    // (the compiler evaluates cheap-looking float operations ahead of the branch, but on the
+    // chip it is a library call of about 100 cycles).
+    let two_pi = Real::<M>::new(2.0 * PI);
+    if crate::math::lt(PI, a) {
+        (Real::new(a) - two_pi).0
+    } else if crate::math::le(a, -PI) {
+        (Real::new(a) + two_pi).0
     } else {
-        0
-    };
-    if bits >> 31 != 0 {
-        -magnitude
-    } else {
-        magnitude
+        a
     }
 }
 
-/// `a * b` exactly, for `|a|, |b| < 2^31`, from four 16 x 16 -> 32-bit products: the M0+
-/// multiplies 32 x 32 -> 32 bits in one cycle, while the library's 64-bit multiply takes ~55.
-#[inline]
-fn wide_mul(a: i32, b: i32) -> i64 {
-    let negative = (a ^ b) < 0;
-    let (a, b) = (a.unsigned_abs(), b.unsigned_abs());
-    let (a_hi, a_lo) = (a >> 16, a & 0xffff);
-    let (b_hi, b_lo) = (b >> 16, b & 0xffff);
-    // a_hi, b_hi < 2^15: the middle sum stays below 2^32.
-    let middle = a_hi * b_lo + a_lo * b_hi;
-    let product =
-        (u64::from(a_hi * b_hi) << 32) + (u64::from(middle) << 16) + u64::from(a_lo * b_lo);
-    if negative {
-        -(product as i64)
-    } else {
-        product as i64
-    }
+/// One leg's constants for the hot loop.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+struct LegConstants {
+    cos_beta: f32,
+    sin_beta: f32,
+    /// `p_i`, mm.
+    platform_mm: [f32; 3],
+    /// `(0, 0, h0) - b_i`: the leg vector is `l_i = R p_i + (x, y, z) + offset`, mm.
+    offset_mm: [f32; 3],
+    /// `2a cos(beta)`, `2a sin(beta)`: `N = n_x l_x + n_y l_y` (eq. 9), mm.
+    n_x_mm: f32,
+    n_y_mm: f32,
+    /// Home arm angle alpha0, rad (the geometry's).
+    alpha0_rad: f32,
+    /// `p_i` (x, y) and `offset` in fixed point, 2^-20 mm (`fixed::MM_FRAC`).
+    platform_q: [i32; 2],
+    offset_q: [i32; 3],
+    /// `n_x`, `n_y` in fixed point, 2^-20 mm.
+    n_q: [i32; 2],
 }
 
-/// `m` shifted so its leading one is bit 31, and the shift. `m != 0`. (The M0+ has no
-/// count-leading-zeros instruction; the library's takes longer than these five steps.)
-#[inline(always)]
-fn normalise(mut m: u32) -> (u32, u32) {
-    let mut shift = 0;
-    if m < 1 << 16 {
-        m <<= 16;
-        shift += 16;
-    }
-    if m < 1 << 24 {
-        m <<= 8;
-        shift += 8;
-    }
-    if m < 1 << 28 {
-        m <<= 4;
-        shift += 4;
-    }
-    if m < 1 << 30 {
-        m <<= 2;
-        shift += 2;
-    }
-    if m < 1 << 31 {
-        m <<= 1;
-        shift += 1;
-    }
-    (m, shift)
+/// The IK of one geometry: the per-leg constants it needs on every pose, computed once by
+/// [`Solver::new`], and the solving itself ([`Solver::solve`], [`Solver::arm_angles`]).
+///
+/// It copies what it needs from the geometry: build a new one whenever the geometry changes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Solver {
+    /// `s^2 - a^2`, mm^2 (the constant in `L` of eq. 9).
+    rod_sq_minus_arm_sq: f32,
+    /// `2a`, mm (the factor in `M` and `N` of eq. 9).
+    two_arm_mm: f32,
+    /// `s^2 - a^2` in fixed point, 2^-36 mm^2 (`fixed::SQ_FRAC`), from the lengths in `f64`.
+    rod_term_q: i64,
+    /// `2a` in fixed point, 2^-20 mm (`fixed::MM_FRAC`).
+    two_arm_q: i32,
+    constants: [LegConstants; LEGS],
+    /// Every platform joint has `z = 0` (true of every circular layout): `R p` skips a column.
+    planar_platform: bool,
+    /// Every base joint has the same `z` (true of every circular layout): the `z` of
+    /// `(x, y, z) + offset` is the same for all legs, so the IK adds it once.
+    flat_base: bool,
+    /// Planar, every `p_i` and offset coordinate within `fixed::MAX_FIXED_MM`, `2a` and
+    /// `s^2 - a^2` within their bounds: the IK may compute `l`, `L`, `M`, `N` in fixed point.
+    fixed_point: bool,
 }
 
-/// The `f32` nearest (ties to even) to `sign * m * 2^(exponent - 158)`, where `m` has its
-/// leading one in bit 31, `sticky` says whether non-zero bits were cut off below `m`, and the
-/// result is a normal number. In integer instructions: a carry out of the mantissa moves into
-/// the exponent field, which is then right.
-#[inline(always)]
-fn pack(sign: u32, m: u32, sticky: bool, exponent: u32) -> f32 {
-    let mut mantissa = m >> 8;
-    let rest = m & 0xff;
-    if rest > 0x80 || (rest == 0x80 && (sticky || mantissa & 1 == 1)) {
-        mantissa += 1;
-    }
-    f32::from_bits(sign | ((exponent << 23) + mantissa - (1 << 23)))
-}
-
-/// `v * 2^-SQ_FRAC` rounded to the nearest `f32` (ties to even), in integer instructions.
-fn from_fixed_sq(v: i64) -> f32 {
-    let sign = (v >> 32) as u32 & 0x8000_0000;
-    let magnitude = v.unsigned_abs();
-    let (high, low) = ((magnitude >> 32) as u32, magnitude as u32);
-    if high == 0 {
-        if low == 0 {
-            return 0.0;
-        }
-        let (m, shift) = normalise(low);
-        return pack(sign, m, false, 127 + 31 - SQ_FRAC - shift);
-    }
-    let (_, shift) = normalise(high);
-    let (m, sticky) = if shift == 0 {
-        (high, low != 0)
-    } else {
-        ((high << shift) | (low >> (32 - shift)), low << shift != 0)
-    };
-    pack(sign, m, sticky, 127 + 63 - SQ_FRAC - shift)
-}
-
-/// The pose's part of eq. 2, 3 in fixed point: the first two columns of `R` ([`ROT_FRAC`]
-/// fraction bits) and `(x, y, z)` ([`MM_FRAC`]).
+/// The pose's part of eq. 2, 3 in fixed point: the first two columns of `R` (`fixed::ROT_FRAC`
+/// fraction bits) and `(x, y, z)` (`fixed::MM_FRAC`).
 struct FixedPose {
     rows: [[i32; 2]; 3],
     position: [i32; 3],
 }
 
-/// The fixed-point pose, or `None` where the float path must run: a geometry that is not
-/// planar or too large ([`Geometry::fixed_point`]), or a position or rotation beyond the
-/// bounds of [`MAX_FIXED_MM`].
-fn fixed_pose(geometry: &Geometry, pose: &Pose, r: &crate::Mat3) -> Option<FixedPose> {
-    if !geometry.fixed_point {
-        return None;
-    }
-    let position = [pose.x_mm, pose.y_mm, pose.z_mm];
-    let rows: [[f32; 2]; 3] = core::array::from_fn(|k| [r[(k, 0)], r[(k, 1)]]);
-    let in_bounds = position.iter().all(|v| below(v.abs(), MAX_FIXED_MM))
-        && rows
-            .iter()
-            .flatten()
-            .all(|v| below(v.abs(), MAX_ROTATION_ENTRY));
-    in_bounds.then(|| FixedPose {
-        rows: rows.map(|row| row.map(|v| to_fixed(v, ROT_FRAC))),
-        position: position.map(|v| to_fixed(v, MM_FRAC)),
-    })
+/// Every leg's arm angle at the home pose (eq. 9 with [`Libm`]), rad, or `Err(leg number)` if a
+/// leg cannot reach: the home arm angles `alpha0` of eq. 12, which [`Geometry::new`] stores.
+/// The geometry's own `alpha0` is not read.
+pub(crate) fn home_arm_angles(geometry: &Geometry) -> Result<[f32; LEGS], u8> {
+    // Eq. 12 is eq. 9 at the home pose (with eq. 9's naming: M0 = 2a(h0 + z_p - z_b),
+    // N0 = 2a[cos(beta)(x_p - x_b) + sin(beta)(y_p - y_b)], L0 = 2a^2 when the legs agree
+    // exactly). Evaluating eq. 9 itself at home gives the exact alpha0 of every leg.
+    Solver::new(geometry).arm_angles_raw::<Libm>(&Pose::HOME)
 }
 
-/// Eq. 9 for all legs without the pose checks; `Err(leg number)` if a leg cannot reach.
-///
-/// The hot loop of the firmware: per leg, `l = R p + (x, y, z) + ((0, 0, h0) - b)` (eq. 2, 3),
-/// then `L`, `M`, `N` and the half-angle root, float arithmetic through `M` ([`Real`]).
-/// With `L - N` and `L + N` at hand, the discriminant is `D = M^2 - (L - N)(L + N)`.
-///
-/// For a planar platform within [`MAX_FIXED_MM`] (every usual build) and a pose within it,
-/// `l` (eq. 2, 3) and then `|l|^2`, `M`, `L - N`, `L + N` are computed in fixed point
-/// instead: `R` with 30 fraction bits, lengths with 20 (2^-20 mm), squared lengths with 36,
-/// exact integer products and sums but for one rounding of `l` to 2^-20 mm and one cut of each
-/// product to 2^-36 mm^2, then one rounding to `f32` of each of the three terms. That is more
-/// accurate than the `f32` arithmetic it replaces (an `f32` of ~100 mm has steps of 7.6e-6 mm,
-/// one of ~1e4 mm^2 steps of 1e-3 mm^2) and on the chip several times cheaper than the 3
-/// conversions, 6 `fmul` and 6 `fadd` per leg. Integer arithmetic is the same everywhere, so
-/// the host runs it too.
-pub(crate) fn arm_angles_raw<M: Math>(geometry: &Geometry, pose: &Pose) -> Result<[f32; LEGS], u8> {
-    let r = pose.rotation_columns::<M>(!geometry.planar_platform);
-    let real = Real::<M>::new;
-    let row = |i: usize| [real(r[(i, 0)]), real(r[(i, 1)]), real(r[(i, 2)])];
-    let rows = [row(0), row(1), row(2)];
-    let position = [real(pose.x_mm), real(pose.y_mm), real(pose.z_mm)];
-    let rod_sq_minus_arm_sq = real(geometry.rod_sq_minus_arm_sq);
-    let two_arm = real(geometry.two_arm_mm);
-    // With a flat base every leg has the same z offset: `z + offset_z` once for all legs
-    // (the same sum each leg would compute).
-    let fixed = fixed_pose(geometry, pose, &r);
-    let shared_z = if fixed.is_none() {
-        position[2] + real(geometry.constants[0].offset_mm[2])
-    } else {
-        real(0.0) // unused
-    };
-    let mut alpha = [0.0f32; LEGS];
-    for (i, c) in geometry.constants.iter().enumerate() {
-        // `M`, `L - N` and `L + N` of eq. 9, mm^2.
-        let (big_m, l_minus_n, l_plus_n) = if let Some(fixed) = &fixed {
-            // l (eq. 2, 3) in 2^-20 mm: R p rounded to nearest (halves up), then the
-            // translation, exactly.
-            let l: [i32; 3] = core::array::from_fn(|k| {
-                let rp = wide_mul(fixed.rows[k][0], c.platform_q[0])
-                    + wide_mul(fixed.rows[k][1], c.platform_q[1]);
-                (((rp >> (ROT_FRAC - 1)) + 1) >> 1) as i32 + fixed.position[k] + c.offset_q[k]
+impl Solver {
+    /// The IK of `geometry`: its per-leg constants, and whether the fixed-point path applies.
+    pub fn new(geometry: &Geometry) -> Solver {
+        let legs = geometry.legs();
+        let (arm_mm, rod_mm) = (geometry.arm_mm(), geometry.rod_mm());
+        let home_height_mm = geometry.home_height_mm();
+        let mut solver = Solver {
+            rod_sq_minus_arm_sq: rod_mm * rod_mm - arm_mm * arm_mm,
+            two_arm_mm: 2.0 * arm_mm,
+            rod_term_q: 0,
+            two_arm_q: 0,
+            constants: [LegConstants::default(); LEGS],
+            planar_platform: legs.iter().all(|leg| leg.platform_mm.z == 0.0),
+            flat_base: legs.iter().all(|leg| leg.base_mm.z == legs[0].base_mm.z),
+            fixed_point: false,
+        };
+        let two_arm_mm = solver.two_arm_mm;
+        let rod_term_mm2 =
+            f64::from(rod_mm) * f64::from(rod_mm) - f64::from(arm_mm) * f64::from(arm_mm);
+        let fixed_lengths = two_arm_mm < MAX_FIXED_TWO_ARM_MM
+            && libm::fabs(rod_term_mm2) < f64::from(MAX_FIXED_ROD_TERM_MM2);
+        if fixed_lengths {
+            solver.two_arm_q = to_fixed(two_arm_mm, MM_FRAC);
+            solver.rod_term_q = to_fixed_sq(rod_term_mm2);
+        }
+        for (i, (c, leg)) in solver.constants.iter_mut().zip(legs.iter()).enumerate() {
+            let (sin_beta, cos_beta) = libm::sincosf(leg.beta_rad);
+            c.sin_beta = sin_beta;
+            c.cos_beta = cos_beta;
+            c.platform_mm = leg.platform_mm.into();
+            c.offset_mm = [
+                -leg.base_mm.x,
+                -leg.base_mm.y,
+                home_height_mm - leg.base_mm.z,
+            ];
+            c.n_x_mm = two_arm_mm * cos_beta;
+            c.n_y_mm = two_arm_mm * sin_beta;
+            c.alpha0_rad = geometry.alpha0_rad(i);
+            c.platform_q = [0, 1].map(|k| to_fixed(c.platform_mm[k], MM_FRAC));
+            c.offset_q = [0, 1, 2].map(|k| to_fixed(c.offset_mm[k], MM_FRAC));
+            if fixed_lengths {
+                // |n_x|, |n_y| <= 2a: within `to_fixed`'s range.
+                c.n_q = [c.n_x_mm, c.n_y_mm].map(|v| to_fixed(v, MM_FRAC));
+            }
+        }
+        solver.fixed_point = solver.planar_platform
+            && fixed_lengths
+            && solver.constants.iter().all(|c| {
+                c.platform_mm
+                    .iter()
+                    .chain(c.offset_mm.iter())
+                    .all(|v| v.abs() < MAX_FIXED_MM)
             });
-            // Products of two 2^-20 mm numbers, cut to 2^-36 mm^2.
-            let sq = |a: i32, b: i32| wide_mul(a, b) >> (2 * MM_FRAC - SQ_FRAC);
-            let leg_sq = sq(l[0], l[0]) + sq(l[1], l[1]) + sq(l[2], l[2]);
-            let big_l = leg_sq - geometry.rod_term_q;
-            let big_n = sq(c.n_q[0], l[0]) + sq(c.n_q[1], l[1]);
-            (
-                real(from_fixed_sq(sq(geometry.two_arm_q, l[2]))),
-                real(from_fixed_sq(big_l - big_n)),
-                real(from_fixed_sq(big_l + big_n)),
-            )
+        solver
+    }
+
+    /// The fixed-point pose, or `None` where the float path must run: a geometry that is not
+    /// planar or too large ([`Solver::fixed_point`]), or a position or rotation beyond the
+    /// bounds of `fixed::MAX_FIXED_MM`.
+    fn fixed_pose(&self, pose: &Pose, r: &crate::Mat3) -> Option<FixedPose> {
+        if !self.fixed_point {
+            return None;
+        }
+        let position = [pose.x_mm, pose.y_mm, pose.z_mm];
+        let rows: [[f32; 2]; 3] = core::array::from_fn(|k| [r[(k, 0)], r[(k, 1)]]);
+        let in_bounds = position.iter().all(|v| below(v.abs(), MAX_FIXED_MM))
+            && rows
+                .iter()
+                .flatten()
+                .all(|v| below(v.abs(), MAX_ROTATION_ENTRY));
+        in_bounds.then(|| FixedPose {
+            rows: rows.map(|row| row.map(|v| to_fixed(v, ROT_FRAC))),
+            position: position.map(|v| to_fixed(v, MM_FRAC)),
+        })
+    }
+
+    /// Eq. 9 for all legs without the pose checks; `Err(leg number)` if a leg cannot reach.
+    ///
+    /// The hot loop of the firmware: per leg, `l = R p + (x, y, z) + ((0, 0, h0) - b)` (eq. 2,
+    /// 3), then `L`, `M`, `N` and the half-angle root, float arithmetic through `M` ([`Real`]).
+    /// With `L - N` and `L + N` at hand, the discriminant is `D = M^2 - (L - N)(L + N)`.
+    ///
+    /// For a planar platform within `fixed::MAX_FIXED_MM` (every usual build) and a pose within
+    /// it, `l` (eq. 2, 3) and then `|l|^2`, `M`, `L - N`, `L + N` are computed in fixed point
+    /// ([`crate::fixed`]) instead: `R` with 30 fraction bits, lengths with 20 (2^-20 mm),
+    /// squared lengths with 36, exact integer products and sums but for one rounding of `l` to
+    /// 2^-20 mm and one cut of each product to 2^-36 mm^2, then one rounding to `f32` of each
+    /// of the three terms. That is more accurate than the `f32` arithmetic it replaces (an
+    /// `f32` of ~100 mm has steps of 7.6e-6 mm, one of ~1e4 mm^2 steps of 1e-3 mm^2) and on
+    /// the chip several times cheaper than the 3 conversions, 6 `fmul` and 6 `fadd` per leg.
+    /// Integer arithmetic is the same everywhere, so the host runs it too.
+    pub(crate) fn arm_angles_raw<M: Math>(&self, pose: &Pose) -> Result<[f32; LEGS], u8> {
+        let r = pose.rotation_columns::<M>(!self.planar_platform);
+        let real = Real::<M>::new;
+        let row = |i: usize| [real(r[(i, 0)]), real(r[(i, 1)]), real(r[(i, 2)])];
+        let rows = [row(0), row(1), row(2)];
+        let position = [real(pose.x_mm), real(pose.y_mm), real(pose.z_mm)];
+        let rod_sq_minus_arm_sq = real(self.rod_sq_minus_arm_sq);
+        let two_arm = real(self.two_arm_mm);
+        // With a flat base every leg has the same z offset: `z + offset_z` once for all legs
+        // (the same sum each leg would compute).
+        let fixed = self.fixed_pose(pose, &r);
+        let shared_z = if fixed.is_none() {
+            position[2] + real(self.constants[0].offset_mm[2])
         } else {
-            let p = c.platform_mm.map(real);
-            let l: [Real<M>; 3] = core::array::from_fn(|k| {
-                let rp = if geometry.planar_platform {
-                    rows[k][0] * p[0] + rows[k][1] * p[1]
-                } else {
-                    rows[k][0] * p[0] + rows[k][1] * p[1] + rows[k][2] * p[2]
-                };
-                let translation = if k == 2 && geometry.flat_base {
-                    shared_z
-                } else {
-                    position[k] + real(c.offset_mm[k])
-                };
-                rp + translation
-            });
-            let leg_sq = l[0] * l[0] + l[1] * l[1] + l[2] * l[2];
-            let big_m = two_arm * l[2];
-            let big_n = real(c.n_x_mm) * l[0] + real(c.n_y_mm) * l[1];
-            let bounded = below(leg_sq.0, MAX_TERM_MM2)
-                && below(big_m.0.abs(), MAX_TERM_MM2)
-                && below(big_n.0.abs(), MAX_TERM_MM2);
-            if !bounded {
+            real(0.0) // unused
+        };
+        let mut alpha = [0.0f32; LEGS];
+        for (i, c) in self.constants.iter().enumerate() {
+            // `M`, `L - N` and `L + N` of eq. 9, mm^2.
+            let (big_m, l_minus_n, l_plus_n) = if let Some(fixed) = &fixed {
+                // l (eq. 2, 3) in 2^-20 mm: R p rounded to nearest (halves up), then the
+                // translation, exactly.
+                let l: [i32; 3] = core::array::from_fn(|k| {
+                    rotate_mm(fixed.rows[k], c.platform_q) + fixed.position[k] + c.offset_q[k]
+                });
+                // Products of two 2^-20 mm numbers, cut to 2^-36 mm^2.
+                let leg_sq = mul_mm(l[0], l[0]) + mul_mm(l[1], l[1]) + mul_mm(l[2], l[2]);
+                let big_l = leg_sq - self.rod_term_q;
+                let big_n = mul_mm(c.n_q[0], l[0]) + mul_mm(c.n_q[1], l[1]);
+                (
+                    real(from_fixed_sq(mul_mm(self.two_arm_q, l[2]))),
+                    real(from_fixed_sq(big_l - big_n)),
+                    real(from_fixed_sq(big_l + big_n)),
+                )
+            } else {
+                let p = c.platform_mm.map(real);
+                let l: [Real<M>; 3] = core::array::from_fn(|k| {
+                    let rp = if self.planar_platform {
+                        rows[k][0] * p[0] + rows[k][1] * p[1]
+                    } else {
+                        rows[k][0] * p[0] + rows[k][1] * p[1] + rows[k][2] * p[2]
+                    };
+                    let translation = if k == 2 && self.flat_base {
+                        shared_z
+                    } else {
+                        position[k] + real(c.offset_mm[k])
+                    };
+                    rp + translation
+                });
+                let leg_sq = l[0] * l[0] + l[1] * l[1] + l[2] * l[2];
+                let big_m = two_arm * l[2];
+                let big_n = real(c.n_x_mm) * l[0] + real(c.n_y_mm) * l[1];
+                let bounded = below(leg_sq.0, MAX_TERM_MM2)
+                    && below(big_m.0.abs(), MAX_TERM_MM2)
+                    && below(big_n.0.abs(), MAX_TERM_MM2);
+                if !bounded {
+                    return Err(i as u8 + 1);
+                }
+                let big_l = leg_sq - rod_sq_minus_arm_sq;
+                (big_m, big_l - big_n, big_l + big_n)
+            };
+            let discriminant = big_m * big_m - l_minus_n * l_plus_n;
+            if !below(discriminant.0, f32::INFINITY) {
                 return Err(i as u8 + 1);
             }
-            let big_l = leg_sq - rod_sq_minus_arm_sq;
-            (big_m, big_l - big_n, big_l + big_n)
-        };
-        let discriminant = big_m * big_m - l_minus_n * l_plus_n;
-        if !below(discriminant.0, f32::INFINITY) {
-            return Err(i as u8 + 1);
+            // The two equal forms of the root; use the one that cannot be 0/0 (see module docs).
+            let root = real(M::sqrt(discriminant.0));
+            // (-0 may take either form: only M = 0 with D = 0 is 0/0, and only in one of them.)
+            let half = if big_m.0.is_sign_positive() {
+                M::atan2(l_minus_n.0, (big_m + root).0)
+            } else {
+                M::atan2((big_m - root).0, l_plus_n.0)
+            };
+            let a = twice::<M>(half);
+            if !below(a.abs(), f32::INFINITY) {
+                return Err(i as u8 + 1);
+            }
+            alpha[i] = a;
         }
-        // The two equal forms of the root; use the one that cannot be 0/0 (see module docs).
-        let root = real(M::sqrt(discriminant.0));
-        // (-0 may take either form: only M = 0 with D = 0 is 0/0, and only in one of them.)
-        let half = if big_m.0.is_sign_positive() {
-            M::atan2(l_minus_n.0, (big_m + root).0)
-        } else {
-            M::atan2((big_m - root).0, l_plus_n.0)
-        };
-        let a = twice::<M>(half);
-        if !below(a.abs(), f32::INFINITY) {
-            return Err(i as u8 + 1);
+        Ok(alpha)
+    }
+
+    /// Each arm's angle from its home angle, `alpha_i - alpha0_i` wrapped into `(-pi, pi]`, rad.
+    fn arm_offsets<M: Math>(&self, pose: &Pose) -> Result<[f32; LEGS], IkError> {
+        check_pose(pose)?;
+        let mut alpha = self
+            .arm_angles_raw::<M>(pose)
+            .map_err(|leg| IkError::Unreachable { leg })?;
+        for (i, a) in alpha.iter_mut().enumerate() {
+            let alpha0 = Real::<M>::new(self.constants[i].alpha0_rad);
+            *a = wrap_angle_rad::<M>((Real::new(*a) - alpha0).0);
         }
-        alpha[i] = a;
+        Ok(alpha)
     }
-    Ok(alpha)
-}
 
-/// Each arm's angle from its home angle, `alpha_i - alpha0_i` wrapped into `(-pi, pi]`, rad.
-fn arm_offsets<M: Math>(geometry: &Geometry, pose: &Pose) -> Result<[f32; LEGS], IkError> {
-    check_pose(pose)?;
-    let mut alpha =
-        arm_angles_raw::<M>(geometry, pose).map_err(|leg| IkError::Unreachable { leg })?;
-    for (i, a) in alpha.iter_mut().enumerate() {
-        let alpha0 = Real::<M>::new(geometry.alpha0_rad(i));
-        *a = wrap_angle_rad::<M>((Real::new(*a) - alpha0).0);
-    }
-    Ok(alpha)
-}
-
-/// Arm angles `alpha_i` for a pose (eq. 9), rad, each within `(-pi, pi]` of its `alpha0`.
-pub fn arm_angles<M: Math>(geometry: &Geometry, pose: &Pose) -> Result<[f32; LEGS], IkError> {
-    let mut alpha = arm_offsets::<M>(geometry, pose)?;
-    for (i, a) in alpha.iter_mut().enumerate() {
-        *a = (Real::<M>::new(geometry.alpha0_rad(i)) + Real::new(*a)).0;
-    }
-    Ok(alpha)
-}
-
-/// Arm angles and pulse widths for a pose (eq. 9, 13, 14): all six or an error naming the
-/// first leg or servo that cannot follow. The pulses come from the offsets from home (eq. 13,
-/// 14 use `alpha - alpha0`), not from the angles, which saves a subtraction per servo.
-pub fn solve<M: Math>(
-    geometry: &Geometry,
-    servos: &ServoSet,
-    pose: &Pose,
-) -> Result<Solution, IkError> {
-    let offset_rad = arm_offsets::<M>(geometry, pose)?;
-    let mut arm_rad = [0.0f32; LEGS];
-    let mut pulse_us = [0.0f32; LEGS];
-    for (i, servo) in servos.0.iter().enumerate() {
-        let pulse = servo.pulse_us_for_offset::<M>(offset_rad[i]);
-        if !servo.allows(pulse) {
-            return Err(IkError::ServoLimit {
-                servo: i as u8 + 1,
-                pulse_us: pulse,
-                min_us: servo.min_us,
-                max_us: servo.max_us,
-            });
+    /// Arm angles `alpha_i` for a pose (eq. 9), rad, each within `(-pi, pi]` of its `alpha0`.
+    pub fn arm_angles<M: Math>(&self, pose: &Pose) -> Result<[f32; LEGS], IkError> {
+        let mut alpha = self.arm_offsets::<M>(pose)?;
+        for (i, a) in alpha.iter_mut().enumerate() {
+            *a = (Real::<M>::new(self.constants[i].alpha0_rad) + Real::new(*a)).0;
         }
-        pulse_us[i] = pulse;
-        arm_rad[i] = (Real::<M>::new(geometry.alpha0_rad(i)) + Real::new(offset_rad[i])).0;
+        Ok(alpha)
     }
-    Ok(Solution { arm_rad, pulse_us })
+
+    /// Arm angles and pulse widths for a pose (eq. 9, 13, 14): all six or an error naming the
+    /// first leg or servo that cannot follow. The pulses come from the offsets from home (eq.
+    /// 13, 14 use `alpha - alpha0`), not from the angles, which saves a subtraction per servo.
+    pub fn solve<M: Math>(&self, servos: &ServoSet, pose: &Pose) -> Result<Solution, IkError> {
+        let offset_rad = self.arm_offsets::<M>(pose)?;
+        let mut arm_rad = [0.0f32; LEGS];
+        let mut pulse_us = [0.0f32; LEGS];
+        for (i, servo) in servos.0.iter().enumerate() {
+            let pulse = servo.pulse_us_for_offset::<M>(offset_rad[i]);
+            if !servo.allows(pulse) {
+                return Err(IkError::ServoLimit {
+                    servo: i as u8 + 1,
+                    pulse_us: pulse,
+                    min_us: servo.min_us,
+                    max_us: servo.max_us,
+                });
+            }
+            pulse_us[i] = pulse;
+            arm_rad[i] =
+                (Real::<M>::new(self.constants[i].alpha0_rad) + Real::new(offset_rad[i])).0;
+        }
+        Ok(Solution { arm_rad, pulse_us })
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::geometry::Leg;
-    use crate::math::Libm;
+    use crate::test_support::xorshift;
 
-    /// The next number of a xorshift32 sequence (seeded, reproducible test inputs).
-    fn xorshift(seed: &mut u32) -> u32 {
-        *seed ^= *seed << 13;
-        *seed ^= *seed >> 17;
-        *seed ^= *seed << 5;
-        *seed
-    }
-
-    #[test]
-    fn fixed_point_conversions_and_products_are_exact() {
-        let mut seed = 0x1234_5678_u32;
-        let mut next = || xorshift(&mut seed);
-        for _ in 0..100_000 {
-            let (a, b) = (next() as i32 >> (next() % 8), next() as i32 >> (next() % 8));
-            if a == i32::MIN || b == i32::MIN {
-                continue;
-            }
-            assert_eq!(wide_mul(a, b), i64::from(a) * i64::from(b), "{a} * {b}");
-            let scale = f64::from(1u32 << MM_FRAC);
-            // `i64 as f32` rounds once, to nearest even; the power of two scales exactly.
-            let w = ((u64::from(next()) << 32 | u64::from(next())) as i64) >> (next() % 64);
-            let expected = w as f32 * (-(SQ_FRAC as f32)).exp2();
-            assert_eq!(from_fixed_sq(w).to_bits(), expected.to_bits(), "{w}");
-            let x = f32::from_bits(next()) % MAX_FIXED_MM;
-            if x.is_finite() {
-                let expected = (f64::from(x) * scale).round() as i32;
-                assert_eq!(to_fixed(x, MM_FRAC), expected, "{x}");
-                let r = x / MAX_FIXED_MM;
-                let expected = (f64::from(r) * f64::from(1u32 << ROT_FRAC)).round() as i32;
-                assert_eq!(to_fixed(r, ROT_FRAC), expected, "{r}");
-            }
-        }
-    }
-
-    #[test]
-    fn wide_conversion_rounds_ties_to_even() {
-        // 2^40 + 2^16 (a tie, even stays), + 1 (above the tie), 2^40 + 3 * 2^16 (a tie, odd
-        // rounds up), and the extremes.
-        for w in [
-            (1i64 << 40) + (1 << 16),
-            (1i64 << 40) + (1 << 16) + 1,
-            (1i64 << 40) + 3 * (1 << 16),
-            -((1i64 << 40) + 3 * (1 << 16)),
-            i64::MAX,
-            -i64::MAX,
-            1,
-            -1,
-            0,
-            (1 << 32) - 1,
-            1 << 32,
-        ] {
-            let expected = w as f32 * (-(SQ_FRAC as f32)).exp2();
-            assert_eq!(from_fixed_sq(w).to_bits(), expected.to_bits(), "{w}");
-        }
-    }
-
-    /// Eq. 9 (half-angle form, as in [`arm_angles_raw`]) for one leg in `f64`, rad.
+    /// Eq. 9 (half-angle form, as in [`Solver::arm_angles_raw`]) for one leg in `f64`, rad.
     fn arm_angle_f64(g: &Geometry, pose: &Pose, leg: usize) -> f64 {
         let (sr, cr) = libm::sincos(f64::from(pose.roll_rad));
         let (sp, cp) = libm::sincos(f64::from(pose.pitch_rad));
@@ -564,8 +510,9 @@ mod tests {
     #[test]
     fn fixed_point_path_is_more_accurate_than_float() {
         let g = Geometry::default();
-        assert!(g.fixed_point);
-        let mut float = g.clone();
+        let solver = Solver::new(&g);
+        assert!(solver.fixed_point);
+        let mut float = solver.clone();
         float.fixed_point = false;
         let (mut worst_fixed, mut worst_float) = (0.0f64, 0.0f64);
         for i in 0..2000 {
@@ -579,8 +526,8 @@ mod tests {
                 15.0 * libm::sinf(0.5 * t),
             );
             match (
-                arm_angles_raw::<Libm>(&g, &pose),
-                arm_angles_raw::<Libm>(&float, &pose),
+                solver.arm_angles_raw::<Libm>(&pose),
+                float.arm_angles_raw::<Libm>(&pose),
             ) {
                 (Ok(a), Ok(b)) => {
                     for leg in 0..LEGS {
@@ -631,7 +578,8 @@ mod tests {
         };
         for build in builds {
             let g = build.build().unwrap();
-            assert!(g.fixed_point, "{build:?}");
+            let solver = Solver::new(&g);
+            assert!(solver.fixed_point, "{build:?}");
             let (mut ok, mut worst) = (0, 0.0f64);
             for i in 0..4000 {
                 // Half the poses small, half out to the fixed-point limits.
@@ -648,7 +596,7 @@ mod tests {
                     next(deg),
                     next(deg),
                 );
-                if let Ok(alpha) = arm_angles_raw::<Libm>(&g, &pose) {
+                if let Ok(alpha) = solver.arm_angles_raw::<Libm>(&pose) {
                     ok += 1;
                     for (leg, a) in alpha.iter().enumerate() {
                         let d = (f64::from(*a) - arm_angle_f64(&g, &pose, leg)).abs();
@@ -664,7 +612,14 @@ mod tests {
             arm_mm: 385.0,
             ..builds[1]
         };
-        assert!(!past.build().unwrap().fixed_point);
+        assert!(!Solver::new(&past.build().unwrap()).fixed_point);
+    }
+
+    #[test]
+    fn wrap_angle_stays_in_range() {
+        assert!((wrap_angle_rad::<Libm>(3.0 * PI / 2.0) + PI / 2.0).abs() < 1e-6);
+        assert!((wrap_angle_rad::<Libm>(-3.0 * PI / 2.0) - PI / 2.0).abs() < 1e-6);
+        assert_eq!(wrap_angle_rad::<Libm>(0.5), 0.5);
     }
 
     #[test]
@@ -690,7 +645,7 @@ mod tests {
     fn home_gives_home_pulses_exactly() {
         let g = Geometry::default();
         let s = ServoSet::default();
-        let sol = solve::<Libm>(&g, &s, &Pose::HOME).unwrap();
+        let sol = Solver::new(&g).solve::<Libm>(&s, &Pose::HOME).unwrap();
         for i in 0..LEGS {
             assert_eq!(sol.pulse_us[i], s.0[i].home_us, "servo {}", i + 1);
         }
@@ -699,7 +654,8 @@ mod tests {
     #[test]
     fn far_pose_is_unreachable_and_names_a_leg() {
         let g = Geometry::default();
-        let err = arm_angles::<Libm>(&g, &Pose::from_degrees(0.0, 0.0, 80.0, 0.0, 0.0, 0.0));
+        let err =
+            Solver::new(&g).arm_angles::<Libm>(&Pose::from_degrees(0.0, 0.0, 80.0, 0.0, 0.0, 0.0));
         assert!(
             matches!(err, Err(IkError::Unreachable { leg: 1 })),
             "{err:?}"
@@ -712,7 +668,8 @@ mod tests {
         let mut s = ServoSet::default();
         s.0[1].max_us = 1510.0;
         // Pure heave up: even servos' pulses grow.
-        let err = solve::<Libm>(&g, &s, &Pose::from_degrees(0.0, 0.0, 5.0, 0.0, 0.0, 0.0));
+        let err =
+            Solver::new(&g).solve::<Libm>(&s, &Pose::from_degrees(0.0, 0.0, 5.0, 0.0, 0.0, 0.0));
         match err {
             Err(IkError::ServoLimit {
                 servo: 2,
@@ -726,16 +683,16 @@ mod tests {
 
     #[test]
     fn non_finite_and_huge_inputs_are_errors() {
-        let g = Geometry::default();
+        let solver = Solver::new(&Geometry::default());
         let s = ServoSet::default();
         let nan = Pose::from_degrees(0.0, f32::NAN, 0.0, 0.0, 0.0, 0.0);
         assert_eq!(
-            solve::<Libm>(&g, &s, &nan),
+            solver.solve::<Libm>(&s, &nan),
             Err(IkError::NonFinite { axis: Axis::Y })
         );
         let big = Pose::from_degrees(0.0, 0.0, 0.0, 0.0, 200.0, 0.0);
         assert!(matches!(
-            solve::<Libm>(&g, &s, &big),
+            solver.solve::<Libm>(&s, &big),
             Err(IkError::AngleTooLarge {
                 axis: Axis::Pitch,
                 ..
@@ -743,7 +700,7 @@ mod tests {
         ));
         let huge = Pose::from_degrees(3e38, 0.0, 0.0, 0.0, 0.0, 0.0);
         assert!(matches!(
-            solve::<Libm>(&g, &s, &huge),
+            solver.solve::<Libm>(&s, &huge),
             Err(IkError::Unreachable { .. })
         ));
     }

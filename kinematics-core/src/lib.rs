@@ -1,7 +1,8 @@
 //! Inverse kinematics of a six-servo Stewart platform ("hexapod"), `no_std`, `f32`, no allocation.
 //!
-//! The maths follows seed 001 ("The Mathematics of the Stewart Platform"); equation numbers in
-//! comments are that document's. Data flows one way:
+//! The maths follows "The Mathematics of the Stewart Platform" (a rotary RC-servo platform);
+//! equation numbers in comments are that document's. The general circular layout follows the
+//! Stewart platform Simscape model documentation. Data flows one way:
 //!
 //! [`Pose`] (mm, rad) -> rotation `R` (eq. 1) -> platform joints `q_i` and leg vectors `l_i`
 //! (eq. 2, 3) -> servo arm angles `alpha_i` (eq. 9) -> pulse widths `W_i` (eq. 13, 14).
@@ -10,15 +11,19 @@
 //!   arm angles `alpha0` (eq. 12).
 //! - [`pose`]: the platform pose and its rotation matrix.
 //! - [`servo`]: per-servo pulse mapping (home pulse, rate, direction, limits).
-//! - [`ik`]: pose -> arm angles -> pulse widths, all-or-nothing with errors naming the leg/servo.
+//! - [`ik`]: pose -> arm angles -> pulse widths, all-or-nothing with errors naming the leg/servo;
+//!   an [`ik::Solver`] holds what it computes once per geometry.
 //! - [`math`]: the few transcendental functions the IK needs, behind a trait so the firmware can
 //!   supply the RP2040 boot ROM's fast routines while the host uses `libm`.
+//! - `fixed` (private): the fixed-point arithmetic of the IK's hot loop (integer instructions for
+//!   a chip without an FPU).
 //!
 //! Legs and servos are numbered 1..=6 in everything a user sees (errors, reports) and indexed
 //! 0..=5 in arrays. Leg `i` is driven by servo `i`.
 #![cfg_attr(not(test), no_std)]
 #![deny(missing_docs)]
 
+mod fixed;
 pub mod geometry;
 pub mod ik;
 pub mod math;
@@ -26,7 +31,7 @@ pub mod pose;
 pub mod servo;
 
 pub use geometry::{Geometry, GeometryError, Leg};
-pub use ik::{IkError, Solution};
+pub use ik::{IkError, Solution, Solver};
 pub use math::{Libm, Math};
 pub use pose::Pose;
 pub use servo::{Direction, ServoConfig, ServoError, ServoSet};
@@ -38,3 +43,15 @@ pub const LEGS: usize = 6;
 pub type Vec3 = nalgebra::Vector3<f32>;
 /// A 3x3 rotation matrix.
 pub type Mat3 = nalgebra::Matrix3<f32>;
+
+/// Helpers shared by the unit tests.
+#[cfg(test)]
+mod test_support {
+    /// The next number of a xorshift32 sequence (seeded, reproducible test inputs).
+    pub(crate) fn xorshift(seed: &mut u32) -> u32 {
+        *seed ^= *seed << 13;
+        *seed ^= *seed >> 17;
+        *seed ^= *seed << 5;
+        *seed
+    }
+}

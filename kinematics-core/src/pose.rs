@@ -1,8 +1,8 @@
 //! The platform pose: a translation in mm and ZYX Euler angles in radians.
 //!
 //! `z_mm` is measured from the home height `h0`, so [`Pose::HOME`] is all zeros. The rotation is
-//! `R = Rz(yaw) * Ry(pitch) * Rx(roll)` (seed 001, eq. 1): yaw about z, then pitch about the new
-//! y, then roll about the new x.
+//! `R = Rz(yaw) * Ry(pitch) * Rx(roll)` (eq. 1 of "The Mathematics of the Stewart Platform"): yaw
+//! about z, then pitch about the new y, then roll about the new x.
 
 use crate::math::{Math, Real};
 use crate::Mat3;
@@ -141,7 +141,8 @@ impl Pose {
         Axis::ALL.into_iter().find(|&a| !self.get(a).is_finite())
     }
 
-    /// The rotation matrix `R = Rz(yaw) Ry(pitch) Rx(roll)`, written out as in seed 001 eq. 1.
+    /// The rotation matrix `R = Rz(yaw) Ry(pitch) Rx(roll)`, written out as in eq. 1 of "The
+    /// Mathematics of the Stewart Platform".
     /// Angles must be finite; keep them within +-2*pi (the boot ROM's sin/cos need |x| < 128).
     pub fn rotation<M: Math>(&self) -> Mat3 {
         self.rotation_columns::<M>(true)

@@ -1,4 +1,5 @@
-//! Servo pulse mapping: arm angle (rad) -> pulse width (us), seed 001 eq. 13 and 14.
+//! Servo pulse mapping: arm angle (rad) -> pulse width (us), eq. 13 and 14 of "The Mathematics
+//! of the Stewart Platform".
 //!
 //! `W_i = W0_i + d_i (alpha_i - alpha0_i) r_i`, where `W0_i` is the pulse that holds servo `i`
 //! at home (its trim), `r_i` the servo rate in us per radian and `d_i` its direction: `+1` for
@@ -11,11 +12,14 @@ use core::fmt;
 use crate::math::{Libm, Math, Real};
 use crate::LEGS;
 
-/// Default home pulse `W0`, us (seed 001: nominally 1500 us).
+/// Default home pulse `W0`, us ("nominally 1500 us" in "The Mathematics of the Stewart
+/// Platform").
 pub const DEFAULT_HOME_US: f32 = 1500.0;
-/// Default servo rate `r`, us per radian: 400 us per 45 degrees, `1600 / pi` (seed 001).
+/// Default servo rate `r`, us per radian: 400 us per 45 degrees, `1600 / pi` (as in "The
+/// Mathematics of the Stewart Platform").
 pub const DEFAULT_RATE_US_PER_RAD: f32 = 1600.0 / PI;
-/// Default travel either side of home, rad (seed 001 restricts the servos to +-45 degrees).
+/// Default travel either side of home, rad ("The Mathematics of the Stewart Platform" restricts
+/// the servos to +-45 degrees).
 pub const DEFAULT_TRAVEL_RAD: f32 = PI / 4.0;
 /// No servo limit may go below this, us: shorter pulses are outside any RC servo's range.
 pub const MIN_PULSE_US: f32 = 400.0;
@@ -45,7 +49,8 @@ impl Direction {
         }
     }
 
-    /// The seed's default for servo number `servo` (1..=6): even servos add, odd subtract.
+    /// The default for servo number `servo` (1..=6), as in eq. 13, 14: even servos add, odd
+    /// subtract.
     pub const fn default_for(servo: u8) -> Direction {
         if servo % 2 == 0 {
             Direction::Normal
@@ -71,8 +76,9 @@ pub struct ServoConfig {
 }
 
 impl ServoConfig {
-    /// The seed's servo for servo number `servo` (1..=6): 1500 us home, `1600/pi` us/rad,
-    /// odd/even direction and +-45 degrees of arm travel (1100..1900 us).
+    /// The default for servo number `servo` (1..=6), as in "The Mathematics of the Stewart
+    /// Platform": 1500 us home, `1600/pi` us/rad, odd/even direction and +-45 degrees of arm
+    /// travel (1100..1900 us).
     pub fn default_for(servo: u8) -> ServoConfig {
         let travel_us = DEFAULT_TRAVEL_RAD * DEFAULT_RATE_US_PER_RAD;
         ServoConfig {
@@ -184,6 +190,8 @@ impl ServoSet {
 }
 
 /// Which pulse setting of a servo a [`ServoError`] is about.
+///
+/// `Display` gives its name for developers; the wording users see is `control::report`'s.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ServoField {
     /// Home pulse `W0`.
@@ -205,6 +213,9 @@ impl fmt::Display for ServoField {
 }
 
 /// Why a servo configuration is refused.
+///
+/// `Display` gives one short line for developers (the case and its values, in the units of the
+/// fields); the wording users see is `control::report`'s.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum ServoError {
     /// A pulse setting is not a number within [`MIN_PULSE_US`]..=[`MAX_PULSE_US`].
@@ -245,11 +256,12 @@ impl fmt::Display for ServoError {
                 value_us,
             } => write!(
                 f,
-                "servo {servo}: {field} {value_us} us is outside {MIN_PULSE_US}..{MAX_PULSE_US} us"
+                "servo {servo}: {field} {value_us} us outside {MIN_PULSE_US}..={MAX_PULSE_US} us"
             ),
             ServoError::RateOutOfRange { servo, value } => write!(
                 f,
-                "servo {servo}: rate {value} us/rad is outside {MIN_RATE_US_PER_RAD}..{MAX_RATE_US_PER_RAD} us/rad"
+                "servo {servo}: rate {value} us/rad outside \
+                 {MIN_RATE_US_PER_RAD}..={MAX_RATE_US_PER_RAD} us/rad"
             ),
             ServoError::HomeOutsideLimits {
                 servo,
@@ -258,18 +270,20 @@ impl fmt::Display for ServoError {
                 max_us,
             } => write!(
                 f,
-                "servo {servo}: home pulse {home_us} us must lie within its limits {min_us}..{max_us} us"
+                "servo {servo}: home pulse {home_us} us outside its limits {min_us}..={max_us} us"
             ),
         }
     }
 }
+
+impl core::error::Error for ServoError {}
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
-    fn defaults_follow_the_seed() {
+    fn defaults_follow_the_source_document() {
         let set = ServoSet::default();
         set.validate().unwrap();
         for (i, s) in set.0.iter().enumerate() {

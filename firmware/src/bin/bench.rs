@@ -1,6 +1,6 @@
 //! IK benchmark firmware (`./dev bench`; `emulator/src/bench.js` drives it).
 //!
-//! Runs the firmware's own IK, `kinematics_core::ik::solve` with the firmware's
+//! Runs the firmware's own IK, `kinematics_core::ik::Solver::solve` with the firmware's
 //! [`RomMath`] (the code path `control::Controller` runs for every pose), on poses sent over
 //! UART0, and for comparison the same IK with `libm` (a straightforward port). GP16 is a
 //! marker: it is high exactly while one IK runs, so the emulator reads the CPU cycle counter at
@@ -67,7 +67,7 @@ fn main() -> ! {
     let mut marker = pins.gpio16.into_push_pull_output();
     let _ = marker.set_low();
 
-    let geometry = Geometry::default();
+    let solver = ik::Solver::new(&Geometry::default());
     let servos = ServoSet::default();
     let mut line = [0u8; MAX_LINE];
     let mut len = 0;
@@ -104,11 +104,11 @@ fn main() -> ! {
                     black_box(&pose);
                     let _ = marker.set_low();
                     let _ = marker.set_high();
-                    let rom = ik::solve::<RomMath>(&geometry, &servos, black_box(&pose));
+                    let rom = solver.solve::<RomMath>(&servos, black_box(&pose));
                     black_box(&rom);
                     let _ = marker.set_low();
                     let _ = marker.set_high();
-                    let libm = ik::solve::<Libm>(&geometry, &servos, black_box(&pose));
+                    let libm = solver.solve::<Libm>(&servos, black_box(&pose));
                     black_box(&libm);
                     let _ = marker.set_low();
                     let _ = out.push('r');
