@@ -157,53 +157,122 @@ impl Segment {
         }
     }
 
-    /// Runs `check` on poses along the path (see the module docs for which), stopping at the
-    /// first failure. The start pose is not checked (it is where the platform already is).
-    pub fn check_path<E>(
-        &self,
-        mut check: impl FnMut(&Pose) -> Result<(), E>,
-    ) -> Result<(), PathError<E>> {
+    /// The poses a path check visits (see the module docs for which), in order. The start
+    /// pose is not among them (it is where the platform already is).
+    pub fn checkpoints(&self) -> Checkpoints {
         let n = self.frames;
-        let mut run = |pose: Pose, fraction: f32| {
-            check(&pose).map_err(|error| PathError {
-                fraction,
-                pose,
-                error,
-            })
-        };
         let samples = self.spacing_samples();
-        if n <= MAX_PATH_CHECKS {
+        let walk = if n <= MAX_PATH_CHECKS {
             // Every commanded pose, plus `sub - 1` poses inside each frame step.
             let sub = if samples > n {
                 samples.div_ceil(n).min(MAX_PATH_CHECKS / n).max(1)
             } else {
                 1
             };
-            let mut previous = self.start;
-            for k in 1..=n {
-                let current = self.pose_at(k);
-                for i in 1..sub {
-                    let t = i as f32 / sub as f32;
-                    run(
-                        lerp(&previous, &current, t),
-                        ((k - 1) as f32 + t) / n as f32,
-                    )?;
-                }
-                run(current, k as f32 / n as f32)?;
-                previous = current;
+            Walk::EveryFrame {
+                sub,
+                k: 1,
+                i: 1,
+                previous: self.start,
+                current: self.pose_at(1),
             }
         } else {
-            let m = samples.min(MAX_PATH_CHECKS);
-            for j in 1..=m {
-                let pose = if j == m {
-                    self.target
-                } else {
-                    lerp(&self.start, &self.target, j as f32 / m as f32)
-                };
-                run(pose, j as f32 / m as f32)?;
+            Walk::Evenly {
+                m: samples.min(MAX_PATH_CHECKS),
+                j: 1,
             }
+        };
+        Checkpoints {
+            segment: *self,
+            walk,
+        }
+    }
+
+    /// Runs `check` on the [`Segment::checkpoints`], stopping at the first failure.
+    pub fn check_path<E>(
+        &self,
+        mut check: impl FnMut(&Pose) -> Result<(), E>,
+    ) -> Result<(), PathError<E>> {
+        for (pose, fraction) in self.checkpoints() {
+            check(&pose).map_err(|error| PathError {
+                fraction,
+                pose,
+                error,
+            })?;
         }
         Ok(())
+    }
+}
+
+/// The poses a path check visits, `(pose, fraction of the path)` in order: an iterator, so a
+/// check can run a few poses at a time (see [`Segment::checkpoints`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Checkpoints {
+    segment: Segment,
+    walk: Walk,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Walk {
+    /// Every commanded pose `k` of `n`, with `sub - 1` poses before it inside its frame step.
+    EveryFrame {
+        sub: u32,
+        k: u32,
+        i: u32,
+        previous: Pose,
+        current: Pose,
+    },
+    /// `m` evenly spaced poses, the last the target.
+    Evenly { m: u32, j: u32 },
+}
+
+impl Iterator for Checkpoints {
+    type Item = (Pose, f32);
+
+    fn next(&mut self) -> Option<(Pose, f32)> {
+        let n = self.segment.frames;
+        match &mut self.walk {
+            Walk::EveryFrame {
+                sub,
+                k,
+                i,
+                previous,
+                current,
+            } => {
+                if *k > n {
+                    return None;
+                }
+                let item = if *i < *sub {
+                    let t = *i as f32 / *sub as f32;
+                    (lerp(previous, current, t), ((*k - 1) as f32 + t) / n as f32)
+                } else {
+                    (*current, *k as f32 / n as f32)
+                };
+                *i += 1;
+                if *i > *sub {
+                    *i = 1;
+                    *k += 1;
+                    *previous = *current;
+                    if *k <= n {
+                        *current = self.segment.pose_at(*k);
+                    }
+                }
+                Some(item)
+            }
+            Walk::Evenly { m, j } => {
+                if *j > *m {
+                    return None;
+                }
+                let fraction = *j as f32 / *m as f32;
+                let pose = if *j == *m {
+                    self.segment.target
+                } else {
+                    lerp(&self.segment.start, &self.segment.target, fraction)
+                };
+                *j += 1;
+                Some((pose, fraction))
+            }
+        }
     }
 }
 
@@ -446,6 +515,79 @@ mod tests {
         assert_eq!(seen.len(), 80);
         for k in 1..=5 {
             assert!(seen.iter().any(|(p, _)| *p == s.pose_at(k)), "frame {k}");
+        }
+    }
+
+    /// The poses of the documented rule, by nested loops as the module docs state it.
+    fn documented_checkpoints(s: &Segment) -> std::vec::Vec<(Pose, f32)> {
+        let n = s.frames();
+        let by_mm = linear_distance_mm(s.start(), s.target()) / PATH_STEP_MM;
+        let by_deg = angular_distance_deg(s.start(), s.target()) / PATH_STEP_DEG;
+        let samples = (libm::ceilf(by_mm.max(by_deg)) as u32).max(1);
+        let mut out = std::vec::Vec::new();
+        if n <= MAX_PATH_CHECKS {
+            let sub = if samples > n {
+                samples.div_ceil(n).min(MAX_PATH_CHECKS / n).max(1)
+            } else {
+                1
+            };
+            let mut previous = *s.start();
+            for k in 1..=n {
+                let current = s.pose_at(k);
+                for i in 1..sub {
+                    let t = i as f32 / sub as f32;
+                    out.push((
+                        lerp(&previous, &current, t),
+                        ((k - 1) as f32 + t) / n as f32,
+                    ));
+                }
+                out.push((current, k as f32 / n as f32));
+                previous = current;
+            }
+        } else {
+            let m = samples.min(MAX_PATH_CHECKS);
+            for j in 1..=m {
+                let t = j as f32 / m as f32;
+                let pose = if j == m {
+                    *s.target()
+                } else {
+                    lerp(s.start(), s.target(), t)
+                };
+                out.push((pose, t));
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn checkpoints_are_the_documented_poses_in_order() {
+        let a = Pose::from_degrees(1.0, -2.0, 3.0, 0.5, 1.0, -1.5);
+        let cases = [
+            (
+                Pose::from_degrees(0.0, 0.0, 2.0, 0.0, 0.0, 0.0),
+                limits(20.0, 0.0),
+            ),
+            (Pose::from_degrees(0.0, 0.0, 10.0, 0.0, 0.0, 0.0), OFF),
+            (
+                Pose::from_degrees(0.0, 0.0, 40.0, 0.0, 0.0, 0.0),
+                limits(1.0, 0.0),
+            ),
+            (
+                Pose::from_degrees(0.0, 0.0, 40.0, 0.0, 0.0, 0.0),
+                limits(400.0, 0.0),
+            ),
+            (
+                Pose::from_degrees(-7.3, 4.1, -9.9, 3.3, -2.2, 7.7),
+                limits(13.0, 17.0),
+            ),
+            (Pose::from_degrees(0.0, 0.0, 4000.0, 0.0, 0.0, 0.0), OFF),
+            (a, limits(5.0, 5.0)),
+        ];
+        for (b, l) in cases {
+            let s = Segment::plan(a, b, l, 50.0);
+            let got: std::vec::Vec<(Pose, f32)> = s.checkpoints().collect();
+            assert_eq!(got, documented_checkpoints(&s), "{b:?} {l:?}");
+            assert!(got.len() <= MAX_PATH_CHECKS as usize);
         }
     }
 
