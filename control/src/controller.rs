@@ -61,8 +61,7 @@ pub struct Controller<M: Math = Libm> {
     /// UART0's baud rate (a link setting: `defaults` keeps it).
     baud: u32,
     generation: u32,
-    geometry: Geometry,
-    /// The IK of `geometry` (built with it).
+    /// The IK of the settings' geometry (and the geometry).
     solver: ik::Solver,
     motion: Motion,
     /// The last good IK result (what the servos are being given).
@@ -109,14 +108,12 @@ impl<M: Math> Controller<M> {
 
     /// A controller with these settings, or why they cannot be used.
     pub fn try_with_math(settings: Settings) -> Result<Self, Error> {
-        let geometry = settings.validate()?;
-        let solver = ik::Solver::new(&geometry);
+        let solver = settings.validate_with::<M>()?;
         let solution = solver.solve::<M>(&settings.servos, &Pose::HOME)?;
         Ok(Controller {
             settings,
             baud: DEFAULT_BAUD,
             generation: 0,
-            geometry,
             solver,
             motion: Motion::new(Pose::HOME),
             solution,
@@ -157,7 +154,7 @@ impl<M: Math> Controller<M> {
 
     /// The active geometry.
     pub fn geometry(&self) -> &Geometry {
-        &self.geometry
+        self.solver.geometry()
     }
 
     /// The pose commanded on the last frame.
@@ -346,7 +343,7 @@ impl<M: Math> Controller<M> {
                 Ok(())
             }
             Command::Geometry => {
-                report::write_geometry(out, &self.settings, &self.geometry);
+                report::write_geometry(out, &self.settings, &self.solver);
                 Ok(())
             }
             Command::Config => {
@@ -446,13 +443,18 @@ impl<M: Math> Controller<M> {
     }
 
     fn change_settings(&mut self, candidate: Settings) -> Result<(), Error> {
-        let geometry = candidate.validate()?;
-        let solver = ik::Solver::new(&geometry);
+        // A new geometry and IK only if the build numbers changed (that is the slow part).
+        let solver = if candidate.layout == self.settings.layout {
+            candidate.check_values()?;
+            self.solver.clone()
+        } else {
+            candidate.validate_with::<M>()?
+        };
         // The pose being held must stay drivable (and the pulses change right away).
-        let solution = solver.solve::<M>(&candidate.servos, self.motion.pose())
+        let solution = solver
+            .solve::<M>(&candidate.servos, self.motion.pose())
             .map_err(|cause| Error::PoseConflict { cause })?;
         self.settings = candidate;
-        self.geometry = geometry;
         self.solver = solver;
         self.new_pulses |= solution.pulse_us != self.solution.pulse_us;
         self.solution = solution;

@@ -36,10 +36,11 @@
 use core::fmt::{self, Display, Formatter};
 
 use kinematics_core::geometry::{GeometryError, PairedLayout};
+use kinematics_core::ik::Solver;
 use kinematics_core::servo::{
     ServoError, MAX_PULSE_US, MAX_RATE_US_PER_RAD, MIN_PULSE_US, MIN_RATE_US_PER_RAD,
 };
-use kinematics_core::{Direction, Geometry, ServoConfig, ServoSet, LEGS};
+use kinematics_core::{Direction, Libm, Math, ServoConfig, ServoSet, LEGS};
 
 use crate::number::{parse_f32, parse_u32, NumberError};
 use crate::word::{word, Word};
@@ -726,8 +727,24 @@ impl Settings {
         s
     }
 
-    /// Checks every value's range, the servo set and the geometry; returns the geometry.
-    pub fn validate(&self) -> Result<Geometry, SettingError> {
+    /// Checks every value's range, the servo set and the geometry; returns the IK of the
+    /// geometry (which holds the geometry), built with `libm`.
+    pub fn validate(&self) -> Result<Solver, SettingError> {
+        self.validate_with::<Libm>()
+    }
+
+    /// [`Settings::validate`], the geometry built with `M`'s sine and cosine.
+    pub fn validate_with<M: Math>(&self) -> Result<Solver, SettingError> {
+        self.check_values()?;
+        let geometry = self
+            .layout
+            .build_with::<M>()
+            .map_err(SettingError::BadGeometry)?;
+        Solver::new_with::<M>(geometry).map_err(SettingError::BadGeometry)
+    }
+
+    /// Checks every value's range and the servo set, not the geometry.
+    pub fn check_values(&self) -> Result<(), SettingError> {
         for id in SettingId::GLOBAL {
             if let Some(value) = self.get(id) {
                 id.check(value)?;
@@ -741,10 +758,7 @@ impl Settings {
                 }
             }
         }
-        self.servos
-            .validate()
-            .map_err(SettingError::BadServoConfig)?;
-        self.layout.build().map_err(SettingError::BadGeometry)
+        self.servos.validate().map_err(SettingError::BadServoConfig)
     }
 }
 

@@ -97,7 +97,7 @@ fn status_shows_pose_target_state_angles_and_pulses() {
         }
     }
     // At home the pulses are the trims and the arms are at alpha0.
-    let g = PairedLayout::default().build().unwrap();
+    let g = ik::Solver::new(PairedLayout::default().build().unwrap()).unwrap();
     let arm = six(&s.status_field("arm_deg"));
     for (i, a) in arm.iter().enumerate() {
         assert!(close(*a, g.alpha0_rad(i).to_degrees(), 1e-3));
@@ -123,7 +123,8 @@ fn pose_moves_there_and_status_reports_it() {
         [3.0, -2.0, 5.0, 4.0, -3.0, 6.0]
     );
     // The pulses are what the IK says for that pose.
-    let expected = ik::Solver::new(&PairedLayout::default().build().unwrap())
+    let expected = ik::Solver::new(PairedLayout::default().build().unwrap())
+        .expect("a valid geometry")
         .solve::<Libm>(
             &ServoSet::default(),
             &Pose::from_degrees(3.0, -2.0, 5.0, 4.0, -3.0, 6.0),
@@ -199,7 +200,8 @@ fn check_reports_pulses_and_nothing_moves() {
             .unwrap()
             .to_owned()
     };
-    let expected = ik::Solver::new(&PairedLayout::default().build().unwrap())
+    let expected = ik::Solver::new(PairedLayout::default().build().unwrap())
+        .expect("a valid geometry")
         .solve::<Libm>(
             &ServoSet::default(),
             &Pose::from_degrees(5.0, 0.0, -3.0, 2.0, 0.0, -4.0),
@@ -227,7 +229,8 @@ fn check_reports_pulses_and_nothing_moves() {
 fn geometry_lists_the_build() {
     let mut s = Host::quiet();
     let data = s.ok("geometry");
-    let g = PairedLayout::default().build().unwrap();
+    let solver = ik::Solver::new(PairedLayout::default().build().unwrap()).unwrap();
+    let g = solver.geometry();
     let h0: f32 = data
         .iter()
         .find_map(|l| l.strip_prefix("# home_height_mm (h0): "))
@@ -243,7 +246,7 @@ fn geometry_lists_the_build() {
             .find(|l| l.starts_with(&format!("# leg {}: ", i + 1)))
             .unwrap();
         let beta = format!("beta_deg={:.3}", leg.beta_rad.to_degrees());
-        let alpha0 = format!("alpha0_deg={:.3}", g.alpha0_rad(i).to_degrees());
+        let alpha0 = format!("alpha0_deg={:.3}", solver.alpha0_rad(i).to_degrees());
         assert!(line.contains(&beta) && line.contains(&alpha0), "{line}");
         assert!(line.contains("b_mm=(") && line.contains("p_mm=("), "{line}");
     }
@@ -487,7 +490,7 @@ fn path_through_unreachable_space_is_refused_before_anything_moves() {
     let to: Vec<f32> = BLOCKED_TO.split(' ').map(|v| v.parse().unwrap()).collect();
     let target = Pose::from_degrees(to[0], to[1], to[2], to[3], to[4], to[5]);
     let geometry = PairedLayout::default().build().unwrap();
-    let solver = ik::Solver::new(&geometry);
+    let solver = ik::Solver::new(geometry.clone()).expect("a valid geometry");
     assert!(solver.solve::<Libm>(&ServoSet::default(), &target).is_ok());
     // ... but the straight line to it from here is not.
     let e = s.err(&format!("pose {BLOCKED_TO}"));

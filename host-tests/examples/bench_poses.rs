@@ -23,7 +23,7 @@ fn main() {
     let count: usize = args.next().and_then(|a| a.parse().ok()).unwrap_or(200);
     let seed: u64 = args.next().and_then(|a| a.parse().ok()).unwrap_or(1);
     let geometry = Geometry::default();
-    let solver = ik::Solver::new(&geometry);
+    let solver = ik::Solver::new(geometry.clone()).expect("a valid geometry");
     let servos = ServoSet::default();
     let reference = RefGeometry::from_core(&geometry);
     let mut rng = Rng::new(seed);

@@ -33,12 +33,11 @@ use std::io::{self, BufRead, Write};
 
 use kinematics_core::geometry::PairedLayout;
 use kinematics_core::ik::{self, IkError};
-use kinematics_core::{Direction, Geometry, Libm, Pose, ServoConfig, ServoSet, LEGS};
+use kinematics_core::{Direction, Libm, Pose, ServoConfig, ServoSet, LEGS};
 
 struct Reference {
     layout: PairedLayout,
-    geometry: Geometry,
-    /// The IK of `geometry` (built with it).
+    /// The IK of the layout's geometry (and the geometry).
     solver: ik::Solver,
     servos: ServoSet,
 }
@@ -91,8 +90,7 @@ impl Reference {
         let geometry = layout.build().expect("the default layout builds");
         Reference {
             layout,
-            solver: ik::Solver::new(&geometry),
-            geometry,
+            solver: ik::Solver::new(geometry).expect("the default layout builds"),
             servos: ServoSet::default(),
         }
     }
@@ -119,10 +117,12 @@ impl Reference {
             arm_mm: arm,
             rod_mm: rod,
         };
-        let geometry = layout.build().map_err(|e| format!("geometry: {e}"))?;
+        let solver = layout
+            .build()
+            .and_then(ik::Solver::new)
+            .map_err(|e| format!("geometry: {e}"))?;
         self.layout = layout;
-        self.solver = ik::Solver::new(&geometry);
-        self.geometry = geometry;
+        self.solver = solver;
         Ok("{\"ok\":true}".to_owned())
     }
 
@@ -184,7 +184,7 @@ impl Reference {
     }
 
     fn geometry(&self) -> String {
-        let g = &self.geometry;
+        let g = self.solver.geometry();
         let mut legs = String::new();
         for (i, leg) in g.legs().iter().enumerate() {
             if i > 0 {
@@ -198,7 +198,7 @@ impl Reference {
                 nums(&[b.x, b.y, b.z]),
                 nums(&[p.x, p.y, p.z]),
                 num(leg.beta_rad.to_degrees()),
-                num(g.alpha0_rad(i).to_degrees())
+                num(self.solver.alpha0_rad(i).to_degrees())
             );
         }
         format!(

@@ -223,7 +223,7 @@ fn solve_agrees_with_the_numeric_reference_over_realistic_poses() {
     eprintln!("\nsolve() vs the numeric f64 reference (default servos, +-45 deg travel):");
     for (n, case) in cases().iter().enumerate() {
         let reference = RefGeometry::from_core(&case.geometry);
-        let solver = ik::Solver::new(&case.geometry);
+        let solver = ik::Solver::new(case.geometry.clone()).expect("a valid geometry");
         // The default geometry gets the most poses; the others a few thousand each.
         let samples = if n == 0 { 9000 } else { 2500 };
         let mut rng = Rng::new(0x5EED_0001 + n as u64);
@@ -255,7 +255,7 @@ fn solve_names_the_right_leg_or_servo_outside_the_realistic_range() {
     let servos = ServoSet::default();
     for (n, case) in cases().iter().enumerate() {
         let reference = RefGeometry::from_core(&case.geometry);
-        let solver = ik::Solver::new(&case.geometry);
+        let solver = ik::Solver::new(case.geometry.clone()).expect("a valid geometry");
         let mut rng = Rng::new(0x5EED_0100 + n as u64);
         let range = case.range.map(|r| 2.0 * r);
         let mut tally = Tally::default();
@@ -345,7 +345,7 @@ fn arm_angles_reach_exactly_where_the_reference_does() {
     eprintln!("\narm_angles() (no servo limits) vs the reference, wide random poses:");
     for (n, case) in cases().iter().enumerate() {
         let reference = RefGeometry::from_core(&case.geometry);
-        let solver = ik::Solver::new(&case.geometry);
+        let solver = ik::Solver::new(case.geometry.clone()).expect("a valid geometry");
         let mut rng = Rng::new(0x5EED_0200 + n as u64);
         let range = case.range.map(|r| 1.8 * r);
         let mut tally = Tally::default();
@@ -369,7 +369,7 @@ fn workspace_boundary_is_where_the_reference_puts_it() {
     eprintln!("\nworkspace boundary probes:");
     for (n, case) in cases().iter().enumerate() {
         let reference = RefGeometry::from_core(&case.geometry);
-        let solver = ik::Solver::new(&case.geometry);
+        let solver = ik::Solver::new(case.geometry.clone()).expect("a valid geometry");
         let mut rng = Rng::new(0x5EED_0300 + n as u64);
         let mut tally = Tally::default();
         let mut disagreements = 0;
@@ -459,7 +459,7 @@ fn one_leg_agrees_with_the_reference_wherever_its_joint_can_be() {
         let leg = *case.geometry.leg(n % LEGS);
         let g = single_leg(leg, case.geometry.arm_mm(), case.geometry.rod_mm());
         let reference = RefGeometry::from_core(&g);
-        let solver = ik::Solver::new(&g);
+        let solver = ik::Solver::new(g.clone()).expect("a valid geometry");
         let (a, s) = (reference.arm, reference.rod);
         let b = reference.legs[0].b;
         let mut rng = Rng::new(0x5EED_0400 + n as u64);
@@ -508,7 +508,7 @@ fn half_angle_singularity_below_the_shaft_is_handled() {
     let u = [leg.beta.cos(), leg.beta.sin(), 0.0];
     let v = [-leg.beta.sin(), leg.beta.cos(), 0.0];
     let mut tally = Tally::default();
-    let solver = ik::Solver::new(&g);
+    let solver = ik::Solver::new(g.clone()).expect("a valid geometry");
     for phi_deg in [
         -2.0, -5.0, -10.0, -20.0, -22.0, -30.0, -45.0, -60.0, -80.0, -89.0,
     ] {

@@ -5,6 +5,7 @@
 use host_tests::fixtures::{cases, seed000_layout};
 use host_tests::reference::{add, dot, solve_leg, sub, RefGeometry, RefGeometryError, RefLeg};
 use kinematics_core::geometry::{CircularLayout, Length, PairedLayout, HOME_HEIGHT_TOLERANCE_MM};
+use kinematics_core::ik::Solver;
 use kinematics_core::{Geometry, GeometryError, Leg, LEGS};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngSeed};
@@ -52,8 +53,15 @@ enum Alpha0Tol {
     JointEquivalent,
 }
 
-/// Checks a core geometry's h0 and alpha0 against eq. 10 / eq. 12 and the numeric root.
-fn check_constants(name: &str, g: &Geometry, tol: Alpha0Tol) -> Result<(f64, f64), String> {
+/// The IK of a geometry (which derives alpha0 and refuses a home pose out of reach).
+fn solver(geometry: &Geometry) -> Solver {
+    Solver::new(geometry.clone()).expect("a valid geometry")
+}
+
+/// Checks a core geometry's h0 and its IK's alpha0 against eq. 10 / eq. 12 and the numeric
+/// root.
+fn check_constants(name: &str, solver: &Solver, tol: Alpha0Tol) -> Result<(f64, f64), String> {
+    let g = solver.geometry();
     let r = RefGeometry::from_core(g);
     let h0 = f64::from(g.home_height_mm());
     let dh = (h0 - r.h0).abs();
@@ -62,7 +70,7 @@ fn check_constants(name: &str, g: &Geometry, tol: Alpha0Tol) -> Result<(f64, f64
     }
     let mut worst_deg: f64 = 0.0;
     for i in 0..LEGS {
-        let a0 = f64::from(g.alpha0_rad(i));
+        let a0 = f64::from(solver.alpha0_rad(i));
         let d = (a0 - r.alpha0[i]).abs().to_degrees();
         worst_deg = worst_deg.max(d);
         let leg = &r.legs[i];
@@ -111,13 +119,14 @@ fn check_constants(name: &str, g: &Geometry, tol: Alpha0Tol) -> Result<(f64, f64
 fn home_height_and_arm_angle_match_eq_10_and_12() {
     eprintln!();
     for case in cases() {
-        let (dh, da) = check_constants(case.name, &case.geometry, Alpha0Tol::Degrees)
+        let solver = solver(&case.geometry);
+        let (dh, da) = check_constants(case.name, &solver, Alpha0Tol::Degrees)
             .unwrap_or_else(|e| panic!("{e}"));
         eprintln!(
             "{:<46} h0 {:>9.4} mm (off by {dh:.1e}), alpha0 {:>8.4} deg (off by {da:.1e})",
             case.name,
             case.geometry.home_height_mm(),
-            f64::from(case.geometry.alpha0_rad(0)).to_degrees()
+            f64::from(solver.alpha0_rad(0)).to_degrees()
         );
     }
 }
@@ -139,8 +148,8 @@ fn paired_layout_arms_are_level_when_the_documented_condition_holds() {
             arm_mm: arm,
             rod_mm: s as f32,
         };
-        let g = layout.build().expect("valid");
-        let r = RefGeometry::from_core(&g);
+        let g = solver(&layout.build().expect("valid"));
+        let r = RefGeometry::from_core(g.geometry());
         for i in 0..LEGS {
             assert!(
                 r.alpha0[i].to_degrees().abs() < 1e-4,
@@ -182,7 +191,7 @@ proptest! {
         };
         let legs = layout.circular().legs();
         let reference = reference_for(&legs, arm, rod);
-        match (layout.build(), reference) {
+        match (layout.build().and_then(Solver::new), reference) {
             (Ok(g), Ok(_)) => {
                 check_constants("random layout", &g, Alpha0Tol::JointEquivalent).map_err(TestCaseError::fail)?;
             }
@@ -304,7 +313,7 @@ fn every_geometry_error_variant_is_produced_and_named() {
     // exactly dz. Within the tolerance the geometry is accepted with h0 the legs' mean.
     let tol = f64::from(HOME_HEIGHT_TOLERANCE_MM);
     let within = moved(legs, 2, |leg| leg.platform_mm.z = 0.09);
-    let g = Geometry::new(within, 20.0, 120.0).expect("0.09 mm is within the tolerance");
+    let g = solver(&Geometry::new(within, 20.0, 120.0).expect("0.09 mm is within the tolerance"));
     check_constants("leg 3 raised 0.09 mm", &g, Alpha0Tol::Degrees)
         .unwrap_or_else(|e| panic!("{e}"));
     let beyond = moved(legs, 2, |leg| leg.platform_mm.z = 0.11);
@@ -351,7 +360,7 @@ fn every_geometry_error_variant_is_produced_and_named() {
         rod_mm: 120.0,
     };
     assert_eq!(
-        out_of_reach.build(),
+        out_of_reach.build().and_then(Solver::new),
         Err(GeometryError::HomeUnreachable { leg: 1 })
     );
     assert_eq!(
@@ -363,7 +372,7 @@ fn every_geometry_error_variant_is_produced_and_named() {
         platform_radius_mm: 120.0,
         ..out_of_reach
     };
-    let g = reachable.build().expect("reachable");
+    let g = solver(&reachable.build().expect("reachable"));
     check_constants("radial rods", &g, Alpha0Tol::JointEquivalent)
         .unwrap_or_else(|e| panic!("{e}"));
 
@@ -387,12 +396,15 @@ fn every_geometry_error_variant_is_produced_and_named() {
 #[test]
 fn seed000_layouts_both_ways_round_share_h0_not_alpha0() {
     // h0 (eq. 10) does not depend on the arm direction; alpha0 (eq. 12) does.
-    let out = seed000_layout(true).build().expect("valid");
-    let inward = seed000_layout(false).build().expect("valid");
-    assert_eq!(out.home_height_mm(), inward.home_height_mm());
+    let out = solver(&seed000_layout(true).build().expect("valid"));
+    let inward = solver(&seed000_layout(false).build().expect("valid"));
+    assert_eq!(
+        out.geometry().home_height_mm(),
+        inward.geometry().home_height_mm()
+    );
     let (a, b) = (
-        RefGeometry::from_core(&out).alpha0[0],
-        RefGeometry::from_core(&inward).alpha0[0],
+        RefGeometry::from_core(out.geometry()).alpha0[0],
+        RefGeometry::from_core(inward.geometry()).alpha0[0],
     );
     assert!((a - b).abs() > 0.1, "{a} vs {b}");
     assert!((f64::from(out.alpha0_rad(0)) - a).abs().to_degrees() < ALPHA0_TOL_DEG);

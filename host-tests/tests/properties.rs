@@ -89,7 +89,10 @@ fn paired_geometry() -> impl Strategy<Value = (PairedLayout, Geometry)> {
                 arm_mm: a,
                 rod_mm: s,
             };
-            layout.build().ok().map(|g| (layout, g))
+            // A geometry the IK can drive: its home pose within reach of every arm.
+            let geometry = layout.build().ok()?;
+            ik::Solver::new(geometry.clone()).ok()?;
+            Some((layout, geometry))
         })
 }
 
@@ -107,7 +110,7 @@ proptest! {
     fn rods_close_for_every_ok_pose(case in 0..cases().len(), pose in pose_in(1.4)) {
         let case = &cases()[case];
         let reference = RefGeometry::from_core(&case.geometry);
-        if let Ok(alpha) = ik::Solver::new(&case.geometry).arm_angles::<Libm>(&pose) {
+        if let Ok(alpha) = ik::Solver::new(case.geometry.clone()).expect("a valid geometry").arm_angles::<Libm>(&pose) {
             let alpha = alpha.map(f64::from);
             let residual = reference.rod_closure_errors(&RefPose::from_core(&pose), &alpha);
             for (i, r) in residual.iter().enumerate() {
@@ -120,11 +123,12 @@ proptest! {
     /// valid geometries.
     #[test]
     fn home_gives_exactly_the_home_pulses(servos in servo_set(), (_, geometry) in paired_geometry()) {
-        let sol = ik::Solver::new(&geometry).solve::<Libm>(&servos, &Pose::HOME);
+        let solver = ik::Solver::new(geometry).expect("a valid geometry");
+        let sol = solver.solve::<Libm>(&servos, &Pose::HOME);
         let sol = sol.map_err(|e| TestCaseError::fail(format!("{e:?}")))?;
         for i in 0..LEGS {
             prop_assert_eq!(sol.pulse_us[i], servos.0[i].home_us, "servo {}", i + 1);
-            prop_assert_eq!(sol.arm_rad[i], geometry.alpha0_rad(i), "servo {}", i + 1);
+            prop_assert_eq!(sol.arm_rad[i], solver.alpha0_rad(i), "servo {}", i + 1);
         }
     }
 
@@ -133,7 +137,7 @@ proptest! {
     #[test]
     fn pure_heave_moves_odd_and_even_pulses_as_mirror_images(z in -25.0f32..25.0) {
         let g = Geometry::default();
-        let solver = ik::Solver::new(&g);
+        let solver = ik::Solver::new(g.clone()).expect("a valid geometry");
         let servos = ServoSet::default();
         let pose = Pose { z_mm: z, ..Pose::HOME };
         let Ok(sol) = solver.solve::<Libm>(&servos, &pose) else {
@@ -159,7 +163,7 @@ proptest! {
     #[test]
     fn mirrored_pose_mirrors_the_legs(pose in pose_in(1.5)) {
         let g = Geometry::default();
-        let solver = ik::Solver::new(&g);
+        let solver = ik::Solver::new(g.clone()).expect("a valid geometry");
         let servos = ServoSet::default();
         let mirror = Pose { y_mm: -pose.y_mm, roll_rad: -pose.roll_rad, yaw_rad: -pose.yaw_rad, ..pose };
         let partner = [1, 0, 5, 4, 3, 2];
@@ -196,7 +200,7 @@ proptest! {
     #[test]
     fn yaw_by_120_degrees_permutes_the_legs(pose in pose_in(1.5), turns in 1usize..3) {
         let g = Geometry::default();
-        let solver = ik::Solver::new(&g);
+        let solver = ik::Solver::new(g.clone()).expect("a valid geometry");
         let servos = ServoSet::default();
         let reference = RefGeometry::from_core(&g);
         let turned = turn_pose(&pose, turns);
@@ -242,7 +246,7 @@ proptest! {
         proptest::array::uniform6(tame_f32()),
     ]) {
         let g = Geometry::default();
-        let solver = ik::Solver::new(&g);
+        let solver = ik::Solver::new(g.clone()).expect("a valid geometry");
         let servos = ServoSet::default();
         let pose = Pose::from_array(v);
         let got = solver.solve::<Libm>(&servos, &pose);
@@ -278,7 +282,7 @@ proptest! {
     #[test]
     fn ok_pulses_are_finite_and_within_each_servos_limits(servos in servo_set(), pose in pose_in(0.8)) {
         let g = Geometry::default();
-        let solver = ik::Solver::new(&g);
+        let solver = ik::Solver::new(g.clone()).expect("a valid geometry");
         match solver.solve::<Libm>(&servos, &pose) {
             Ok(sol) => {
                 let reference = RefGeometry::from_core(&g);
@@ -306,7 +310,7 @@ proptest! {
     #[test]
     fn a_tightened_limit_names_exactly_that_servo(pose in pose_in(1.0), k in 0..LEGS) {
         let g = Geometry::default();
-        let solver = ik::Solver::new(&g);
+        let solver = ik::Solver::new(g.clone()).expect("a valid geometry");
         let servos = ServoSet::default();
         let Ok(sol) = solver.solve::<Libm>(&servos, &pose) else { return Ok(()) };
         let need = sol.pulse_us[k];
@@ -428,7 +432,7 @@ fn platform_joints_and_legs_match_eq_2_and_3() {
 #[test]
 fn angle_limit_is_180_degrees_inclusive() {
     let g = Geometry::default();
-    let solver = ik::Solver::new(&g);
+    let solver = ik::Solver::new(g.clone()).expect("a valid geometry");
     let servos = ServoSet::default();
     for axis in [Axis::Roll, Axis::Pitch, Axis::Yaw] {
         for v in [PI, -PI] {

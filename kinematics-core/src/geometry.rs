@@ -15,19 +15,22 @@
 //!
 //! All legs share the arm (horn) length `a` and the rod length `s`.
 //!
-//! From these, [`Geometry::new`] derives the home height `h0` (eq. 10) and each leg's home arm
-//! angle `alpha0` (eq. 12, which asks the IK for the arm angles at the home pose). A geometry
-//! is a description of the build and nothing else: what the IK computes from it once per
-//! geometry lives in [`crate::ik::Solver`].
+//! From these, [`Geometry::new`] derives the home height `h0` (eq. 10). A geometry is a
+//! description of the build and nothing else: what the IK derives from it (the home arm angles
+//! `alpha0` of eq. 12, which are the IK's own answer at the home pose, and the constants it needs
+//! on every pose) lives in [`crate::ik::Solver`].
+//!
+//! The layouts compute their joints with `M`'s sine and cosine (`build_with`), so a board
+//! builds a geometry with its fast routines; `build` uses `libm`.
 
 use core::fmt;
 
-use crate::ik;
+use crate::math::{Libm, Math};
 use crate::{Vec3, LEGS};
 
 /// Largest disagreement between the legs' home heights (eq. 10) that a geometry may have, mm.
-/// Below it, `h0` is their mean and each leg's `alpha0` is computed exactly for that height;
-/// above it, the build numbers are almost certainly mistyped.
+/// Below it, `h0` is their mean (and the IK computes each leg's `alpha0` exactly for that
+/// height); above it, the build numbers are almost certainly mistyped.
 pub const HOME_HEIGHT_TOLERANCE_MM: f32 = 0.1;
 
 /// One leg's build coordinates.
@@ -42,7 +45,7 @@ pub struct Leg {
 }
 
 /// A validated platform geometry: the build (legs, arm and rod lengths) and what follows from
-/// it alone, the home height `h0` and the home arm angles `alpha0`.
+/// it alone, the home height `h0`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Geometry {
     legs: [Leg; LEGS],
@@ -50,8 +53,6 @@ pub struct Geometry {
     rod_mm: f32,
     /// `h0` (eq. 10), mm.
     home_height_mm: f32,
-    /// `alpha0` of each leg (eq. 12), rad.
-    alpha0_rad: [f32; LEGS],
 }
 
 /// Which length of a geometry a [`GeometryError`] is about.
@@ -164,7 +165,7 @@ fn leg_number(index: usize) -> u8 {
 }
 
 impl Geometry {
-    /// Validates explicit build coordinates and derives `h0` and `alpha0`.
+    /// Validates explicit build coordinates and derives `h0`.
     pub fn new(legs: [Leg; LEGS], arm_mm: f32, rod_mm: f32) -> Result<Geometry, GeometryError> {
         let arm_mm = check_length(Length::Arm, arm_mm)?;
         let rod_mm = check_length(Length::Rod, rod_mm)?;
@@ -199,19 +200,12 @@ impl Geometry {
             }
         }
         let home_height_mm = heights.iter().sum::<f32>() / LEGS as f32;
-
-        let mut geometry = Geometry {
+        Ok(Geometry {
             legs,
             arm_mm,
             rod_mm,
             home_height_mm,
-            alpha0_rad: [0.0; LEGS], // set below
-        };
-        // Eq. 12: each arm's angle at the home pose, from the IK itself, so that the home pose
-        // gives exactly the home pulses.
-        geometry.alpha0_rad =
-            ik::home_arm_angles(&geometry).map_err(|leg| GeometryError::HomeUnreachable { leg })?;
-        Ok(geometry)
+        })
     }
 
     /// The six legs' build coordinates.
@@ -238,11 +232,6 @@ impl Geometry {
     /// home pose, mm.
     pub fn home_height_mm(&self) -> f32 {
         self.home_height_mm
-    }
-
-    /// Home arm angle `alpha0` (eq. 12) of leg `index` (0..=5), rad, above horizontal.
-    pub fn alpha0_rad(&self, index: usize) -> f32 {
-        self.alpha0_rad[index]
     }
 }
 
@@ -279,9 +268,16 @@ pub struct CircularLayout {
 impl CircularLayout {
     /// The explicit legs of this layout (all joints in their frame's z = 0 plane).
     pub fn legs(&self) -> [Leg; LEGS] {
+        self.legs_with::<Libm>()
+    }
+
+    /// [`CircularLayout::legs`] with `M`'s sine and cosine. `M` may take only small angles
+    /// (the boot ROM's up to 128 rad, about 7,300 degrees): beyond, a coordinate is NaN and
+    /// [`Geometry::new`] refuses it.
+    pub fn legs_with<M: Math>(&self) -> [Leg; LEGS] {
         core::array::from_fn(|i| {
-            let (sb, cb) = libm::sincosf(self.base_angles_deg[i].to_radians());
-            let (sp, cp) = libm::sincosf(self.platform_angles_deg[i].to_radians());
+            let (sb, cb) = M::sin_cos(self.base_angles_deg[i].to_radians());
+            let (sp, cp) = M::sin_cos(self.platform_angles_deg[i].to_radians());
             Leg {
                 base_mm: Vec3::new(self.base_radius_mm * cb, self.base_radius_mm * sb, 0.0),
                 platform_mm: Vec3::new(
@@ -296,9 +292,14 @@ impl CircularLayout {
 
     /// Validates the layout and derives the geometry.
     pub fn build(&self) -> Result<Geometry, GeometryError> {
+        self.build_with::<Libm>()
+    }
+
+    /// [`CircularLayout::build`] with `M`'s sine and cosine.
+    pub fn build_with<M: Math>(&self) -> Result<Geometry, GeometryError> {
         check_length(Length::BaseRadius, self.base_radius_mm)?;
         check_length(Length::PlatformRadius, self.platform_radius_mm)?;
-        Geometry::new(self.legs(), self.arm_mm, self.rod_mm)
+        Geometry::new(self.legs_with::<M>(), self.arm_mm, self.rod_mm)
     }
 }
 
@@ -376,6 +377,11 @@ impl PairedLayout {
     pub fn build(&self) -> Result<Geometry, GeometryError> {
         self.circular().build()
     }
+
+    /// [`PairedLayout::build`] with `M`'s sine and cosine (a board's fast routines).
+    pub fn build_with<M: Math>(&self) -> Result<Geometry, GeometryError> {
+        self.circular().build_with::<M>()
+    }
 }
 
 #[cfg(test)]
@@ -383,50 +389,13 @@ mod tests {
     use super::*;
 
     #[test]
-    fn default_geometry_is_valid_and_symmetric() {
+    fn default_geometry_has_the_documented_home_height() {
         let g = Geometry::default();
         assert!(
             (g.home_height_mm() - 118.458).abs() < 0.01,
             "{}",
             g.home_height_mm()
         );
-        let a0 = g.alpha0_rad(0);
-        for i in 0..LEGS {
-            assert!((g.alpha0_rad(i) - a0).abs() < 1e-5, "leg {i}");
-        }
-        // The default is chosen with the arms close to horizontal at home.
-        assert!(
-            a0.abs() < 0.5f32.to_radians(),
-            "alpha0 = {} deg",
-            a0.to_degrees()
-        );
-    }
-
-    #[test]
-    fn home_height_puts_arm_and_rod_at_right_angles() {
-        let g = Geometry::default();
-        for (i, leg) in g.legs().iter().enumerate() {
-            let alpha0 = g.alpha0_rad(i);
-            let (sin_beta, cos_beta) = libm::sincosf(leg.beta_rad);
-            let tip = leg.base_mm
-                + g.arm_mm()
-                    * Vec3::new(
-                        alpha0.cos() * cos_beta,
-                        alpha0.cos() * sin_beta,
-                        alpha0.sin(),
-                    );
-            let joint = leg.platform_mm + Vec3::new(0.0, 0.0, g.home_height_mm());
-            let arm = tip - leg.base_mm;
-            let rod = joint - tip;
-            assert!(
-                (rod.norm() - g.rod_mm()).abs() < 1e-3,
-                "rod closure leg {i}"
-            );
-            assert!(
-                arm.dot(&rod).abs() / (arm.norm() * rod.norm()) < 1e-4,
-                "leg {i}"
-            );
-        }
     }
 
     fn layout_with(change: impl FnOnce(&mut PairedLayout)) -> Result<Geometry, GeometryError> {

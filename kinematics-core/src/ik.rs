@@ -21,9 +21,11 @@
 //! Eq. 13, 14 then map `alpha` to a pulse width (see [`crate::servo`]). A pose is accepted or
 //! rejected as a whole: there is never a partial or NaN result.
 //!
-//! A [`Solver`] holds what the IK needs of one [`Geometry`] on every pose: per-leg constants
-//! (mm, rad), in `f32` and, where the build allows, in fixed point (module `fixed`). Build it
-//! once per geometry, and again whenever the geometry changes.
+//! A [`Solver`] is the IK of one [`Geometry`]: it owns the geometry, derives the home arm angles
+//! `alpha0` (eq. 12, which is eq. 9 at the home pose: the IK's own answer there, so the home
+//! pose gives exactly the home pulses) and holds what it needs on every pose: per-leg
+//! constants (mm, rad), in `f32` and, where the build allows, in fixed point (module `fixed`).
+//! Build it once per geometry.
 
 use core::f32::consts::PI;
 use core::fmt;
@@ -32,7 +34,7 @@ use crate::fixed::{
     from_fixed_sq, mul_mm, rotate_mm, to_fixed, to_fixed_sq, MAX_FIXED_MM, MAX_FIXED_ROD_TERM_MM2,
     MAX_FIXED_TWO_ARM_MM, MAX_ROTATION_ENTRY, MM_FRAC, ROT_FRAC,
 };
-use crate::geometry::Geometry;
+use crate::geometry::{Geometry, GeometryError};
 use crate::math::{Libm, Math, Real};
 use crate::pose::{Axis, Pose};
 use crate::servo::ServoSet;
@@ -182,8 +184,6 @@ fn wrap_angle_rad<M: Math>(a: f32) -> f32 {
 /// One leg's constants for the hot loop.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 struct LegConstants {
-    cos_beta: f32,
-    sin_beta: f32,
     /// `p_i`, mm.
     platform_mm: [f32; 3],
     /// `(0, 0, h0) - b_i`: the leg vector is `l_i = R p_i + (x, y, z) + offset`, mm.
@@ -191,7 +191,7 @@ struct LegConstants {
     /// `2a cos(beta)`, `2a sin(beta)`: `N = n_x l_x + n_y l_y` (eq. 9), mm.
     n_x_mm: f32,
     n_y_mm: f32,
-    /// Home arm angle alpha0, rad (the geometry's).
+    /// Home arm angle alpha0 (eq. 12), rad.
     alpha0_rad: f32,
     /// `p_i` (x, y) and `offset` in fixed point, 2^-20 mm (`fixed::MM_FRAC`).
     platform_q: [i32; 2],
@@ -200,12 +200,12 @@ struct LegConstants {
     n_q: [i32; 2],
 }
 
-/// The IK of one geometry: the per-leg constants it needs on every pose, computed once by
-/// [`Solver::new`], and the solving itself ([`Solver::solve`], [`Solver::arm_angles`]).
-///
-/// It copies what it needs from the geometry: build a new one whenever the geometry changes.
+/// The IK of one geometry: the geometry, its home arm angles, the per-leg constants the IK
+/// needs on every pose, computed once by [`Solver::new`], and the solving itself
+/// ([`Solver::solve`], [`Solver::arm_angles`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Solver {
+    geometry: Geometry,
     /// `s^2 - a^2`, mm^2 (the constant in `L` of eq. 9).
     rod_sq_minus_arm_sq: f32,
     /// `2a`, mm (the factor in `M` and `N` of eq. 9).
@@ -232,23 +232,22 @@ struct FixedPose {
     position: [i32; 3],
 }
 
-/// Every leg's arm angle at the home pose (eq. 9 with [`Libm`]), rad, or `Err(leg number)` if a
-/// leg cannot reach: the home arm angles `alpha0` of eq. 12, which [`Geometry::new`] stores.
-/// The geometry's own `alpha0` is not read.
-pub(crate) fn home_arm_angles(geometry: &Geometry) -> Result<[f32; LEGS], u8> {
-    // Eq. 12 is eq. 9 at the home pose (with eq. 9's naming: M0 = 2a(h0 + z_p - z_b),
-    // N0 = 2a[cos(beta)(x_p - x_b) + sin(beta)(y_p - y_b)], L0 = 2a^2 when the legs agree
-    // exactly). Evaluating eq. 9 itself at home gives the exact alpha0 of every leg.
-    Solver::new(geometry).arm_angles_raw::<Libm>(&Pose::HOME)
-}
-
 impl Solver {
-    /// The IK of `geometry`: its per-leg constants, and whether the fixed-point path applies.
-    pub fn new(geometry: &Geometry) -> Solver {
-        let legs = geometry.legs();
+    /// The IK of `geometry` with `libm`'s sine and cosine: see [`Solver::new_with`].
+    pub fn new(geometry: Geometry) -> Result<Solver, GeometryError> {
+        Solver::new_with::<Libm>(geometry)
+    }
+
+    /// The IK of `geometry`: its per-leg constants (with `M`'s sine and cosine of `beta_i`),
+    /// whether the fixed-point path applies, and the home arm angles `alpha0` (eq. 12) computed
+    /// by this very solver with `M`, so the home pose gives exactly the home pulses. Refused
+    /// ([`GeometryError::HomeUnreachable`]) if an arm cannot reach its rod at the home pose.
+    pub fn new_with<M: Math>(geometry: Geometry) -> Result<Solver, GeometryError> {
+        let legs = *geometry.legs();
         let (arm_mm, rod_mm) = (geometry.arm_mm(), geometry.rod_mm());
         let home_height_mm = geometry.home_height_mm();
         let mut solver = Solver {
+            geometry,
             rod_sq_minus_arm_sq: rod_mm * rod_mm - arm_mm * arm_mm,
             two_arm_mm: 2.0 * arm_mm,
             rod_term_q: 0,
@@ -267,10 +266,8 @@ impl Solver {
             solver.two_arm_q = to_fixed(two_arm_mm, MM_FRAC);
             solver.rod_term_q = to_fixed_sq(rod_term_mm2);
         }
-        for (i, (c, leg)) in solver.constants.iter_mut().zip(legs.iter()).enumerate() {
-            let (sin_beta, cos_beta) = libm::sincosf(leg.beta_rad);
-            c.sin_beta = sin_beta;
-            c.cos_beta = cos_beta;
+        for (c, leg) in solver.constants.iter_mut().zip(legs.iter()) {
+            let (sin_beta, cos_beta) = M::sin_cos(leg.beta_rad);
             c.platform_mm = leg.platform_mm.into();
             c.offset_mm = [
                 -leg.base_mm.x,
@@ -279,7 +276,6 @@ impl Solver {
             ];
             c.n_x_mm = two_arm_mm * cos_beta;
             c.n_y_mm = two_arm_mm * sin_beta;
-            c.alpha0_rad = geometry.alpha0_rad(i);
             c.platform_q = [0, 1].map(|k| to_fixed(c.platform_mm[k], MM_FRAC));
             c.offset_q = [0, 1, 2].map(|k| to_fixed(c.offset_mm[k], MM_FRAC));
             if fixed_lengths {
@@ -295,7 +291,26 @@ impl Solver {
                     .chain(c.offset_mm.iter())
                     .all(|v| v.abs() < MAX_FIXED_MM)
             });
-        solver
+        // Eq. 12 is eq. 9 at the home pose (with eq. 9's naming: M0 = 2a(h0 + z_p - z_b),
+        // N0 = 2a[cos(beta)(x_p - x_b) + sin(beta)(y_p - y_b)], L0 = 2a^2 when the legs agree
+        // exactly). Evaluating eq. 9 itself at home gives the exact alpha0 of every leg.
+        let home = solver
+            .arm_angles_raw::<M>(&Pose::HOME)
+            .map_err(|leg| GeometryError::HomeUnreachable { leg })?;
+        for (c, alpha0) in solver.constants.iter_mut().zip(home) {
+            c.alpha0_rad = alpha0;
+        }
+        Ok(solver)
+    }
+
+    /// The geometry this solver solves.
+    pub fn geometry(&self) -> &Geometry {
+        &self.geometry
+    }
+
+    /// Home arm angle `alpha0` (eq. 12) of leg `index` (0..=5), rad, above horizontal.
+    pub fn alpha0_rad(&self, index: usize) -> f32 {
+        self.constants[index].alpha0_rad
     }
 
     /// The fixed-point pose, or `None` where the float path must run: a geometry that is not
@@ -510,7 +525,7 @@ mod tests {
     #[test]
     fn fixed_point_path_is_more_accurate_than_float() {
         let g = Geometry::default();
-        let solver = Solver::new(&g);
+        let solver = Solver::new(g.clone()).expect("a valid geometry");
         assert!(solver.fixed_point);
         let mut float = solver.clone();
         float.fixed_point = false;
@@ -578,7 +593,7 @@ mod tests {
         };
         for build in builds {
             let g = build.build().unwrap();
-            let solver = Solver::new(&g);
+            let solver = Solver::new(g.clone()).expect("a valid geometry");
             assert!(solver.fixed_point, "{build:?}");
             let (mut ok, mut worst) = (0, 0.0f64);
             for i in 0..4000 {
@@ -612,7 +627,11 @@ mod tests {
             arm_mm: 385.0,
             ..builds[1]
         };
-        assert!(!Solver::new(&past.build().unwrap()).fixed_point);
+        assert!(
+            !Solver::new(past.build().unwrap())
+                .expect("a valid geometry")
+                .fixed_point
+        );
     }
 
     #[test]
@@ -642,10 +661,56 @@ mod tests {
     }
 
     #[test]
+    fn default_home_arm_angles_are_symmetric_and_near_horizontal() {
+        let g = Solver::new(Geometry::default()).expect("a valid geometry");
+        let a0 = g.alpha0_rad(0);
+        for i in 0..LEGS {
+            assert!((g.alpha0_rad(i) - a0).abs() < 1e-5, "leg {i}");
+        }
+        // The default is chosen with the arms close to horizontal at home.
+        assert!(
+            a0.abs() < 0.5f32.to_radians(),
+            "alpha0 = {} deg",
+            a0.to_degrees()
+        );
+    }
+
+    #[test]
+    fn at_home_every_arm_and_rod_are_at_right_angles() {
+        let solver = Solver::new(Geometry::default()).expect("a valid geometry");
+        let g = solver.geometry();
+        for (i, leg) in g.legs().iter().enumerate() {
+            let alpha0 = solver.alpha0_rad(i);
+            let (sin_beta, cos_beta) = libm::sincosf(leg.beta_rad);
+            let tip = leg.base_mm
+                + g.arm_mm()
+                    * Vec3::new(
+                        alpha0.cos() * cos_beta,
+                        alpha0.cos() * sin_beta,
+                        alpha0.sin(),
+                    );
+            let joint = leg.platform_mm + Vec3::new(0.0, 0.0, g.home_height_mm());
+            let arm = tip - leg.base_mm;
+            let rod = joint - tip;
+            assert!(
+                (rod.norm() - g.rod_mm()).abs() < 1e-3,
+                "rod closure leg {i}"
+            );
+            assert!(
+                arm.dot(&rod).abs() / (arm.norm() * rod.norm()) < 1e-4,
+                "leg {i}"
+            );
+        }
+    }
+
+    #[test]
     fn home_gives_home_pulses_exactly() {
         let g = Geometry::default();
         let s = ServoSet::default();
-        let sol = Solver::new(&g).solve::<Libm>(&s, &Pose::HOME).unwrap();
+        let sol = Solver::new(g.clone())
+            .expect("a valid geometry")
+            .solve::<Libm>(&s, &Pose::HOME)
+            .unwrap();
         for i in 0..LEGS {
             assert_eq!(sol.pulse_us[i], s.0[i].home_us, "servo {}", i + 1);
         }
@@ -654,8 +719,9 @@ mod tests {
     #[test]
     fn far_pose_is_unreachable_and_names_a_leg() {
         let g = Geometry::default();
-        let err =
-            Solver::new(&g).arm_angles::<Libm>(&Pose::from_degrees(0.0, 0.0, 80.0, 0.0, 0.0, 0.0));
+        let err = Solver::new(g.clone())
+            .expect("a valid geometry")
+            .arm_angles::<Libm>(&Pose::from_degrees(0.0, 0.0, 80.0, 0.0, 0.0, 0.0));
         assert!(
             matches!(err, Err(IkError::Unreachable { leg: 1 })),
             "{err:?}"
@@ -668,8 +734,9 @@ mod tests {
         let mut s = ServoSet::default();
         s.0[1].max_us = 1510.0;
         // Pure heave up: even servos' pulses grow.
-        let err =
-            Solver::new(&g).solve::<Libm>(&s, &Pose::from_degrees(0.0, 0.0, 5.0, 0.0, 0.0, 0.0));
+        let err = Solver::new(g.clone())
+            .expect("a valid geometry")
+            .solve::<Libm>(&s, &Pose::from_degrees(0.0, 0.0, 5.0, 0.0, 0.0, 0.0));
         match err {
             Err(IkError::ServoLimit {
                 servo: 2,
@@ -683,7 +750,7 @@ mod tests {
 
     #[test]
     fn non_finite_and_huge_inputs_are_errors() {
-        let solver = Solver::new(&Geometry::default());
+        let solver = Solver::new(Geometry::default()).expect("a valid geometry");
         let s = ServoSet::default();
         let nan = Pose::from_degrees(0.0, f32::NAN, 0.0, 0.0, 0.0, 0.0);
         assert_eq!(

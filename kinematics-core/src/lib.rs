@@ -7,12 +7,12 @@
 //! [`Pose`] (mm, rad) -> rotation `R` (eq. 1) -> platform joints `q_i` and leg vectors `l_i`
 //! (eq. 2, 3) -> servo arm angles `alpha_i` (eq. 9) -> pulse widths `W_i` (eq. 13, 14).
 //!
-//! - [`geometry`]: where the servos and rod joints are; derived home height `h0` (eq. 10) and home
-//!   arm angles `alpha0` (eq. 12).
+//! - [`geometry`]: where the servos and rod joints are; derived home height `h0` (eq. 10).
 //! - [`pose`]: the platform pose and its rotation matrix.
 //! - [`servo`]: per-servo pulse mapping (home pulse, rate, direction, limits).
 //! - [`ik`]: pose -> arm angles -> pulse widths, all-or-nothing with errors naming the leg/servo;
-//!   an [`ik::Solver`] holds what it computes once per geometry.
+//!   an [`ik::Solver`] is the IK of one geometry: it owns it, derives the home arm angles
+//!   `alpha0` (eq. 12) and holds what it computes once per geometry.
 //! - [`math`]: the few transcendental functions the IK needs, behind a trait so the firmware can
 //!   supply the RP2040 boot ROM's fast routines while the host uses `libm`.
 //! - `fixed` (private): the fixed-point arithmetic of the IK's hot loop (integer instructions for

@@ -3,8 +3,8 @@
 
 use core::fmt::{self, Display, Formatter, Write};
 
-use kinematics_core::ik::IkError;
-use kinematics_core::{Geometry, Pose, LEGS};
+use kinematics_core::ik::{IkError, Solver};
+use kinematics_core::{Pose, LEGS};
 
 use super::errors::IkMessage;
 use super::format::{degrees, Fixed, PoseText, Six, ValueText, Vector};
@@ -270,8 +270,10 @@ pub fn write_check(
     line(out, format_args!("duration_s: {}", Fixed(duration_s, 3)));
 }
 
-/// Writes the `geometry` data lines.
-pub fn write_geometry(out: &mut impl Write, settings: &Settings, geometry: &Geometry) {
+/// Writes the `geometry` data lines: the layout, then the geometry and the home arm angles of
+/// `solver`, the IK built from it.
+pub fn write_geometry(out: &mut impl Write, settings: &Settings, solver: &Solver) {
+    let geometry = solver.geometry();
     let l = &settings.layout;
     line(
         out,
@@ -307,7 +309,7 @@ pub fn write_geometry(out: &mut impl Write, settings: &Settings, geometry: &Geom
                 Vector(&leg.base_mm),
                 Vector(&leg.platform_mm),
                 Fixed(leg.beta_rad.to_degrees(), 3),
-                Fixed(geometry.alpha0_rad(i).to_degrees(), 3)
+                Fixed(solver.alpha0_rad(i).to_degrees(), 3)
             ),
         );
     }

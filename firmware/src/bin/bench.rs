@@ -67,7 +67,7 @@ fn main() -> ! {
     let mut marker = pins.gpio16.into_push_pull_output();
     let _ = marker.set_low();
 
-    let solver = ik::Solver::new(&Geometry::default());
+    let solver = ik::Solver::new(Geometry::default()).expect("a valid geometry");
     let servos = ServoSet::default();
     let mut line = [0u8; MAX_LINE];
     let mut len = 0;
