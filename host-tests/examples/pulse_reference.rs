@@ -8,7 +8,8 @@
 //! It reads commands from stdin, one per line, and answers each with one line of JSON:
 //!
 //! ```text
-//! layout <base_radius_mm> <base_half_angle_deg> <platform_radius_mm> <platform_half_angle_deg> <arm_mm> <rod_mm>
+//! layout <base_radius_mm> <base_half_angle_deg> <platform_radius_mm>
+//!        <platform_half_angle_deg> <arm_mm> <rod_mm>
 //!     -> {"ok":true} or {"ok":false,"error":"..."}             (the geometry used from now on)
 //! servo <1-6> <trim_us> <rate_us_rad> <normal|reversed> <min_us> <max_us>
 //!     -> {"ok":true}                                            (that servo from now on)
@@ -19,7 +20,8 @@
 //!      | {"ok":false,"code":"angle-too-large","axis":"roll"}
 //!      | {"ok":false,"code":"pose-not-finite","axis":"x"}
 //! geometry
-//!     -> {"ok":true,"arm_mm":a,"rod_mm":s,"h0_mm":h,"legs":[{"b_mm":[3],"p_mm":[3],"beta_deg":b,"alpha0_deg":a0}]}
+//!     -> {"ok":true,"arm_mm":a,"rod_mm":s,"h0_mm":h,
+//!         "legs":[{"b_mm":[3],"p_mm":[3],"beta_deg":b,"alpha0_deg":a0}]}
 //! ```
 //!
 //! It starts with the core's default layout and servos; the tests send theirs explicitly.

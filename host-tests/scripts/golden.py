@@ -5,9 +5,10 @@ Independent of both kinematics-core and the Rust reference: the geometry is buil
 documented PairedLayout definition (pair k centred at 120k degrees, servos at 120k -+ 20,
 platform joints at 120k -+ (60 - 20), arms tangential pointing away from the pair centre,
 base radius 75 mm, platform radius 60 mm, arm 20 mm, rod 120 mm) in exact degrees; the
-rotation is Rz Ry Rx multiplied out numerically; arm angles come from seed 001 eq. 9 and are
-then checked against a brute-force scan of the rod-closure function; h0 from eq. 10; pulses
-from eq. 13/14 with W0 = 1500 us and r = 1600/pi us/rad.
+rotation is Rz Ry Rx multiplied out numerically; arm angles come from eq. 9 of "The
+Mathematics of the Stewart Platform" and are then checked against a brute-force scan of the
+rod-closure function; h0 from eq. 10; pulses from eq. 13/14 with W0 = 1500 us and
+r = 1600/pi us/rad.
 
 Run once from the repository root:  python3 host-tests/scripts/golden.py
 """
@@ -128,7 +129,8 @@ def main():
     out.append("Default `PairedLayout`: base radius 75 mm, servo pairs 2 x 20 degrees apart, "
                "platform radius 60 mm, joint pairs 2 x 20 degrees apart, arm a = 20 mm, rod s = 120 mm; "
                "default servos (W0 = 1500 us, r = 1600/pi us/rad, even servos add, odd subtract). "
-               "Computed in f64 by `host-tests/scripts/golden.py` (seed 001 eq. 9, 10, 13, 14, each "
+               "Computed in f64 by `host-tests/scripts/golden.py` ('The Mathematics of the Stewart "
+               "Platform', eq. 9, 10, 13, 14, each "
                "root checked by a scan of the rod-closure function), not by the firmware. "
                "`host-tests/tests/golden.rs` parses this file and checks the core against it.\n")
     out.append("## Derived constants\n")

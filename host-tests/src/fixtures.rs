@@ -3,25 +3,27 @@
 use kinematics_core::geometry::{CircularLayout, PairedLayout};
 use kinematics_core::{Geometry, Pose};
 
-/// The angles of seed 000's general circular configuration, degrees: servo shafts...
-pub const SEED000_BASE_DEG: [f32; 6] = [-10.0, 10.0, 110.0, 130.0, 230.0, 250.0];
+/// The angles of the general circular configuration of the Stewart platform Simscape model
+/// documentation, degrees: servo shafts...
+pub const SIMSCAPE_BASE_DEG: [f32; 6] = [-10.0, 10.0, 110.0, 130.0, 230.0, 250.0];
 /// ...and platform joints.
-pub const SEED000_PLATFORM_DEG: [f32; 6] = [-50.0, 50.0, 70.0, 170.0, 190.0, -70.0];
+pub const SIMSCAPE_PLATFORM_DEG: [f32; 6] = [-50.0, 50.0, 70.0, 170.0, 190.0, -70.0];
 
-/// Seed 000's angles with tangential arms. `outwards` points each arm away from its pair's
-/// centre (towards its own platform joint, like [`PairedLayout`]); otherwise towards it.
-pub fn seed000_layout(outwards: bool) -> CircularLayout {
+/// The Simscape documentation's angles with tangential arms. `outwards` points each arm away
+/// from its pair's centre (towards its own platform joint, like [`PairedLayout`]); otherwise
+/// towards it.
+pub fn simscape_layout(outwards: bool) -> CircularLayout {
     let turn = if outwards { 90.0 } else { -90.0 };
     let beta_deg = core::array::from_fn(|i| {
         // Odd servos (index 0, 2, 4) are the clockwise member of their pair.
         let sense = if i % 2 == 0 { -1.0 } else { 1.0 };
-        SEED000_BASE_DEG[i] + sense * turn
+        SIMSCAPE_BASE_DEG[i] + sense * turn
     });
     CircularLayout {
         base_radius_mm: 75.0,
         platform_radius_mm: 60.0,
-        base_angles_deg: SEED000_BASE_DEG,
-        platform_angles_deg: SEED000_PLATFORM_DEG,
+        base_angles_deg: SIMSCAPE_BASE_DEG,
+        platform_angles_deg: SIMSCAPE_PLATFORM_DEG,
         beta_deg,
         arm_mm: 20.0,
         rod_mm: 120.0,
@@ -48,8 +50,9 @@ pub struct Case {
 /// maxima are 5-9e-5 degrees.
 pub const TIGHT_DEG: f64 = 1.0e-4;
 
-/// The geometries the agreement tests run on: the default, other paired layouts, seed 000's
-/// circular layout both ways round, and an explicit build with joints off the z = 0 planes.
+/// The geometries the agreement tests run on: the default, other paired layouts, the Simscape
+/// documentation's circular layout both ways round, and an explicit build with joints off the
+/// z = 0 planes.
 pub fn cases() -> Vec<Case> {
     let realistic = [15.0, 15.0, 12.0, 8.0, 8.0, 15.0];
     let paired = |base_radius_mm,
@@ -100,14 +103,14 @@ pub fn cases() -> Vec<Case> {
             angle_tol_deg: TIGHT_DEG,
         },
         Case {
-            name: "seed 000 circular, arms outwards",
-            geometry: seed000_layout(true).build().expect("valid"),
+            name: "Simscape circular, arms outwards",
+            geometry: simscape_layout(true).build().expect("valid"),
             range: realistic,
             angle_tol_deg: TIGHT_DEG,
         },
         Case {
-            name: "seed 000 circular, arms inwards",
-            geometry: seed000_layout(false).build().expect("valid"),
+            name: "Simscape circular, arms inwards",
+            geometry: simscape_layout(false).build().expect("valid"),
             range: realistic,
             angle_tol_deg: TIGHT_DEG,
         },

@@ -1,4 +1,5 @@
-//! An f64 reference for seed 001, written from the seed and NOT from `kinematics-core`'s code.
+//! An f64 reference for "The Mathematics of the Stewart Platform", written from the document
+//! and NOT from `kinematics-core`'s code.
 //!
 //! What it shares with the core is only the inputs: build coordinates `b_i`, `p_i`, `beta_i`,
 //! `a`, `s` (read from the core's public getters or from the same `Leg` values the core is
@@ -6,7 +7,7 @@
 //! Everything derived from them is computed here, in `f64`, by different means:
 //!
 //! - the rotation is the product of the three elementary matrices `Rz(psi) Ry(theta) Rx(phi)`
-//!   (seed 001, before it expands them into eq. 1);
+//!   (the document's, before it expands them into eq. 1);
 //! - platform joints `q_i = T + R p_i` with `T = (x, y, h0 + z)` (eq. 2);
 //! - the arm angle is found NUMERICALLY: the arm tip
 //!   `A(alpha) = b + a (cos alpha cos beta, cos alpha sin beta, sin alpha)` (eq. 4-6) must be at
@@ -78,19 +79,19 @@ pub fn transpose(m: &M3) -> M3 {
     out
 }
 
-/// Elementary rotation about x by `phi` (roll), seed 001 `R_x`.
+/// Elementary rotation about x by `phi` (roll), the document's `R_x`.
 pub fn rot_x(phi: f64) -> M3 {
     let (s, c) = phi.sin_cos();
     [[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]]
 }
 
-/// Elementary rotation about y by `theta` (pitch), seed 001 `R_y`.
+/// Elementary rotation about y by `theta` (pitch), the document's `R_y`.
 pub fn rot_y(theta: f64) -> M3 {
     let (s, c) = theta.sin_cos();
     [[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]]
 }
 
-/// Elementary rotation about z by `psi` (yaw), seed 001 `R_z`.
+/// Elementary rotation about z by `psi` (yaw), the document's `R_z`.
 pub fn rot_z(psi: f64) -> M3 {
     let (s, c) = psi.sin_cos();
     [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]
@@ -193,7 +194,7 @@ impl RefLeg {
     }
 
     /// The arm tip `A(alpha) = b + a (cos alpha cos beta, cos alpha sin beta, sin alpha)`
-    /// (seed 001 eq. 4-6), mm.
+    /// ("The Mathematics of the Stewart Platform", eq. 4-6), mm.
     pub fn arm_tip(&self, arm: f64, alpha: f64) -> V3 {
         let (sa, ca) = alpha.sin_cos();
         let (sb, cb) = self.beta.sin_cos();
@@ -401,10 +402,10 @@ pub fn solve_leg(
     })
 }
 
-/// Seed 001 eq. 9, literally: `alpha = asin(L / sqrt(M^2 + N^2)) - atan2(N, M)` with
-/// `L = |l|^2 - (s^2 - a^2)`, `M = 2a (z_p - z_b)`, `N = 2a [cos(beta) (x_p - x_b) +
-/// sin(beta) (y_p - y_b)]` (here `(x_p, y_p, z_p)` is the joint `q` in the base frame).
-/// The seed writes `tan^-1(N / M)`; `atan2(N, M)` is the same for `M > 0` (joint above the
+/// Eq. 9 of "The Mathematics of the Stewart Platform", literally: `alpha = asin(L / sqrt(M^2 +
+/// N^2)) - atan2(N, M)` with `L = |l|^2 - (s^2 - a^2)`, `M = 2a (z_p - z_b)`, `N = 2a
+/// [cos(beta) (x_p - x_b) + sin(beta) (y_p - y_b)]` (here `(x_p, y_p, z_p)` is the joint `q`
+/// in the base frame). The document writes `tan^-1(N / M)`; `atan2(N, M)` is the same for `M > 0` (joint above the
 /// shaft) and keeps the formula's branch for `M <= 0`. `None` where `|L| > sqrt(M^2 + N^2)`.
 pub fn eq9_alpha(leg: &RefLeg, arm: f64, rod: f64, q: V3) -> Option<f64> {
     let l = sub(q, leg.b);
@@ -415,8 +416,8 @@ pub fn eq9_alpha(leg: &RefLeg, arm: f64, rod: f64, q: V3) -> Option<f64> {
     (ratio.abs() <= 1.0).then(|| ratio.asin() - big_n.atan2(big_m))
 }
 
-/// Seed 001 eq. 12, literally, generalised from leg 2 (`beta = 0`) to any leg by projecting the
-/// horizontal offset onto the arm plane: `alpha0 = asin(L0 / sqrt(M0^2 + N0^2)) -
+/// Eq. 12 of "The Mathematics of the Stewart Platform", literally, generalised from leg 2
+/// (`beta = 0`) to any leg by projecting the horizontal offset onto the arm plane: `alpha0 = asin(L0 / sqrt(M0^2 + N0^2)) -
 /// atan(M0 / N0)` with eq. 12's OWN naming, `M0 = 2a [cos(beta) (x_p - x_b) + sin(beta)
 /// (y_p - y_b)]` (horizontal), `N0 = 2a (h0 + z_p - z_b)` (vertical) and `L0 = 2a^2`.
 pub fn eq12_alpha0(leg: &RefLeg, arm: f64, h0: f64) -> Option<f64> {

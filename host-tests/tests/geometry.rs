@@ -2,7 +2,7 @@
 //! f64 references, and every `GeometryError` variant produced by a suitable input and
 //! confirmed by the reference where it is a statement about the geometry.
 
-use host_tests::fixtures::{cases, seed000_layout};
+use host_tests::fixtures::{cases, simscape_layout};
 use host_tests::reference::{add, dot, solve_leg, sub, RefGeometry, RefGeometryError, RefLeg};
 use kinematics_core::geometry::{CircularLayout, Length, PairedLayout, HOME_HEIGHT_TOLERANCE_MM};
 use kinematics_core::ik::Solver;
@@ -394,10 +394,10 @@ fn every_geometry_error_variant_is_produced_and_named() {
 }
 
 #[test]
-fn seed000_layouts_both_ways_round_share_h0_not_alpha0() {
+fn simscape_layouts_both_ways_round_share_h0_not_alpha0() {
     // h0 (eq. 10) does not depend on the arm direction; alpha0 (eq. 12) does.
-    let out = solver(&seed000_layout(true).build().expect("valid"));
-    let inward = solver(&seed000_layout(false).build().expect("valid"));
+    let out = solver(&simscape_layout(true).build().expect("valid"));
+    let inward = solver(&simscape_layout(false).build().expect("valid"));
     assert_eq!(
         out.geometry().home_height_mm(),
         inward.geometry().home_height_mm()
