@@ -569,9 +569,9 @@ pub fn pulse_us(servo: &ServoConfig, alpha: f64, alpha0: f64) -> f64 {
     f64::from(servo.home_us) + d * (alpha - alpha0) * f64::from(servo.rate_us_per_rad)
 }
 
-/// Eq. 13 / 14 exactly as the seed writes them, by servo number (1..=6): even servos add,
+/// Eq. 13 / 14 exactly as the document writes them, by servo number (1..=6): even servos add,
 /// odd servos subtract, us.
-pub fn seed_pulse_us(servo_number: usize, w0: f64, rate: f64, alpha: f64, alpha0: f64) -> f64 {
+pub fn eq13_14_pulse_us(servo_number: usize, w0: f64, rate: f64, alpha: f64, alpha0: f64) -> f64 {
     if servo_number % 2 == 0 {
         w0 + (alpha - alpha0) * rate
     } else {

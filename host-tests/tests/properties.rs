@@ -463,7 +463,7 @@ fn default_servos_follow_eq_13_and_14() {
         assert!((f64::from(s.rate_us_per_rad) - 1600.0 / core::f64::consts::PI).abs() < 1e-4);
         let alpha0 = 0.01;
         let alpha = 0.2;
-        let w_seed = host_tests::reference::seed_pulse_us(
+        let w_document = host_tests::reference::eq13_14_pulse_us(
             number,
             1500.0,
             1600.0 / core::f64::consts::PI,
@@ -472,11 +472,11 @@ fn default_servos_follow_eq_13_and_14() {
         );
         let w_ref = pulse_us(s, alpha, alpha0);
         // (The servo's rate is 1600/pi rounded to f32.)
-        assert!((w_seed - w_ref).abs() < 1e-4, "servo {number}");
+        assert!((w_document - w_ref).abs() < 1e-4, "servo {number}");
         let w_core = f64::from(s.pulse_us(alpha as f32, alpha0 as f32));
         assert!(
-            (w_core - w_seed).abs() < 1e-3,
-            "servo {number}: {w_core} vs {w_seed}"
+            (w_core - w_document).abs() < 1e-3,
+            "servo {number}: {w_core} vs {w_document}"
         );
     }
 }
