@@ -114,6 +114,11 @@ export class EmulatedBoard {
 
     // UART0: what the firmware sends, split into lines; what we send, paced.
     mcu.uart[0].onByte = (byte) => this.received(byte);
+    this.uart0 = mcu.uart[0].pl011;
+    this.uart0.onTxLost = (byte) => {
+      // The PL011 drops a byte written while TXFF is set; firmware must check TXFF first.
+      this.fail(`firmware wrote 0x${byte.toString(16)} to UART0 while its TX FIFO was full: byte lost`);
+    };
     this.input = new PacedUartInput(mcu, mcu.uart[0]);
 
     /** The main loop's longest pass and the longest interrupt handler (see loop-meter.js). */
@@ -292,9 +297,24 @@ export class EmulatedBoard {
     return () => this.outputListeners.delete(listener);
   }
 
-  /** Bytes lost because they arrived while the 32-byte RX FIFO was full. */
+  /** Bytes lost because they arrived while the 32-byte RX FIFO was full (overruns). */
   get rxFifoDroppedBytes() {
-    return this.input.droppedBytes;
+    return this.uart0.rxOverrunBytes;
+  }
+
+  /** Bytes that arrived while the firmware had UART0's receiver disabled (lost). */
+  get rxDisabledDroppedBytes() {
+    return this.uart0.rxDisabledBytes;
+  }
+
+  /** UART0 has nothing left to send: TX FIFO empty and the last stop bit sent (not BUSY). */
+  get uartTxIdle() {
+    return !this.uart0.busy;
+  }
+
+  /** Bytes the firmware wrote to UART0 while TXFF was set (lost; each also fails the run). */
+  get uartTxLostBytes() {
+    return this.uart0.txLostBytes;
   }
 
   /** Bytes queued by `sendBytes` that are not on the wire yet. */
@@ -351,8 +371,8 @@ export class EmulatedBoard {
     return { servos, stop: () => this.servoMeter.pulseListeners.delete(listener) };
   }
 
-  /** The baud rate the firmware programmed into UART0 (what the paced input follows). */
+  /** The baud rate the firmware latched into UART0, rounded (what the paced input follows). */
   get baud() {
-    return this.input.baud;
+    return Math.round(this.input.baud);
   }
 }

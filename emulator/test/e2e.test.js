@@ -86,12 +86,18 @@ test('LF and CRLF each end one line; back-to-back lines are answered in order', 
 
 test('input is paced at the baud rate: a line of n bytes takes n byte times', () => {
   const board = bootedBoard();
+  // Echo off: the reply is then only sent after the whole line is in, and the reply's own
+  // bytes take their byte times on the way back (the same rate both ways).
+  assert.equal(board.request('set echo off').reply, 'ok');
+  board.runMs(5);
   const start = board.nanos;
+  const outputBefore = board.outputBytes.length;
   board.request('x'.repeat(39)); // 40 bytes with the LF
+  const bytes = 40 + board.outputBytes.length - outputBefore;
   const byteNanos = 1e9 * (10 / 115_200); // 8N1
   const elapsed = board.nanos - start;
-  assert.ok(elapsed >= 40 * byteNanos * 0.99, `reply after ${elapsed} ns`);
-  assert.ok(elapsed < 40 * byteNanos + 1e6, `reply after ${elapsed} ns`);
+  assert.ok(elapsed >= bytes * byteNanos * 0.99, `reply after ${elapsed} ns (${bytes} bytes both ways)`);
+  assert.ok(elapsed < bytes * byteNanos + 1e6, `reply after ${elapsed} ns (${bytes} bytes both ways)`);
 });
 
 test('runs are deterministic', () => {

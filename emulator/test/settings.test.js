@@ -203,13 +203,22 @@ test('set baud: the board listens at the new rate once the ok has left; config s
     // (a host may talk at the new rate as soon as it has read the ok).
     board.runMs((4 * 10 * 1000) / old);
     assert.ok(Math.abs(board.baud - baud) / baud < 0.02, `UART0 at ${board.baud} baud, want ${baud}`);
-    // A line is paced at the new rate: n bytes take n byte times.
+    // A line is paced at the new rate: n bytes take n byte times, and so do the n bytes of
+    // the reply on the way back (echo is off: the reply starts once the line is in). The
+    // line's last bytes (107 is not a multiple of the firmware's FIFO level of 8) wait in the
+    // UART's FIFO for its receive timeout, 32 bit periods, before the firmware sees them.
     const start = board.nanos;
-    const line = `${' '.repeat(100)}status`; // 108 bytes with the LF; status is quick
-    assert.equal(ok(board, line, { timeoutMs: 200 }).length, 5);
+    const outputBefore = board.outputBytes.length;
+    const line = `${' '.repeat(100)}status`; // 107 bytes with the LF; status is quick
+    assert.equal(ok(board, line, { timeoutMs: 1000 }).length, 5);
+    const bytes = line.length + 1 + board.outputBytes.length - outputBefore;
     const byteNanos = (10 * 1e9) / board.baud;
+    const rxTimeoutNanos = (32 * 1e9) / board.baud;
     const elapsed = board.nanos - start;
-    assert.ok(elapsed >= (line.length + 1) * byteNanos * 0.99 && elapsed < (line.length + 1) * byteNanos + 1e6, `${elapsed} ns at ${baud}`);
+    assert.ok(
+      elapsed >= bytes * byteNanos * 0.99 && elapsed < bytes * byteNanos + rxTimeoutNanos + 1e6,
+      `${elapsed} ns for ${bytes} bytes at ${baud}`,
+    );
     assert.equal(config(board).get('baud'), String(baud));
   }
 });
