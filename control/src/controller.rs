@@ -15,19 +15,34 @@
 //!   being held can still be driven with them; changes to the frame rate, geometry or servos
 //!   are refused while moving (`error:busy`);
 //! - [`Controller::on_frame`] always returns finite pulses within the servo limits: if the IK
-//!   fails on a frame, the last good pulses are held and the motion stops (a fault notice).
+//!   fails on a frame, the last good pulses are held and the motion stops (a fault notice);
+//! - no call does much work at once: a command whose work is long (a path check solves the IK
+//!   at up to [`crate::motion::MAX_PATH_CHECKS`] poses; a listing writes many lines) becomes a
+//!   job that [`Controller::work`] advances a slice at a time (at most [`CHECKS_PER_SLICE`]
+//!   IK solutions, or one line), and the command's reply comes when its job is done. So the
+//!   board's main loop never stalls: frames, the watchdog and the other links are served
+//!   between slices.
 //!
-//! Latency: with both speed limits off a move is a jump, and a jump is made at once: the
-//! command's reply is followed by new pulses from [`Controller::take_new_pulses`], which the
-//! board writes right away instead of at the next frame (hobby-servo PWM latches new compare
-//! values at the next period, so nothing is cut short). Streaming hosts use this mode. With a
-//! speed limit set the first step comes with the next frame (up to one frame later), because
-//! writing it early could put two steps into one frame and exceed the limit.
+//! One job at a time: while [`Controller::is_busy`], the board feeds no bytes (they wait in the
+//! link's receive queue, or the USB host waits). A move checked while the platform moves holds
+//! the platform where it was when the command arrived until the check ends (a few
+//! milliseconds; at most about 150 ms on the RP2040 for the longest check), then starts from
+//! there; a refused move lets the move in progress go on. `check` does not hold anything.
+//!
+//! Latency: with both speed limits off a move is a jump, and a jump is made as soon as its
+//! path is checked: the command's reply is followed by new pulses from
+//! [`Controller::take_new_pulses`], which the board writes right away instead of at the next
+//! frame (hobby-servo PWM latches new compare values at the next period, so nothing is cut
+//! short). Streaming hosts use this mode. With a speed limit set the first step comes with the
+//! next frame (up to one frame later), because writing it early could put two steps into one
+//! frame and exceed the limit.
 //!
 //! Link loss: with `link_timeout_s` set, when that long passes without a completed non-blank
-//! line (any line, valid or not, counts as a sign of life), the platform returns home at the
-//! configured speeds (a group whose speed is off uses [`LINK_LOSS_SPEED_MM_S`] /
-//! [`LINK_LOSS_SPEED_DEG_S`] so it never jumps). It fires once per silence.
+//! line (any line, valid or not, counts as a sign of life, and so does a command being
+//! carried out), the platform returns home at the configured speeds (a group whose speed is
+//! off uses [`LINK_LOSS_SPEED_MM_S`] / [`LINK_LOSS_SPEED_DEG_S`] so it never jumps). It fires
+//! once per silence, never before the timeout: silence is counted in whole frames from the
+//! first frame that starts after the line's end (so up to one frame late).
 
 use core::fmt::Write;
 use core::marker::PhantomData;
@@ -37,19 +52,85 @@ use kinematics_core::{Geometry, Libm, Math, Pose, LEGS};
 
 use crate::command::{self, Command};
 use crate::error::Error;
-use crate::motion::{Motion, Segment, SpeedLimits};
-use crate::protocol::Feed;
-use crate::report::{self, Fault, MotionReport, Notice, StatusReport, EOL};
+use crate::motion::{Checkpoints, Motion, Segment, SpeedLimits};
+use crate::protocol::{Feed, Lost};
+use crate::report::{self, Fault, Listing, MotionReport, Notice, StatusReport, EOL};
 use crate::session::Session;
-use crate::settings::{LinkSettings, SettingId, SettingValue, Settings, DEFAULT_BAUD};
+use crate::settings::{
+    LinkSettings, SettingError, SettingId, SettingValue, Settings, DEFAULT_BAUD,
+};
 
 /// Linear speed for returning home after link loss when `speed_mm_s` is off, mm/s.
 pub const LINK_LOSS_SPEED_MM_S: f32 = 10.0;
 /// Angular speed for returning home after link loss when `speed_deg_s` is off, deg/s.
 pub const LINK_LOSS_SPEED_DEG_S: f32 = 15.0;
+/// Most IK solutions of a path check in one slice of work ([`Controller::work`]): on the
+/// RP2040 one takes about 0.15 ms, so a slice stays under half a millisecond.
+pub const CHECKS_PER_SLICE: u32 = 3;
 
 /// Notices kept for links that have not shown them yet (the latest ones).
 const NOTICE_QUEUE: usize = 4;
+
+/// What a checked path is for.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Purpose {
+    /// `pose`, `move`, `nudge`, `home`: start the move (a jump if `jump`).
+    Move { jump: bool },
+    /// `check`: report, move nothing.
+    Check,
+    /// Link loss: return home.
+    ReturnHome,
+}
+
+/// A command's work left for later slices ([`Controller::work`]).
+// No heap to box the large variants into: there is one job at a time, held in place.
+#[allow(clippy::large_enum_variant)]
+#[derive(Debug, Clone)]
+enum Job {
+    /// A reachable target whose straight path is being checked.
+    Path {
+        purpose: Purpose,
+        /// The target's solution (solved when the command came).
+        solution: Solution,
+        segment: Segment,
+        checkpoints: Checkpoints,
+    },
+    /// A listing being written, line `next` next.
+    Listing { listing: Listing, next: usize },
+    /// New settings with new build numbers: their geometry and IK are built a step per slice.
+    Rebuild { candidate: Settings, stage: Rebuild },
+}
+
+/// How far a [`Job::Rebuild`] has got.
+#[allow(clippy::large_enum_variant)] // see Job
+#[derive(Debug, Clone)]
+enum Rebuild {
+    /// The geometry is to be built.
+    Geometry,
+    /// The geometry is built; its IK is next.
+    Solver(Geometry),
+    /// The IK is built; the pose being held must be drivable with it.
+    HeldPose(ik::Solver),
+}
+
+/// A job's outcome, for the reply.
+enum Done {
+    /// Reply `ok` (after any data already written).
+    Ok,
+    /// Reply with this error.
+    Refused(Error),
+    /// The job was the controller's own (link loss): no reply.
+    Quiet,
+}
+
+/// What starting a line did.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Begun {
+    /// Its final reply is written (or it was blank).
+    Answered,
+    /// A job runs; the reply comes when [`Controller::work`] completes it.
+    Pending,
+}
 
 /// The hardware-independent firmware: feed it bytes and frames.
 ///
@@ -68,8 +149,13 @@ pub struct Controller<M: Math = Libm> {
     solution: Solution,
     /// The move in progress was started by link loss.
     returning_home: bool,
-    /// Time since the last completed line, us.
-    silence_us: u32,
+    /// The work in progress, if any.
+    job: Option<Job>,
+    /// The motion holds still until the job's check ends (a move checked while moving).
+    holding: bool,
+    /// Time without a line, us, counted in whole frames from the first frame that started
+    /// after the last line; `None` until that frame.
+    silence_us: Option<u32>,
     /// Link loss already handled for this silence.
     link_loss_handled: bool,
     /// The last fault, until the next accepted move.
@@ -118,7 +204,9 @@ impl<M: Math> Controller<M> {
             motion: Motion::new(Pose::HOME),
             solution,
             returning_home: false,
-            silence_us: 0,
+            job: None,
+            holding: false,
+            silence_us: None,
             link_loss_handled: false,
             fault: None,
             new_pulses: false,
@@ -172,6 +260,12 @@ impl<M: Math> Controller<M> {
         self.motion.is_moving()
     }
 
+    /// True while a command's (or the controller's own) work is in progress: feed no bytes
+    /// until it is done, but keep calling [`Controller::work`] and [`Controller::on_frame`].
+    pub fn is_busy(&self) -> bool {
+        self.job.is_some()
+    }
+
     /// The pulses being commanded, us.
     pub fn pulses_us(&self) -> [f32; LEGS] {
         self.solution.pulse_us
@@ -205,14 +299,17 @@ impl<M: Math> Controller<M> {
     }
 
     /// Feeds one byte received on `session`'s link: echo and line editing; at the end of a
-    /// line, runs it and writes exactly one final reply to that link (blank lines get none).
+    /// line, runs it and writes exactly one final reply to that link (blank lines get none),
+    /// at once or, if the command has long work, when [`Controller::work`] completes it. Feed
+    /// no byte while [`Controller::is_busy`]: a line ended then is refused (`error:busy`).
     pub fn on_byte(&mut self, session: &mut Session, byte: u8, out: &mut impl Write) {
         match session.feed(byte, out) {
             Feed::Line => {
                 // Copied out so the link can take the next line while the command runs.
                 let line = session.take_line();
-                self.execute_line(session, &line, out);
-                session.prompt(out);
+                if self.begin_line(session, &line, out) == Begun::Answered {
+                    session.prompt(out);
+                }
             }
             Feed::Spoiled(why) => {
                 self.heard_from_host();
@@ -225,27 +322,114 @@ impl<M: Math> Controller<M> {
         }
     }
 
-    /// `session`'s link lost `dropped` received bytes: the line being received there is refused
-    /// when it ends (`error:rx-overflow`), and a warning goes to every link (to this one now).
-    pub fn on_rx_overflow(&mut self, session: &mut Session, dropped: u32, out: &mut impl Write) {
-        session.rx_overflow(dropped);
-        self.notify(Notice::RxOverflow { dropped });
+    /// Runs one line as if it had been typed on `session`'s link (any case, blank lines
+    /// ignored) and writes its replies there, its work done to the end at once: for
+    /// transports other than the byte stream, and for tests.
+    pub fn execute_line(&mut self, session: &mut Session, line: &str, out: &mut impl Write) {
+        if self.begin_line(session, line, out) == Begun::Pending {
+            while session.awaits_reply() {
+                self.work(session, out);
+            }
+        }
+    }
+
+    /// Does one slice of the work in progress: at most [`CHECKS_PER_SLICE`] IK solutions of a
+    /// path check, or one line of a listing. When the work of a command completes, its final
+    /// reply (and the prompt) goes to `session`, which must be the link that sent it
+    /// ([`Session::awaits_reply`]); called with another link, a command's work waits. The
+    /// controller's own work (the return home after link loss) goes on whichever link is
+    /// passed. Call it once per main-loop pass while [`Controller::is_busy`].
+    pub fn work(&mut self, session: &mut Session, out: &mut impl Write) {
+        let commanded = !matches!(
+            self.job,
+            Some(Job::Path {
+                purpose: Purpose::ReturnHome,
+                ..
+            })
+        );
+        if commanded && !session.awaits_reply() {
+            return;
+        }
+        let Some(job) = self.job.take() else {
+            return;
+        };
+        let done = match job {
+            Job::Path {
+                purpose,
+                solution,
+                segment,
+                mut checkpoints,
+            } => match self.check_slice(&segment, &mut checkpoints) {
+                None => {
+                    self.job = Some(Job::Path {
+                        purpose,
+                        solution,
+                        segment,
+                        checkpoints,
+                    });
+                    return;
+                }
+                Some(result) => self.finish_path(purpose, solution, segment, result, out),
+            },
+            Job::Listing { listing, next } => {
+                if listing.write_line(next, &self.settings, &self.solver, out) {
+                    self.job = Some(Job::Listing {
+                        listing,
+                        next: next + 1,
+                    });
+                    return;
+                }
+                Done::Ok
+            }
+            Job::Rebuild { candidate, stage } => match self.rebuild_step(candidate, stage) {
+                None => return,
+                Some(Ok(())) => Done::Ok,
+                Some(Err(e)) => Done::Refused(e),
+            },
+        };
+        self.holding = false;
+        match done {
+            Done::Quiet => {}
+            Done::Ok => self.reply(session, Ok(()), out),
+            Done::Refused(e) => self.reply(session, Err(e), out),
+        }
+    }
+
+    /// Bytes were lost on their way in (a receive queue was full, or the UART saw an overrun,
+    /// framing, parity or break error) and the board has just noticed: a warning goes to every
+    /// link at once (to this one now). `at_least` bytes so far; `in_uart`: the UART's
+    /// hardware lost them (it cannot tell how many). The line they cut is refused when the
+    /// board reaches the gap ([`Controller::on_rx_overflow`]).
+    pub fn on_input_lost(
+        &mut self,
+        session: &mut Session,
+        at_least: u32,
+        in_uart: bool,
+        out: &mut impl Write,
+    ) {
+        self.notify(Notice::InputLost { at_least, in_uart });
         self.write_notices(session, out);
+    }
+
+    /// The board reached the gap where `session`'s link lost bytes: the line being received
+    /// there is refused when it ends (`error:rx-overflow`, naming what was lost).
+    pub fn on_rx_overflow(&mut self, session: &mut Session, lost: Lost) {
+        session.rx_overflow(lost);
     }
 
     /// Writes the notices (faults, link loss, warnings) this link has not shown yet, restoring
     /// the prompt and the line being typed when echo is on. Call it for every link after
-    /// anything that may notify (a frame, a receive overflow); notices pending for a link are
-    /// also written before its next reply.
+    /// anything that may notify (a frame, lost input); notices pending for a link are also
+    /// written before its next reply.
     pub fn write_notices(&self, session: &mut Session, out: &mut impl Write) {
         if !self.has_notices_for(session) {
             return;
         }
-        if session.echo() {
+        if session.echo() && !session.awaits_reply() {
             let _ = out.write_str(EOL);
         }
         self.flush_notices(session, out);
-        if session.echo() {
+        if session.echo() && !session.awaits_reply() {
             session.prompt(out);
             let _ = out.write_str(session.typed());
         }
@@ -255,13 +439,15 @@ impl<M: Math> Controller<M> {
     /// pulse widths (us, servo 1 first), always finite and within each servo's limits.
     pub fn on_frame(&mut self) -> [f32; LEGS] {
         let frame_us = 1_000_000 / u32::from(self.settings.frame_hz.max(1));
-        self.silence_us = self.silence_us.saturating_add(frame_us);
+        // The frame in which the last line ended counts nothing (part of it was not silent).
+        self.silence_us = Some(self.silence_us.map_or(0, |s| s.saturating_add(frame_us)));
         self.check_link();
 
-        if !self.motion.is_moving() {
-            // Standing still: the held pose's pulses are solved already (when it was reached or
-            // the settings changed), and the IK is deterministic. This keeps idle frames cheap,
-            // so a frame never delays a command much.
+        if !self.motion.is_moving() || self.holding {
+            // Standing still (or holding while a new path is checked): the held pose's pulses
+            // are solved already (when it was reached or the settings changed), and the IK is
+            // deterministic. This keeps idle frames cheap, so a frame never delays a command
+            // much.
             return self.safe_pulses();
         }
         let next = self.motion.next_pose();
@@ -292,80 +478,83 @@ impl<M: Math> Controller<M> {
         self.safe_pulses()
     }
 
-    /// Runs one line as if it had been typed on `session`'s link (any case, blank lines
-    /// ignored) and writes its replies there; for transports other than the byte stream.
-    pub fn execute_line(&mut self, session: &mut Session, line: &str, out: &mut impl Write) {
+    // ----- commands -----
+
+    /// Starts a line: its reply at once, or a job whose reply comes later.
+    fn begin_line(&mut self, session: &mut Session, line: &str, out: &mut impl Write) -> Begun {
         if line.bytes().all(|b| b == b' ' || b == b'\t') {
-            return;
+            return Begun::Answered;
         }
         self.heard_from_host();
         self.flush_notices(session, out);
+        if self.job.is_some() {
+            report::write_error(out, &Error::Pending);
+            return Begun::Answered;
+        }
         let result = command::parse(line)
             .map_err(Error::from)
-            .and_then(|cmd| self.run(session, cmd, out));
+            .and_then(|cmd| self.run(session, cmd));
+        match result {
+            Ok(Begun::Answered) => {
+                report::write_ok(out);
+                Begun::Answered
+            }
+            Ok(Begun::Pending) => {
+                session.set_awaiting_reply(true);
+                Begun::Pending
+            }
+            Err(e) => {
+                report::write_error(out, &e);
+                Begun::Answered
+            }
+        }
+    }
+
+    /// Writes a job's final reply to `session` and the prompt.
+    fn reply(&mut self, session: &mut Session, result: Result<(), Error>, out: &mut impl Write) {
+        session.set_awaiting_reply(false);
+        // The host is alive: the link-loss silence starts from the reply.
+        self.heard_from_host();
+        self.flush_notices(session, out);
         match result {
             Ok(()) => report::write_ok(out),
             Err(e) => report::write_error(out, &e),
         }
+        session.prompt(out);
     }
 
-    // ----- commands -----
-
-    fn run(
-        &mut self,
-        session: &mut Session,
-        cmd: Command,
-        out: &mut impl Write,
-    ) -> Result<(), Error> {
+    fn run(&mut self, session: &mut Session, cmd: Command) -> Result<Begun, Error> {
         match cmd {
             Command::Pose(target) => self.move_to(target),
             Command::Move(values) => self.move_to(values.apply(self.motion.target(), false)),
             Command::Nudge(values) => self.move_to(values.apply(self.motion.target(), true)),
             Command::Home => self.move_to(Pose::HOME),
-            Command::Check(target) => {
-                let (solution, segment) = self.plan(target, self.speed_limits())?;
-                let duration_s = segment.frames() as f32 / f32::from(self.settings.frame_hz);
-                let duration_s = if segment.start() == segment.target() {
-                    0.0
-                } else {
-                    duration_s
-                };
-                report::write_check(out, &solution.arm_rad, &solution.pulse_us, duration_s);
-                Ok(())
-            }
+            Command::Check(target) => self.start_path(target, self.speed_limits(), Purpose::Check),
             Command::Stop => {
                 self.motion.stop();
                 self.returning_home = false;
-                Ok(())
+                Ok(Begun::Answered)
             }
-            Command::Status => {
-                report::write_status(out, &self.status());
-                Ok(())
-            }
-            Command::Geometry => {
-                report::write_geometry(out, &self.settings, &self.solver);
-                Ok(())
-            }
-            Command::Config => {
-                let link = LinkSettings {
-                    baud: self.baud,
-                    echo: session.echo(),
-                };
-                report::write_config(out, &self.settings, &link);
-                Ok(())
-            }
-            Command::Help => {
-                report::write_help(out);
-                Ok(())
-            }
+            Command::Status => Ok(self.list(Listing::Status(self.status()))),
+            Command::Geometry => Ok(self.list(Listing::Geometry)),
+            Command::Config => Ok(self.list(Listing::Config(LinkSettings {
+                baud: self.baud,
+                echo: session.echo(),
+            }))),
+            Command::Help => Ok(self.list(Listing::Help)),
             Command::Set(SettingId::Echo, SettingValue::Flag(on)) => {
                 session.set_echo(on);
-                Ok(())
+                Ok(Begun::Answered)
             }
             Command::Set(SettingId::Baud, SettingValue::Whole(baud)) => {
+                if baud != self.baud {
+                    // The prompt after the `ok` must go out at the new rate, which the board
+                    // switches to once the `ok` has left (see Session::prompt_deferred).
+                    session.defer_prompt();
+                }
                 self.baud = baud;
                 self.generation = self.generation.wrapping_add(1);
-                Ok(())
+                Ok(Begun::Answered)
             }
             Command::Set(id, value) => {
                 let moves_matter = matches!(
@@ -388,6 +577,12 @@ impl<M: Math> Controller<M> {
         }
     }
 
+    /// Starts writing a listing, a line per slice.
+    fn list(&mut self, listing: Listing) -> Begun {
+        self.job = Some(Job::Listing { listing, next: 0 });
+        Begun::Pending
+    }
+
     fn speed_limits(&self) -> SpeedLimits {
         SpeedLimits {
             mm_per_s: self.settings.speed_mm_s,
@@ -395,9 +590,20 @@ impl<M: Math> Controller<M> {
         }
     }
 
-    /// Checks a target and the straight path to it from the current pose.
-    fn plan(&self, target: Pose, limits: SpeedLimits) -> Result<(Solution, Segment), Error> {
-        // The target itself first: its error is the most useful one.
+    fn move_to(&mut self, target: Pose) -> Result<Begun, Error> {
+        let limits = self.speed_limits();
+        let jump = !(limits.mm_per_s > 0.0 || limits.deg_per_s > 0.0);
+        self.start_path(target, limits, Purpose::Move { jump })
+    }
+
+    /// Checks the target now (its error is the most useful one), then starts the check of the
+    /// straight path to it from the current pose as a job.
+    fn start_path(
+        &mut self,
+        target: Pose,
+        limits: SpeedLimits,
+        purpose: Purpose,
+    ) -> Result<Begun, Error> {
         let solution = self.solver.solve::<M>(&self.settings.servos, &target)?;
         let segment = Segment::plan(
             *self.motion.pose(),
@@ -405,34 +611,89 @@ impl<M: Math> Controller<M> {
             limits,
             f32::from(self.settings.frame_hz),
         );
-        segment
-            .check_path(|p| {
-                if *p == target {
-                    return Ok(()); // solved above
-                }
-                self.solver.solve::<M>(&self.settings.servos, p).map(|_| ())
-            })
-            .map_err(|e| Error::PathBlocked {
-                percent: e.fraction * 100.0,
-                cause: e.error,
-            })?;
-        Ok((solution, segment))
+        // A move checked while moving: the platform holds here until the check ends.
+        self.holding = purpose != Purpose::Check && self.motion.is_moving();
+        self.job = Some(Job::Path {
+            purpose,
+            solution,
+            segment,
+            checkpoints: segment.checkpoints(),
+        });
+        Ok(Begun::Pending)
     }
 
-    fn move_to(&mut self, target: Pose) -> Result<(), Error> {
-        let limits = self.speed_limits();
-        let (solution, segment) = self.plan(target, limits)?;
-        if limits.mm_per_s > 0.0 || limits.deg_per_s > 0.0 {
-            self.start(segment);
-        } else {
-            // No speed limit: a jump, made now (see the module docs on latency).
-            self.motion = Motion::new(target);
-            self.solution = solution;
-            self.new_pulses = true;
-            self.returning_home = false;
-            self.fault = None;
+    /// Checks up to [`CHECKS_PER_SLICE`] more poses of the path: `None` if poses remain,
+    /// `Some(Ok)` if the whole path is clear, `Some(Err)` at the first that is not.
+    fn check_slice(
+        &self,
+        segment: &Segment,
+        checkpoints: &mut Checkpoints,
+    ) -> Option<Result<(), Error>> {
+        let mut solved = 0;
+        while solved < CHECKS_PER_SLICE {
+            let Some((pose, fraction)) = checkpoints.next() else {
+                return Some(Ok(()));
+            };
+            if pose == *segment.target() {
+                continue; // solved when the command came
+            }
+            solved += 1;
+            if let Err(cause) = self.solver.solve::<M>(&self.settings.servos, &pose) {
+                return Some(Err(Error::PathBlocked {
+                    percent: fraction * 100.0,
+                    cause,
+                }));
+            }
         }
-        Ok(())
+        None
+    }
+
+    /// What a checked path leads to.
+    fn finish_path(
+        &mut self,
+        purpose: Purpose,
+        solution: Solution,
+        segment: Segment,
+        result: Result<(), Error>,
+        out: &mut impl Write,
+    ) -> Done {
+        match (purpose, result) {
+            (Purpose::Move { jump: false }, Ok(())) => {
+                self.start(segment);
+                Done::Ok
+            }
+            (Purpose::Move { jump: true }, Ok(())) => {
+                // No speed limit: a jump, made now (see the module docs on latency).
+                self.motion = Motion::new(*segment.target());
+                self.solution = solution;
+                self.new_pulses = true;
+                self.returning_home = false;
+                self.fault = None;
+                Done::Ok
+            }
+            (Purpose::Check, Ok(())) => {
+                let duration_s = if segment.start() == segment.target() {
+                    0.0
+                } else {
+                    segment.frames() as f32 / f32::from(self.settings.frame_hz)
+                };
+                report::write_check(out, &solution.arm_rad, &solution.pulse_us, duration_s);
+                Done::Ok
+            }
+            (Purpose::ReturnHome, Ok(())) => {
+                self.start(segment);
+                self.returning_home = true;
+                self.notify(Notice::LinkLost {
+                    timeout_s: self.settings.link_timeout_s,
+                });
+                Done::Quiet
+            }
+            (Purpose::ReturnHome, Err(e)) => {
+                self.home_blocked(e);
+                Done::Quiet
+            }
+            (_, Err(e)) => Done::Refused(e),
+        }
     }
 
     /// Starts a checked move.
@@ -442,15 +703,45 @@ impl<M: Math> Controller<M> {
         self.fault = None;
     }
 
-    fn change_settings(&mut self, candidate: Settings) -> Result<(), Error> {
-        // A new geometry and IK only if the build numbers changed (that is the slow part).
-        let solver = if candidate.layout == self.settings.layout {
-            candidate.check_values()?;
-            self.solver.clone()
-        } else {
-            candidate.validate_with::<M>()?
+    /// Commits `candidate` if it is valid and the pose being held can still be driven with it.
+    /// New build numbers mean a new geometry and IK: that is built as a job, a step per slice.
+    fn change_settings(&mut self, candidate: Settings) -> Result<Begun, Error> {
+        candidate.check_values()?;
+        if candidate.layout != self.settings.layout {
+            self.job = Some(Job::Rebuild {
+                candidate,
+                stage: Rebuild::Geometry,
+            });
+            return Ok(Begun::Pending);
+        }
+        self.commit_settings(candidate, self.solver.clone())?;
+        Ok(Begun::Answered)
+    }
+
+    /// One step of building new settings' geometry and IK: `None` while steps remain, then the
+    /// outcome (committed, or why not).
+    fn rebuild_step(&mut self, candidate: Settings, stage: Rebuild) -> Option<Result<(), Error>> {
+        let next = match stage {
+            Rebuild::Geometry => match candidate.layout.build_with::<M>() {
+                Ok(geometry) => Rebuild::Solver(geometry),
+                Err(e) => return Some(Err(SettingError::BadGeometry(e).into())),
+            },
+            Rebuild::Solver(geometry) => match ik::Solver::new_with::<M>(geometry) {
+                Ok(solver) => Rebuild::HeldPose(solver),
+                Err(e) => return Some(Err(SettingError::BadGeometry(e).into())),
+            },
+            Rebuild::HeldPose(solver) => return Some(self.commit_settings(candidate, solver)),
         };
-        // The pose being held must stay drivable (and the pulses change right away).
+        self.job = Some(Job::Rebuild {
+            candidate,
+            stage: next,
+        });
+        None
+    }
+
+    /// Commits checked settings and their IK if the pose being held can be driven with them
+    /// (its pulses change right away).
+    fn commit_settings(&mut self, candidate: Settings, solver: ik::Solver) -> Result<(), Error> {
         let solution = solver
             .solve::<M>(&candidate.servos, self.motion.pose())
             .map_err(|cause| Error::PoseConflict { cause })?;
@@ -462,7 +753,7 @@ impl<M: Math> Controller<M> {
         Ok(())
     }
 
-    fn status(&self) -> StatusReport<'_> {
+    fn status(&self) -> StatusReport {
         let hz = f32::from(self.settings.frame_hz);
         let motion = match self.motion.progress() {
             None => MotionReport::Idle,
@@ -483,18 +774,18 @@ impl<M: Math> Controller<M> {
         };
         StatusReport {
             motion,
-            pose: self.motion.pose(),
-            target: self.motion.target(),
-            arm_rad: &self.solution.arm_rad,
-            pulse_us: &self.solution.pulse_us,
-            fault: self.fault.as_ref(),
+            pose: *self.motion.pose(),
+            target: *self.motion.target(),
+            arm_rad: self.solution.arm_rad,
+            pulse_us: self.solution.pulse_us,
+            fault: self.fault,
         }
     }
 
     // ----- link loss -----
 
     fn heard_from_host(&mut self) {
-        self.silence_us = 0;
+        self.silence_us = None;
         self.link_loss_handled = false;
     }
 
@@ -503,7 +794,13 @@ impl<M: Math> Controller<M> {
         if timeout_s <= 0.0 || self.link_loss_handled {
             return;
         }
-        if (self.silence_us as f32) < timeout_s * 1e6 {
+        // A command being carried out is a sign of life; and one job at a time.
+        if self.job.is_some() {
+            self.heard_from_host();
+            return;
+        }
+        let silence_us = self.silence_us.unwrap_or(0);
+        if (silence_us as f32) < timeout_s * 1e6 {
             return;
         }
         self.link_loss_handled = true;
@@ -515,24 +812,22 @@ impl<M: Math> Controller<M> {
             mm_per_s: or(self.settings.speed_mm_s, LINK_LOSS_SPEED_MM_S),
             deg_per_s: or(self.settings.speed_deg_s, LINK_LOSS_SPEED_DEG_S),
         };
-        match self.plan(Pose::HOME, limits) {
-            Ok((_, segment)) => {
-                self.start(segment);
-                self.returning_home = true;
-                self.notify(Notice::LinkLost { timeout_s });
-            }
-            Err(e) => {
-                self.motion.stop();
-                let cause = match e {
-                    Error::Pose(cause) | Error::PathBlocked { cause, .. } => cause,
-                    // `plan` only fails with the two above.
-                    _ => IkError::Unreachable { leg: 0 },
-                };
-                let fault = Fault::HomeBlocked { cause };
-                self.fault = Some(fault);
-                self.notify(Notice::Fault(fault));
-            }
+        if let Err(e) = self.start_path(Pose::HOME, limits, Purpose::ReturnHome) {
+            self.home_blocked(e);
         }
+    }
+
+    /// Link loss, but home cannot be reached: stop and hold, and say so.
+    fn home_blocked(&mut self, e: Error) {
+        self.motion.stop();
+        let cause = match e {
+            Error::Pose(cause) | Error::PathBlocked { cause, .. } => cause,
+            // Only the two above come from a path.
+            _ => IkError::Unreachable { leg: 0 },
+        };
+        let fault = Fault::HomeBlocked { cause };
+        self.fault = Some(fault);
+        self.notify(Notice::Fault(fault));
     }
 
     // ----- output helpers -----
@@ -679,11 +974,15 @@ mod tests {
         let stuck = pose([40.0, 20.0, -18.5, -5.0, -16.0, -26.0]);
         c.motion = Motion::new(stuck);
         c.solution = c.solver.solve::<Libm>(&c.settings.servos, &stuck).unwrap();
-        for _ in 0..20 {
+        let mut out = std::string::String::new();
+        for _ in 0..50 {
             let pulses = c.on_frame();
             assert!(within_limits(&c, &pulses));
+            // The board's main loop: a slice of the return home's check per pass.
+            c.work(&mut link, &mut out);
         }
-        assert!(!c.is_moving());
+        assert_eq!(out, "", "the controller's own work replies to nobody");
+        assert!(!c.is_moving() && !c.is_busy());
         assert_eq!(*c.pose(), stuck);
         assert!(matches!(c.fault(), Some(Fault::HomeBlocked { .. })));
         let out = notices(&c, &mut link);
@@ -714,14 +1013,17 @@ mod tests {
     #[test]
     fn notice_queue_keeps_the_latest() {
         let (mut c, mut link) = (quiet(), program());
-        for dropped in 1..=10 {
-            c.notify(Notice::RxOverflow { dropped });
+        for at_least in 1..=10 {
+            c.notify(Notice::InputLost {
+                at_least,
+                in_uart: false,
+            });
         }
         let mut out = std::string::String::new();
         c.write_notices(&mut link, &mut out);
         assert_eq!(out.lines().count(), NOTICE_QUEUE);
         assert!(
-            out.contains("10 bytes") && !out.contains(" 1 bytes"),
+            out.contains("at least 10 bytes") && !out.contains("at least 1 byte "),
             "{out}"
         );
         // Shown once per link: the same link gets nothing more, another link gets them too.
@@ -729,6 +1031,13 @@ mod tests {
         c.write_notices(&mut link, &mut out);
         assert_eq!(out, "");
         assert_eq!(notices(&c, &mut program()).lines().count(), NOTICE_QUEUE);
+    }
+
+    /// Runs the work of `link`'s command to its end, as the board's main loop does.
+    fn finish(c: &mut Controller, link: &mut Session, out: &mut std::string::String) {
+        while link.awaits_reply() {
+            c.work(link, out);
+        }
     }
 
     #[test]
@@ -742,10 +1051,18 @@ mod tests {
         to_terminal.clear();
         to_program.clear();
         // Each link assembles its own line, even interleaved byte by byte.
-        for (a, b) in b"home\r".iter().zip(b"help\n") {
+        for (a, b) in b"home".iter().zip(b"help") {
             c.on_byte(&mut terminal, *a, &mut to_terminal);
             c.on_byte(&mut program, *b, &mut to_program);
         }
+        c.on_byte(&mut terminal, b'\r', &mut to_terminal);
+        assert!(terminal.awaits_reply() && !program.awaits_reply());
+        // The work goes on only with the link that asked.
+        c.work(&mut program, &mut to_program);
+        assert!(terminal.awaits_reply());
+        finish(&mut c, &mut terminal, &mut to_terminal);
+        c.on_byte(&mut program, b'\n', &mut to_program);
+        finish(&mut c, &mut program, &mut to_program);
         assert_eq!(to_terminal, "home\r\nok\r\n> ");
         assert!(
             to_program.starts_with("# commands") && to_program.ends_with("\r\nok\r\n"),
@@ -761,16 +1078,238 @@ mod tests {
         to_terminal.clear();
         to_program.clear();
         c.on_byte(&mut program, b's', &mut to_program);
-        c.on_rx_overflow(&mut terminal, 9, &mut to_terminal);
+        c.on_input_lost(&mut terminal, 9, false, &mut to_terminal);
         c.write_notices(&mut program, &mut to_program);
         c.write_notices(&mut terminal, &mut to_terminal);
         assert_eq!(
             to_terminal,
-            "# warning: receive queue overflowed, 9 bytes lost\r\n"
+            "# warning: receive queue overflowed, input lost (at least 9 bytes so far)\r\n"
         );
         assert_eq!(
             to_program,
-            "s\r\n# warning: receive queue overflowed, 9 bytes lost\r\n> s"
+            "s\r\n# warning: receive queue overflowed, input lost (at least 9 bytes so far)\r\n> s"
         );
+    }
+
+    #[test]
+    fn a_long_path_check_runs_in_slices_and_the_reply_comes_at_its_end() {
+        let (mut c, mut link) = (quiet(), program());
+        let mut out = std::string::String::new();
+        c.execute_line(&mut link, "set speed_mm_s 1", &mut out);
+        // 20 mm at 1 mm/s: 1000 frames, every one checked.
+        for &b in b"pose 20 0 0 0 0 0\n" {
+            c.on_byte(&mut link, b, &mut out);
+        }
+        assert_eq!(out, "ok\r\n", "nothing but the set's reply yet");
+        assert!(c.is_busy() && link.awaits_reply() && !c.is_moving());
+        let mut slices = 0;
+        while link.awaits_reply() {
+            // Frames go on between slices; the platform does not move before the reply.
+            c.on_frame();
+            assert_eq!(*c.pose(), Pose::HOME);
+            c.work(&mut link, &mut out);
+            slices += 1;
+        }
+        assert_eq!(out, "ok\r\nok\r\n");
+        assert!(c.is_moving() && !c.is_busy());
+        // 1000 checks of which the target was solved when the command came, CHECKS_PER_SLICE
+        // a slice (and a last slice may find nothing left).
+        let full = 999u32.div_ceil(CHECKS_PER_SLICE);
+        assert!(slices == full || slices == full + 1, "{slices} slices");
+    }
+
+    #[test]
+    fn a_move_checked_while_moving_holds_the_platform_then_starts_from_there() {
+        let (mut c, mut link) = (quiet(), program());
+        let mut out = std::string::String::new();
+        c.execute_line(&mut link, "set speed_mm_s 1", &mut out);
+        c.execute_line(&mut link, "pose 10 0 0 0 0 0", &mut out);
+        for _ in 0..100 {
+            c.on_frame();
+        }
+        let here = *c.pose();
+        assert!(here.x_mm > 1.9 && here.x_mm < 2.1, "{here:?}");
+        for &b in b"move x=-10\n" {
+            c.on_byte(&mut link, b, &mut out);
+        }
+        assert!(link.awaits_reply());
+        let pulses = c.on_frame();
+        while link.awaits_reply() {
+            assert_eq!(c.on_frame(), pulses, "the platform holds during the check");
+            assert_eq!(*c.pose(), here);
+            c.work(&mut link, &mut out);
+        }
+        assert!(out.ends_with("ok\r\n"));
+        assert_eq!(
+            *c.target(),
+            Pose::from_degrees(-10.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+        );
+        c.on_frame();
+        assert!(
+            c.pose().x_mm < here.x_mm,
+            "moving towards the new target from where it held"
+        );
+        // A refused move lets the move in progress go on, from where it held.
+        out.clear();
+        let before = *c.target();
+        for &b in b"move z=80\n" {
+            c.on_byte(&mut link, b, &mut out);
+        }
+        assert!(out.starts_with("error:unreachable"), "{out}");
+        assert_eq!(*c.target(), before);
+        let held = *c.pose();
+        c.on_frame();
+        assert!(c.pose().x_mm < held.x_mm);
+    }
+
+    #[test]
+    fn check_runs_in_slices_without_holding_a_move() {
+        let (mut c, mut link) = (quiet(), program());
+        let mut out = std::string::String::new();
+        c.execute_line(&mut link, "set speed_mm_s 1", &mut out);
+        c.execute_line(&mut link, "pose 10 0 0 0 0 0", &mut out);
+        out.clear();
+        for &b in b"check -10 0 0 0 0 0\n" {
+            c.on_byte(&mut link, b, &mut out);
+        }
+        let mut last = *c.pose();
+        while link.awaits_reply() {
+            c.on_frame();
+            assert!(c.pose().x_mm > last.x_mm, "the move goes on during a check");
+            last = *c.pose();
+            c.work(&mut link, &mut out);
+        }
+        assert!(
+            out.starts_with("# arm_deg: ") && out.ends_with("ok\r\n"),
+            "{out}"
+        );
+        assert_eq!(
+            *c.target(),
+            Pose::from_degrees(10.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+        );
+    }
+
+    #[test]
+    fn a_line_sent_before_the_reply_is_refused_not_lost() {
+        let (mut c, mut link) = (quiet(), program());
+        let mut out = std::string::String::new();
+        for &b in b"status\nhome\n" {
+            c.on_byte(&mut link, b, &mut out);
+        }
+        assert_eq!(
+            out,
+            "error:busy the previous command is still being carried out; wait for its reply\r\n"
+        );
+        finish(&mut c, &mut link, &mut out);
+        assert!(
+            out.ends_with("# pulse_us: 1500.00 1500.00 1500.00 1500.00 1500.00 1500.00\r\nok\r\n")
+        );
+    }
+
+    #[test]
+    fn a_listing_is_written_a_line_per_slice() {
+        let (mut c, mut link) = (quiet(), program());
+        let mut out = std::string::String::new();
+        for &b in b"config\n" {
+            c.on_byte(&mut link, b, &mut out);
+        }
+        let mut lines = std::vec::Vec::new();
+        while link.awaits_reply() {
+            let before = out.len();
+            c.work(&mut link, &mut out);
+            lines.push(out[before..].matches("\r\n").count());
+        }
+        // 12 settings, 6 servos, then the reply.
+        assert_eq!(lines.len(), 19);
+        assert!(lines.iter().all(|&n| n == 1), "{lines:?}");
+        assert!(out.ends_with("ok\r\n"));
+    }
+
+    #[test]
+    fn new_build_numbers_are_built_a_step_per_slice() {
+        let (mut c, mut link) = (quiet(), program());
+        let mut out = std::string::String::new();
+        let h0 = c.geometry().home_height_mm();
+        for &b in b"set rod_mm 125\n" {
+            c.on_byte(&mut link, b, &mut out);
+        }
+        assert!(link.awaits_reply() && out.is_empty());
+        let mut slices = 0;
+        while link.awaits_reply() {
+            assert_eq!(
+                c.settings().layout.rod_mm,
+                120.0,
+                "committed only at the end"
+            );
+            c.work(&mut link, &mut out);
+            slices += 1;
+        }
+        assert_eq!((slices, out.as_str()), (3, "ok\r\n"));
+        assert_eq!(c.settings().layout.rod_mm, 125.0);
+        assert!(c.geometry().home_height_mm() > h0 + 4.0);
+        // A build that cannot be is refused at the step that finds it; nothing changes.
+        out.clear();
+        let before = *c.settings();
+        c.execute_line(&mut link, "set rod_mm 15", &mut out);
+        assert!(out.starts_with("error:bad-geometry "), "{out}");
+        assert_eq!(*c.settings(), before);
+        // A value out of range is refused at once, before any step.
+        out.clear();
+        for &b in b"set rod_mm 3000\n" {
+            c.on_byte(&mut link, b, &mut out);
+        }
+        assert!(!link.awaits_reply() && out.starts_with("error:out-of-range "));
+    }
+
+    #[test]
+    fn link_loss_never_comes_before_the_timeout() {
+        let (mut c, mut link) = (quiet(), program());
+        let mut out = std::string::String::new();
+        // 50 Hz: 20 ms frames; 0.1 s is 5 frames, counted from the first frame after the line.
+        c.execute_line(&mut link, "set link_timeout_s 0.1", &mut out);
+        c.execute_line(&mut link, "pose 0 0 1 0 0 0", &mut out);
+        while c.is_moving() {
+            c.on_frame();
+        }
+        c.execute_line(&mut link, "status", &mut out);
+        // The line ended somewhere inside the current frame: that frame counts nothing.
+        for frame in 1..=5 {
+            c.on_frame();
+            assert!(
+                !c.is_busy() && !c.is_moving(),
+                "link loss after {frame} frames"
+            );
+        }
+        c.on_frame();
+        assert!(
+            c.is_busy(),
+            "the return home is being checked after 6 frames"
+        );
+        while c.is_busy() {
+            c.work(&mut link, &mut out);
+        }
+        assert!(c.is_moving());
+        assert!(notices(&c, &mut link).starts_with("# link lost: no command for 0.1 s"));
+    }
+
+    #[test]
+    fn the_prompt_after_a_baud_change_waits_for_the_switch() {
+        let mut c = quiet();
+        let mut terminal = Session::new();
+        let mut out = std::string::String::new();
+        for &b in b"set baud 230400\r" {
+            c.on_byte(&mut terminal, b, &mut out);
+        }
+        assert_eq!(out, "set baud 230400\r\nok\r\n", "nothing after the ok");
+        terminal.write_deferred_prompt(&mut out);
+        assert!(out.ends_with("ok\r\n> "));
+        terminal.write_deferred_prompt(&mut out);
+        assert!(out.ends_with("ok\r\n> "), "once");
+        // Unchanged rate: no switch, so the prompt comes at once.
+        out.clear();
+        for &b in b"set baud 230400\r" {
+            c.on_byte(&mut terminal, b, &mut out);
+        }
+        assert!(out.ends_with("ok\r\n> "));
     }
 }

@@ -36,6 +36,9 @@ pub enum Error {
     },
     /// Not possible while the platform moves.
     Busy,
+    /// A line came before the reply to the one before (only where the board feeds bytes while
+    /// the controller is busy, which the firmware never does).
+    Pending,
 }
 
 impl From<Spoiled> for Error {

@@ -20,7 +20,8 @@
 //!   output conventions are documented there).
 //! - [`controller`]: [`Controller`], the platform's state, which ties them together.
 //!
-//! The board keeps one [`Session`] per serial link and uses it like this:
+//! The board keeps one [`Session`] per serial link and uses it like this, in a main loop whose
+//! every pass does little (a command's long work is done a slice per pass):
 //!
 //! ```
 //! # use core::fmt::Write;
@@ -28,8 +29,15 @@
 //! let mut ctl = control::Controller::new(control::Settings::default());
 //! let mut uart = control::Session::new();
 //! ctl.banner(&mut uart, &mut out);
-//! for &byte in b"pose 0 0 5 0 0 0\r" {
-//!     ctl.on_byte(&mut uart, byte, &mut out); // echo, editing, and at the line end one reply
+//! let mut received = b"pose 0 0 5 0 0 0\r".iter();
+//! loop {
+//!     if ctl.is_busy() {
+//!         ctl.work(&mut uart, &mut out); // a slice of a command's work; its reply at the end
+//!     } else if let Some(&byte) = received.next() {
+//!         ctl.on_byte(&mut uart, byte, &mut out); // echo, editing; at a line end, the command
+//!     } else {
+//!         break;
+//!     }
 //! }
 //! assert!(out.contains("\r\nok\r\n"));
 //! let generation = ctl.settings_generation();

@@ -37,8 +37,18 @@ pub enum Spoiled {
     TooLong,
     /// A byte that is not printable ASCII (first one seen).
     BadByte(u8),
-    /// The receive queue lost this many bytes while the line was being received.
-    RxOverflow(u32),
+    /// Bytes were lost while the line was being received.
+    RxOverflow(Lost),
+}
+
+/// Bytes lost on their way in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Lost {
+    /// How many; exact unless `in_uart`.
+    pub bytes: u32,
+    /// Some were lost in the UART's hardware (a FIFO overrun, or a framing, parity or break
+    /// error): `bytes` is only a lower bound, since the UART cannot tell how many it missed.
+    pub in_uart: bool,
 }
 
 /// What one received byte did.
@@ -124,12 +134,15 @@ impl LineBuffer {
         self.spoiled = None;
     }
 
-    /// Records that the receive queue dropped `count` bytes: the current line is spoiled.
-    pub fn rx_overflow(&mut self, count: u32) {
-        self.spoiled = Some(match self.spoiled {
-            Some(Spoiled::RxOverflow(n)) => Spoiled::RxOverflow(n.saturating_add(count)),
-            _ => Spoiled::RxOverflow(count),
-        });
+    /// Records that bytes were lost on the way in: the current line is spoiled.
+    pub fn rx_overflow(&mut self, lost: Lost) {
+        self.spoiled = Some(Spoiled::RxOverflow(match self.spoiled {
+            Some(Spoiled::RxOverflow(before)) => Lost {
+                bytes: before.bytes.saturating_add(lost.bytes),
+                in_uart: before.in_uart || lost.in_uart,
+            },
+            _ => lost,
+        }));
     }
 
     /// Feeds one received byte.
@@ -409,10 +422,14 @@ mod tests {
     fn rx_overflow_spoils_the_current_line_and_adds_up() {
         let mut lb = LineBuffer::new();
         lb.feed(b'p');
-        lb.rx_overflow(3);
-        lb.rx_overflow(4);
+        let lost = |bytes, in_uart| Lost { bytes, in_uart };
+        lb.rx_overflow(lost(3, false));
+        lb.rx_overflow(lost(4, true));
         lb.feed(b'q');
-        assert_eq!(lb.feed(b'\n'), Feed::Spoiled(Spoiled::RxOverflow(7)));
+        assert_eq!(
+            lb.feed(b'\n'),
+            Feed::Spoiled(Spoiled::RxOverflow(lost(7, true)))
+        );
         lb.feed(b'?');
         assert_eq!(lb.feed(b'\n'), Feed::Line);
         assert_eq!(lb.line(), "?");

@@ -5,7 +5,7 @@
 
 use core::fmt::Write;
 
-use crate::protocol::{Feed, LineBuffer, MAX_LINE};
+use crate::protocol::{Feed, LineBuffer, Lost, MAX_LINE};
 use crate::report;
 
 /// The state of one link.
@@ -15,6 +15,10 @@ pub struct Session {
     echo: bool,
     /// Sequence number of the first notice this link has not been shown.
     next_notice: u32,
+    /// A command from this link is being carried out; its reply is still to come.
+    awaiting_reply: bool,
+    /// The prompt after the last reply waits for the board to switch the baud rate.
+    prompt_deferred: bool,
 }
 
 impl Default for Session {
@@ -33,6 +37,8 @@ impl Session {
             line: LineBuffer::new(),
             echo: true,
             next_notice: 0,
+            awaiting_reply: false,
+            prompt_deferred: false,
         }
     }
 
@@ -49,6 +55,29 @@ impl Session {
     /// What has been typed of the current line.
     pub fn typed(&self) -> &str {
         self.line.line()
+    }
+
+    /// True while a command this link sent is being carried out: its final reply is still to
+    /// come (from [`crate::Controller::work`], which must be given this session).
+    pub fn awaits_reply(&self) -> bool {
+        self.awaiting_reply
+    }
+
+    /// Writes the prompt held back after `set baud` changed the rate (echo on): call it once
+    /// the board has switched the UART to the new rate, so the prompt arrives readable.
+    pub fn write_deferred_prompt(&mut self, out: &mut impl Write) {
+        if core::mem::take(&mut self.prompt_deferred) {
+            self.prompt(out);
+        }
+    }
+
+    pub(crate) fn set_awaiting_reply(&mut self, awaiting: bool) {
+        self.awaiting_reply = awaiting;
+    }
+
+    /// The next prompt waits for [`Session::write_deferred_prompt`].
+    pub(crate) fn defer_prompt(&mut self) {
+        self.prompt_deferred = true;
     }
 
     /// Feeds one received byte to the line, echoing it when echo is on.
@@ -70,13 +99,13 @@ impl Session {
     }
 
     /// Bytes were lost on this link's way in: the line being received is refused when it ends.
-    pub(crate) fn rx_overflow(&mut self, dropped: u32) {
-        self.line.rx_overflow(dropped);
+    pub(crate) fn rx_overflow(&mut self, lost: Lost) {
+        self.line.rx_overflow(lost);
     }
 
-    /// Writes the prompt if echo is on.
+    /// Writes the prompt if echo is on (unless it waits for a baud-rate switch).
     pub(crate) fn prompt(&self, out: &mut impl Write) {
-        if self.echo {
+        if self.echo && !self.prompt_deferred {
             report::write_prompt(out);
         }
     }

@@ -535,8 +535,15 @@ fn rx_overflow_warns_at_once_and_refuses_the_line() {
     let mut s = Host::quiet();
     s.feed(b"pose 1 2");
     let mut out = String::new();
-    s.ctl.on_rx_overflow(&mut s.link, 17, &mut out);
+    s.ctl.on_input_lost(&mut s.link, 17, false, &mut out);
     assert!(out.starts_with("# ") && out.contains("17 bytes"), "{out:?}");
+    s.ctl.on_rx_overflow(
+        &mut s.link,
+        control::protocol::Lost {
+            bytes: 17,
+            in_uart: false,
+        },
+    );
     assert!(!out.contains("ok") && !out.contains("error:"));
     let out = s.feed(b" 3 0 0 0\r\n");
     assert_eq!(out.lines().count(), 1, "{out:?}");

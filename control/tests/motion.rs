@@ -191,15 +191,18 @@ fn link_loss_eases_home_after_the_timeout() {
     let mut s = session("10", "off");
     s.ok("set link_timeout_s 2");
     s.ok("pose 0 0 5 0 0 0");
-    // The timer runs from the last line: 2 s = 100 frames, moving or not.
-    s.frames(99);
+    // The timer runs in whole frames from the first frame that starts after the last line
+    // (the one the line ended in counts nothing, so link loss is never early): 2 s = 100
+    // frames after that one, moving or not.
+    s.frames(100);
     assert!(!s.ctl.is_moving());
     assert_eq!(s.ctl.target().z_mm, 5.0);
     s.frames(1);
     assert!(s.ctl.is_moving());
     assert_eq!(*s.ctl.target(), Pose::HOME);
-    // At the configured speed: 5 mm at 10 mm/s (one frame of it already done).
-    assert_eq!(s.run_until_idle(), 24);
+    // At the configured speed: 5 mm at 10 mm/s, from the next frame (the way home was
+    // checked after the frame that noticed the silence).
+    assert_eq!(s.run_until_idle(), 25);
     assert_eq!(*s.ctl.pose(), Pose::HOME);
     // The notice comes out now (write_notices) ...
     let out = s.notices();
@@ -216,7 +219,7 @@ fn link_loss_notice_comes_before_the_next_reply_if_not_fetched() {
     let mut s = session("10", "off");
     s.ok("set link_timeout_s 0.5");
     s.ok("pose 0 0 2 0 0 0");
-    s.frames(25);
+    s.frames(26);
     let (data, reply) = s.exchange("status");
     assert_eq!(reply, "ok");
     assert!(data[0].starts_with("# link lost:"), "{data:?}");
@@ -236,14 +239,14 @@ fn any_line_resets_the_link_timer() {
     s.err("nonsense"); // an erroneous line is still a sign of life
     s.frames(40);
     s.ok("?");
-    s.frames(49);
+    s.frames(50);
     assert_eq!(s.ctl.target().z_mm, 2.0);
     s.frames(1);
     assert_eq!(*s.ctl.target(), Pose::HOME);
     // Once per silence: back home it stays put, and a new command re-arms it.
     s.run_until_idle();
     s.ok("pose 0 0 1 0 0 0");
-    s.frames(50);
+    s.frames(51);
     assert_eq!(*s.ctl.target(), Pose::HOME);
 }
 
@@ -252,10 +255,10 @@ fn link_loss_with_speed_off_still_eases() {
     let mut s = session("off", "off");
     s.ok("set link_timeout_s 1");
     s.ok("pose 0 0 5 0 0 0");
-    s.frames(50);
+    s.frames(51);
     assert!(s.ctl.is_moving());
-    // 5 mm at the 10 mm/s fallback: 25 frames (one already done).
-    assert_eq!(s.run_until_idle(), 24);
+    // 5 mm at the 10 mm/s fallback: 25 frames.
+    assert_eq!(s.run_until_idle(), 25);
 }
 
 #[test]

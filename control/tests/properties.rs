@@ -66,6 +66,10 @@ proptest! {
         for (i, &b) in bytes.iter().enumerate() {
             let mut out = String::new();
             ctl.on_byte(&mut link, b, &mut out);
+            // As the board does: the command's work (and its reply) before the next byte.
+            while ctl.is_busy() {
+                ctl.work(&mut link, &mut out);
+            }
             let n = finals(&out);
             prop_assert!(n <= 1, "byte {} produced {:?}", i, out);
             if n == 1 {
@@ -80,6 +84,9 @@ proptest! {
         let mut out = String::new();
         for &b in b"\x03status\r" {
             ctl.on_byte(&mut link, b, &mut out);
+        }
+        while ctl.is_busy() {
+            ctl.work(&mut link, &mut out);
         }
         prop_assert_eq!(finals(&out), 1, "{:?}", out);
         prop_assert!(out.split("\r\n").any(|l| l == "ok"), "{:?}", out);

@@ -174,6 +174,15 @@ impl Checked {
         let expected = self.model.byte(b);
         let mut out = String::new();
         self.ctl.on_byte(&mut self.link, b, &mut out);
+        // As the board does: the command's work, a slice at a time, before the next byte; the
+        // reply comes at its end. (Frames between slices are left out here, so that "a refused
+        // command changes nothing" can be checked; the controller's tests cover them.)
+        let mut slices = 0u32;
+        while self.ctl.is_busy() {
+            self.ctl.work(&mut self.link, &mut out);
+            slices += 1;
+            assert!(slices < 100_000, "a command's work never ends: {out:?}");
+        }
         self.record(&out);
         check_output_bytes(&out);
         let finals = Self::finals(&out, echo_before);
@@ -252,12 +261,19 @@ impl Checked {
         let before = self.state();
         self.model.lost();
         let mut out = String::new();
-        self.ctl.on_rx_overflow(&mut self.link, dropped, &mut out);
+        self.ctl
+            .on_input_lost(&mut self.link, dropped, false, &mut out);
+        let lost = control::protocol::Lost {
+            bytes: dropped,
+            in_uart: false,
+        };
+        self.ctl.on_rx_overflow(&mut self.link, lost);
         self.record(&out);
         check_output_bytes(&out);
+        let bytes = if dropped == 1 { "byte" } else { "bytes" };
         assert!(
             out.contains(&format!(
-                "# warning: receive queue overflowed, {dropped} bytes lost"
+                "# warning: receive queue overflowed, input lost (at least {dropped} {bytes} so far)"
             )),
             "a loss of {dropped} bytes was not reported at once: {out:?}"
         );
@@ -282,6 +298,11 @@ impl Checked {
                 "frame pulses differ from pulses_us"
             );
             let mut out = String::new();
+            // The controller's own work (the return home after link loss), as the main loop
+            // runs it between frames.
+            while self.ctl.is_busy() && !self.link.awaits_reply() {
+                self.ctl.work(&mut self.link, &mut out);
+            }
             self.ctl.write_notices(&mut self.link, &mut out);
             self.record(&out);
             check_output_bytes(&out);

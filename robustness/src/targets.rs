@@ -59,7 +59,10 @@ pub fn protocol(data: &[u8]) {
     };
     for &b in bytes {
         if with_losses && b == 0xFF {
-            lb.rx_overflow(1);
+            lb.rx_overflow(control::protocol::Lost {
+                bytes: 1,
+                in_uart: false,
+            });
             model.lost();
         } else {
             feed_byte(b, &mut lb, &mut model);

@@ -14,7 +14,7 @@ use kinematics_core::servo::{
 use super::format::Fixed;
 use crate::command::{Missing, ParseError, Verb};
 use crate::error::Error;
-use crate::protocol::{Spoiled, MAX_LINE};
+use crate::protocol::{Lost, Spoiled, MAX_LINE};
 use crate::settings::{Expected, SettingError};
 
 /// The error codes, one per kind of refusal. `error:<code>` is what programs match on.
@@ -146,7 +146,7 @@ impl Error {
             Error::Pose(e) => ik_code(e),
             Error::PathBlocked { .. } => Code::PathBlocked,
             Error::PoseConflict { .. } => Code::PoseConflict,
-            Error::Busy => Code::Busy,
+            Error::Busy | Error::Pending => Code::Busy,
         }
     }
 }
@@ -237,6 +237,9 @@ impl Display for Error {
                 IkMessage(cause)
             ),
             Error::Busy => f.write_str("the platform is moving; wait for it or send stop first"),
+            Error::Pending => f.write_str(
+                "the previous command is still being carried out; wait for its reply",
+            ),
         }
     }
 }
@@ -250,9 +253,15 @@ impl Display for SpoiledMessage {
                 f,
                 "line longer than {MAX_LINE} characters; it was discarded"
             ),
-            Spoiled::RxOverflow(dropped) => write!(
+            Spoiled::RxOverflow(Lost { bytes, in_uart: false }) => write!(
                 f,
-                "receive queue overflowed, {dropped} bytes lost; the line was discarded (wait for each reply before sending more)"
+                "receive queue overflowed, {} lost; the line was discarded (wait for each reply before sending more)",
+                Bytes(bytes)
+            ),
+            Spoiled::RxOverflow(Lost { bytes, in_uart: true }) => write!(
+                f,
+                "input lost (at least {}, some in the UART); the line was discarded (wait for each reply before sending more)",
+                Bytes(bytes)
             ),
             Spoiled::BadByte(byte) => write!(
                 f,
@@ -481,6 +490,18 @@ impl Display for GeometryMessage<'_> {
             GeometryError::HomeUnreachable { leg } => {
                 write!(f, "leg {leg}: the arm cannot reach its rod at the home pose")
             }
+        }
+    }
+}
+
+/// A count of bytes: `1 byte`, `2 bytes`.
+pub(super) struct Bytes(pub u32);
+
+impl Display for Bytes {
+    fn fmt(&self, f: &mut Formatter<'_>) -> fmt::Result {
+        match self.0 {
+            1 => f.write_str("1 byte"),
+            n => write!(f, "{n} bytes"),
         }
     }
 }

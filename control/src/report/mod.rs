@@ -34,9 +34,8 @@ mod replies;
 pub use errors::{usage, Code};
 pub use format::{degrees, Fixed, PoseText, Six, ValueText, Vector};
 pub use replies::{
-    refusal, write_banner, write_check, write_config, write_echo, write_error, write_geometry,
-    write_help, write_notice, write_ok, write_prompt, write_status, Fault, MotionReport, Notice,
-    StatusReport, EOL, HELP, PROMPT, VERSION,
+    refusal, write_banner, write_check, write_echo, write_error, write_notice, write_ok,
+    write_prompt, Fault, Listing, MotionReport, Notice, StatusReport, EOL, HELP, PROMPT, VERSION,
 };
 
 #[cfg(test)]
@@ -49,7 +48,7 @@ mod tests {
     use super::*;
     use crate::command::{Missing, ParseError, Verb};
     use crate::error::Error;
-    use crate::protocol::Spoiled;
+    use crate::protocol::{Lost, Spoiled};
     use crate::settings::{
         Expected, LayoutParam, ServoParam, ServoSel, SettingError, SettingId, BAUD_RATES,
     };
@@ -60,7 +59,10 @@ mod tests {
         let setting = SettingId::FrameHz;
         std::vec![
             Error::Spoiled(Spoiled::TooLong),
-            Error::Spoiled(Spoiled::RxOverflow(3)),
+            Error::Spoiled(Spoiled::RxOverflow(Lost {
+                bytes: 3,
+                in_uart: false,
+            })),
             Error::Spoiled(Spoiled::BadByte(0xC2)),
             Error::Parse(ParseError::UnknownCommand { word: word("fly") }),
             Error::Parse(ParseError::MissingField {
@@ -140,6 +142,7 @@ mod tests {
                 },
             },
             Error::Busy,
+            Error::Pending,
         ]
     }
 

@@ -6,7 +6,7 @@ use core::fmt::{self, Display, Formatter, Write};
 use kinematics_core::ik::{IkError, Solver};
 use kinematics_core::{Pose, LEGS};
 
-use super::errors::IkMessage;
+use super::errors::{Bytes, IkMessage};
 use super::format::{degrees, Fixed, PoseText, Six, ValueText, Vector};
 use crate::error::Error;
 use crate::protocol::Feed;
@@ -94,15 +94,8 @@ pub const HELP: &[&str] = &[
     "axes: x y z (mm, z from the home height) roll pitch yaw (degrees, applied yaw-pitch-roll)",
     "moves run in a straight line at speed_mm_s / speed_deg_s (0 or off: jump)",
     "servo settings: servo<1-6>.<trim_us|rate_us_rad|dir|min_us|max_us>, servos.<...> sets all six",
-    "editing: backspace erases, ctrl-u erases the line, ctrl-c abandons it; set echo off for programs",
+    "editing: backspace erases, ctrl-u erases the line, ctrl-c or ctrl-x abandons it; set echo off for programs",
 ];
-
-/// Writes the help text.
-pub fn write_help(out: &mut impl Write) {
-    for text in HELP {
-        line(out, format_args!("{text}"));
-    }
-}
 
 /// What the motion is doing, for `status`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -171,10 +164,13 @@ pub enum Notice {
         /// The timeout, s.
         timeout_s: f32,
     },
-    /// A receive queue overflowed (the line being received on that link will be refused).
-    RxOverflow {
-        /// Bytes lost.
-        dropped: u32,
+    /// Input was lost on its way in (the line it cuts will be refused when the board reaches
+    /// the gap).
+    InputLost {
+        /// Bytes lost so far (more may follow until the board catches up).
+        at_least: u32,
+        /// The UART's hardware lost them (an overrun or a line error), not a receive queue.
+        in_uart: bool,
     },
     /// The settings given at start-up were invalid; the defaults are used.
     SettingsRejected(Error),
@@ -188,9 +184,25 @@ pub fn write_notice(out: &mut impl Write, notice: &Notice) {
             out,
             format_args!("link lost: no command for {timeout_s} s; returning home"),
         ),
-        Notice::RxOverflow { dropped } => line(
+        Notice::InputLost {
+            at_least,
+            in_uart: false,
+        } => line(
             out,
-            format_args!("warning: receive queue overflowed, {dropped} bytes lost"),
+            format_args!(
+                "warning: receive queue overflowed, input lost (at least {} so far)",
+                Bytes(*at_least)
+            ),
+        ),
+        Notice::InputLost {
+            at_least,
+            in_uart: true,
+        } => line(
+            out,
+            format_args!(
+                "warning: UART receive error, input lost (at least {})",
+                Bytes(*at_least)
+            ),
         ),
         Notice::SettingsRejected(e) => line(
             out,
@@ -202,60 +214,109 @@ pub fn write_notice(out: &mut impl Write, notice: &Notice) {
     }
 }
 
-/// Everything `status` shows.
-#[derive(Debug, Clone, Copy)]
-pub struct StatusReport<'a> {
+/// Everything `status` shows, as it was when the command ran.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StatusReport {
     /// What the motion is doing.
     pub motion: MotionReport,
     /// The pose commanded on the last frame.
-    pub pose: &'a Pose,
+    pub pose: Pose,
     /// Where it is going.
-    pub target: &'a Pose,
+    pub target: Pose,
     /// Arm angles of the last frame, rad.
-    pub arm_rad: &'a [f32; LEGS],
+    pub arm_rad: [f32; LEGS],
     /// Pulse widths of the last frame, us.
-    pub pulse_us: &'a [f32; LEGS],
+    pub pulse_us: [f32; LEGS],
     /// The last fault, until the next accepted move.
-    pub fault: Option<&'a Fault>,
+    pub fault: Option<Fault>,
 }
 
-/// Writes the `status` data lines.
-pub fn write_status(out: &mut impl Write, s: &StatusReport<'_>) {
-    match s.motion {
-        MotionReport::Idle => line(out, format_args!("state: idle")),
-        MotionReport::Moving {
-            elapsed_s,
-            duration_s,
-        } => line(
-            out,
-            format_args!(
-                "state: moving {} of {} s",
-                Fixed(elapsed_s, 3),
-                Fixed(duration_s, 3)
-            ),
-        ),
-        MotionReport::ReturningHome {
-            elapsed_s,
-            duration_s,
-        } => line(
-            out,
-            format_args!(
-                "state: returning home (link lost) {} of {} s",
-                Fixed(elapsed_s, 3),
-                Fixed(duration_s, 3)
-            ),
-        ),
+/// A reply of several data lines. It may be written a line at a time (the controller writes
+/// one per slice of work, so a long listing never keeps the main loop long):
+/// [`Listing::write_line`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Listing {
+    /// `status`, from its snapshot.
+    Status(StatusReport),
+    /// `geometry`: the layout, the geometry and the IK's home arm angles.
+    Geometry,
+    /// `config`: the platform's settings and the asking link's.
+    Config(LinkSettings),
+    /// `help`.
+    Help,
+}
+
+impl Listing {
+    /// Writes data line `index` (from 0); `false` if there is no such line (the listing is
+    /// complete). `settings` and `solver` are the active ones.
+    pub fn write_line(
+        &self,
+        index: usize,
+        settings: &Settings,
+        solver: &Solver,
+        out: &mut impl Write,
+    ) -> bool {
+        match self {
+            Listing::Status(report) => status_line(out, report, index),
+            Listing::Geometry => geometry_line(out, settings, solver, index),
+            Listing::Config(link) => config_line(out, settings, link, index),
+            Listing::Help => HELP.get(index).is_some_and(|text| {
+                line(out, format_args!("{text}"));
+                true
+            }),
+        }
     }
-    line(out, format_args!("pose: {}", PoseText(s.pose)));
-    line(out, format_args!("target: {}", PoseText(s.target)));
-    line(
-        out,
-        format_args!("arm_deg: {}", Six(&degrees(s.arm_rad), 3)),
-    );
-    line(out, format_args!("pulse_us: {}", Six(s.pulse_us, 2)));
-    if let Some(fault) = s.fault {
-        line(out, format_args!("fault: {fault}"));
+
+    /// Writes every line at once.
+    pub fn write(&self, settings: &Settings, solver: &Solver, out: &mut impl Write) {
+        let mut index = 0;
+        while self.write_line(index, settings, solver, out) {
+            index += 1;
+        }
     }
+}
+
+fn status_line(out: &mut impl Write, s: &StatusReport, index: usize) -> bool {
+    match index {
+        0 => match s.motion {
+            MotionReport::Idle => line(out, format_args!("state: idle")),
+            MotionReport::Moving {
+                elapsed_s,
+                duration_s,
+            } => line(
+                out,
+                format_args!(
+                    "state: moving {} of {} s",
+                    Fixed(elapsed_s, 3),
+                    Fixed(duration_s, 3)
+                ),
+            ),
+            MotionReport::ReturningHome {
+                elapsed_s,
+                duration_s,
+            } => line(
+                out,
+                format_args!(
+                    "state: returning home (link lost) {} of {} s",
+                    Fixed(elapsed_s, 3),
+                    Fixed(duration_s, 3)
+                ),
+            ),
+        },
+        1 => line(out, format_args!("pose: {}", PoseText(&s.pose))),
+        2 => line(out, format_args!("target: {}", PoseText(&s.target))),
+        3 => line(
+            out,
+            format_args!("arm_deg: {}", Six(&degrees(&s.arm_rad), 3)),
+        ),
+        4 => line(out, format_args!("pulse_us: {}", Six(&s.pulse_us, 2))),
+        5 => match &s.fault {
+            Some(fault) => line(out, format_args!("fault: {fault}")),
+            None => return false,
+        },
+        _ => return false,
+    }
+    true
 }
 
 /// Writes the `check` data lines for an acceptable pose.
@@ -270,62 +331,78 @@ pub fn write_check(
     line(out, format_args!("duration_s: {}", Fixed(duration_s, 3)));
 }
 
-/// Writes the `geometry` data lines: the layout, then the geometry and the home arm angles of
-/// `solver`, the IK built from it.
-pub fn write_geometry(out: &mut impl Write, settings: &Settings, solver: &Solver) {
+/// `geometry`: the layout, a, s, h0, then a line per leg.
+fn geometry_line(out: &mut impl Write, settings: &Settings, solver: &Solver, index: usize) -> bool {
     let geometry = solver.geometry();
     let l = &settings.layout;
-    line(
-        out,
-        format_args!(
-            "layout: paired base_radius_mm={} base_half_angle_deg={} platform_radius_mm={} platform_half_angle_deg={}",
-            Fixed(l.base_radius_mm, 3),
-            Fixed(l.base_half_angle_deg, 3),
-            Fixed(l.platform_radius_mm, 3),
-            Fixed(l.platform_half_angle_deg, 3)
-        ),
-    );
-    line(
-        out,
-        format_args!("arm_mm (a): {}", Fixed(geometry.arm_mm(), 3)),
-    );
-    line(
-        out,
-        format_args!("rod_mm (s): {}", Fixed(geometry.rod_mm(), 3)),
-    );
-    line(
-        out,
-        format_args!(
-            "home_height_mm (h0): {}",
-            Fixed(geometry.home_height_mm(), 3)
-        ),
-    );
-    for (i, leg) in geometry.legs().iter().enumerate() {
-        line(
+    match index {
+        0 => line(
             out,
             format_args!(
-                "leg {}: b_mm={} p_mm={} beta_deg={} alpha0_deg={}",
-                i + 1,
-                Vector(&leg.base_mm),
-                Vector(&leg.platform_mm),
-                Fixed(leg.beta_rad.to_degrees(), 3),
-                Fixed(solver.alpha0_rad(i).to_degrees(), 3)
+                "layout: paired base_radius_mm={} base_half_angle_deg={} platform_radius_mm={} platform_half_angle_deg={}",
+                Fixed(l.base_radius_mm, 3),
+                Fixed(l.base_half_angle_deg, 3),
+                Fixed(l.platform_radius_mm, 3),
+                Fixed(l.platform_half_angle_deg, 3)
             ),
-        );
+        ),
+        1 => line(
+            out,
+            format_args!("arm_mm (a): {}", Fixed(geometry.arm_mm(), 3)),
+        ),
+        2 => line(
+            out,
+            format_args!("rod_mm (s): {}", Fixed(geometry.rod_mm(), 3)),
+        ),
+        3 => line(
+            out,
+            format_args!(
+                "home_height_mm (h0): {}",
+                Fixed(geometry.home_height_mm(), 3)
+            ),
+        ),
+        _ => {
+            let i = index - 4;
+            let Some(leg) = geometry.legs().get(i) else {
+                return false;
+            };
+            line(
+                out,
+                format_args!(
+                    "leg {}: b_mm={} p_mm={} beta_deg={} alpha0_deg={}",
+                    i + 1,
+                    Vector(&leg.base_mm),
+                    Vector(&leg.platform_mm),
+                    Fixed(leg.beta_rad.to_degrees(), 3),
+                    Fixed(solver.alpha0_rad(i).to_degrees(), 3)
+                ),
+            );
+        }
     }
+    true
 }
 
-/// Writes the `config` data lines: `# name: value` (the platform's settings and the link
-/// settings, in [`SettingId::GLOBAL`] order), then the servos one line each.
-pub fn write_config(out: &mut impl Write, settings: &Settings, link: &LinkSettings) {
-    for id in SettingId::GLOBAL {
+/// `config`: `# name: value` (the platform's settings and the link settings, in
+/// [`SettingId::GLOBAL`] order), then the servos one line each.
+fn config_line(
+    out: &mut impl Write,
+    settings: &Settings,
+    link: &LinkSettings,
+    index: usize,
+) -> bool {
+    if let Some(&id) = SettingId::GLOBAL.get(index) {
         if let Some(value) = settings.get(id).or_else(|| link.get(id)) {
             line(out, format_args!("{id}: {}", ValueText(id, value)));
         }
+        return true;
     }
-    for servo in 1..=LEGS as u8 {
-        line(out, format_args!("{}", ServoLine(settings, servo)));
+    let servo = index - SettingId::GLOBAL.len() + 1;
+    if servo > LEGS {
+        return false;
     }
+    // LEGS is 6: never truncates.
+    line(out, format_args!("{}", ServoLine(settings, servo as u8)));
+    true
 }
 
 /// `servoN: trim_us=.. rate_us_rad=.. dir=.. min_us=.. max_us=..`

@@ -40,11 +40,15 @@ impl Host {
         }
     }
 
-    /// Feeds raw bytes; returns what was written meanwhile.
+    /// Feeds raw bytes as the board does (a command's work runs to its end before the next
+    /// byte is read); returns what was written meanwhile.
     pub fn feed(&mut self, bytes: &[u8]) -> String {
         let mut out = String::new();
         for &b in bytes {
             self.ctl.on_byte(&mut self.link, b, &mut out);
+            while self.ctl.is_busy() {
+                self.ctl.work(&mut self.link, &mut out);
+            }
         }
         self.log.push_str(&out);
         out
@@ -106,9 +110,21 @@ impl Host {
         out
     }
 
-    /// Runs `n` frames; returns their pulses.
+    /// Runs `n` frames; returns their pulses. Between frames, work the controller started on
+    /// its own (the return home after link loss) runs to its end, as on a board whose main
+    /// loop gets through a check within a frame.
     pub fn frames(&mut self, n: usize) -> Vec<[f32; 6]> {
-        (0..n).map(|_| self.ctl.on_frame()).collect()
+        (0..n)
+            .map(|_| {
+                let pulses = self.ctl.on_frame();
+                let mut out = String::new();
+                while self.ctl.is_busy() {
+                    self.ctl.work(&mut self.link, &mut out);
+                }
+                self.log.push_str(&out);
+                pulses
+            })
+            .collect()
     }
 
     /// Runs frames until the move ends; returns how many it took.
