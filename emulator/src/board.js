@@ -9,7 +9,7 @@ import { RP2040 } from 'rp2040js';
 
 import { loadBootrom } from './bootrom.js';
 import { loadSegments } from './elf.js';
-import { attachLoopMeter } from './loop-meter.js';
+import { attachFrameMeter, attachLoopMeter } from './loop-meter.js';
 import {
   onWatchdogExpiry,
   PacedUartInput,
@@ -123,6 +123,8 @@ export class EmulatedBoard {
 
     /** The main loop's longest pass and the longest interrupt handler (see loop-meter.js). */
     this.loop = attachLoopMeter(mcu);
+    /** Servo frames seen and frames the firmware missed (see loop-meter.js). */
+    this.frames = attachFrameMeter(mcu);
 
     this.servoMeter = new ServoPulseMeter(mcu);
     if (this.servoChangeListener) {

@@ -153,8 +153,9 @@ export function measureLockStep(lines, { baud = 921600 } = {}) {
 
 /**
  * The longest command: a move whose path check solves the IK for the most poses (one per
- * frame of a 1024-frame move, the budget), timed from its line end to its reply.
- * Returns { checks, micros, cycles }.
+ * frame of a 1024-frame move, the budget), timed from its line end to its reply, with the
+ * longest main-loop pass and the frames missed meanwhile.
+ * Returns { checks, micros, cycles, longestPassCycles, frames, missed }.
  */
 export function measureWorstCommand() {
   const { board, lineEnds } = streamingBoard();
@@ -162,6 +163,8 @@ export function measureWorstCommand() {
   board.runMs(50);
   // 20.48 mm at 1 mm/s and 50 Hz: 1024 frames, each checked.
   expectOk(board, 'set speed_mm_s 1');
+  board.loop.reset();
+  board.frames.reset();
   const cyclesBefore = board.cycles;
   const { reply } = board.request('pose 0 0 10.48 0 0 0', { timeoutMs: 2000 });
   if (reply !== 'ok') {
@@ -172,7 +175,78 @@ export function measureWorstCommand() {
     checks: 1024,
     micros: (replyNanos - lineEnds[lineEnds.length - 1]) / 1000,
     cycles: board.cycles - cyclesBefore,
+    longestPassCycles: board.loop.longestPassCycles,
+    frames: board.frames.frames,
+    missed: board.frames.missed,
     board,
+  };
+}
+
+/**
+ * The longest main-loop pass and interrupt handler over a hostile session: every long command
+ * class back to back at 333 Hz with echo on, then moves pipelined at 921,600 baud, each checked
+ * at 1,000 poses, and a long reply draining at 9,600 baud. Returns { longestPassCycles,
+ * longestHandlerCycles, frames, missed, lines }.
+ */
+export function measureLongestPass() {
+  const board = new EmulatedBoard();
+  board.boot();
+  const lines = [
+    'set frame_hz 333',
+    'set speed_mm_s 1',
+    'check 20 0 0 0 0 0',
+    'config',
+    'help',
+    'geometry',
+    'status',
+    'set rod_mm 121',
+    'set rod_mm 120',
+    'defaults',
+    'set frame_hz 333',
+    'set speed_mm_s 1',
+    'pose 20 0 0 0 0 0',
+    'move x=-20',
+    'pose 0 0 80 0 0 0',
+    'set speed_mm_s off',
+    'pose 0 0 0 0 0 0',
+    'check 30 -12 -13.5 5 -13 28',
+    'set speed_mm_s 1',
+    'set echo off',
+    'set baud 921600',
+  ];
+  board.runMs(20);
+  board.loop.reset();
+  board.frames.reset();
+  let worst = { pass: 0, handler: 0, frames: 0, missed: 0 };
+  const keep = () => {
+    worst = {
+      pass: Math.max(worst.pass, board.loop.longestPassCycles),
+      handler: Math.max(worst.handler, board.loop.longestHandlerCycles),
+      frames: worst.frames + board.frames.frames,
+      missed: worst.missed + board.frames.missed,
+    };
+  };
+  const replies = (from) => board.lines.slice(from).filter((l) => /^(ok|error:)/.test(l)).length;
+  let from = board.lines.length;
+  board.sendBytes(lines.map((l) => `${l}\n`).join(''));
+  board.runUntil(() => replies(from) >= lines.length, { timeoutMs: 20_000 });
+  board.runMs(10);
+  keep();
+  // The UART switched to 921,600 baud (the board follows the programmed rate).
+  board.loop.reset();
+  board.frames.reset();
+  const moves = Array.from({ length: 20 }, (_, i) => `move x=${i % 2 ? '-10.1' : '-10.2'}`);
+  from = board.lines.length;
+  board.sendBytes(moves.map((l) => `${l}\n`).join(''));
+  board.runUntil(() => replies(from) >= moves.length, { timeoutMs: 20_000 });
+  board.runMs(50);
+  keep();
+  return {
+    longestPassCycles: worst.pass,
+    longestHandlerCycles: worst.handler,
+    frames: worst.frames,
+    missed: worst.missed,
+    lines: lines.length + moves.length,
   };
 }
 

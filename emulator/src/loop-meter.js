@@ -4,9 +4,17 @@
 // mode). In CPU cycles, which rp2040js counts per instruction and does not advance while the
 // core sleeps in WFI, so a pass is the work it did, not the time it slept. Interrupt handlers
 // that run inside a pass count in that pass too.
+//
+// And whether the firmware serves every servo frame: it writes the frame's new compare values
+// after each frame starts (a rising edge on servo 1's pin), so a frame period in which it wrote
+// none is a frame it missed (its pins held the old pulses one period longer).
 
 const WATCHDOG_BASE = 0x40058;
 const WATCHDOG_LOAD = 0x04;
+/** PWM slice 1 (servos 1 and 2), its compare register: slices are 0x14 bytes apart. */
+const SLICE1_CC = 0x14 + 0x0c;
+/** Servo 1's pin. */
+const SERVO1_GPIO = 2;
 
 /**
  * Attaches the meter to a fresh `RP2040`. Returns the live statistics:
@@ -73,5 +81,52 @@ export function attachLoopMeter(mcu) {
       handlerStart = null;
     }
   };
+  return stats;
+}
+
+/**
+ * Attaches the frame meter to a fresh `RP2040`. Returns the live statistics:
+ * `{ frames, missed, missedAtNanos, reset() }`: frame periods seen whole, and those in which
+ * the firmware wrote no compare value for servos 1 and 2 (missed frames).
+ */
+export function attachFrameMeter(mcu) {
+  const stats = {
+    frames: 0,
+    missed: 0,
+    missedAtNanos: [],
+    reset() {
+      this.frames = 0;
+      this.missed = 0;
+      this.missedAtNanos = [];
+      started = false;
+    },
+  };
+  let started = false; // a frame start seen since the last reset
+  let writes = 0; // compare writes since the last frame start
+  const pwm = mcu.pwm;
+  const writeRegister = pwm.writeUint32.bind(pwm);
+  pwm.writeUint32 = (offset, value) => {
+    if (offset === SLICE1_CC) {
+      writes++;
+    }
+    writeRegister(offset, value);
+  };
+  let high = false;
+  mcu.gpio[SERVO1_GPIO].addListener((state) => {
+    const rising = state && !high;
+    high = !!state;
+    if (!rising) {
+      return;
+    }
+    if (started) {
+      stats.frames++;
+      if (writes === 0) {
+        stats.missed++;
+        stats.missedAtNanos.push(mcu.clock.nanos);
+      }
+    }
+    started = true;
+    writes = 0;
+  });
   return stats;
 }

@@ -109,9 +109,10 @@ function randomBytes(seed, n, { exclude = [] } = {}) {
  * echo ("> " + the line as the firmware kept it). A line the firmware ran must be exactly a
  * line that was sent, in order, with the reply `expectedReply(line)`. Whenever sent lines
  * were skipped, the loss must have been reported in between: by an rx-overflow refusal, or,
- * for a gap that swallowed the rest of the input (no line end followed yet), by the overflow
- * notice, written the moment the loss was seen; that cut line is then refused as soon as a
- * line end arrives. Returns the last line that ran.
+ * for a gap that swallowed the rest of the input (no line end followed yet), by the warning
+ * written the moment the loss began (so it comes before the replies to the lines received
+ * ahead of the gap; a refusal answers it); that cut line is then refused as soon as a line
+ * end arrives. Returns the last line that ran.
  */
 /** The last `pose` line that ran (its echo followed by `ok`) in the output from `from` on. */
 function lastPoseRun(board, from) {
@@ -126,12 +127,12 @@ function accountForEveryLine(board, from, sent, expectedReply) {
   const out = board.lines.slice(from);
   let next = 0; // index in `sent` of the next line not yet accounted for
   let refusedSinceLastRun = false;
-  let noticeSinceLastRun = false;
+  let noticeUnanswered = false;
   let lastRun = null;
   let overflowErrors = 0;
   out.forEach((line, k) => {
-    if (line.startsWith('# warning: receive queue overflowed')) {
-      noticeSinceLastRun = true;
+    if (line.startsWith('# warning: receive queue overflowed') || line.startsWith('# warning: UART receive error')) {
+      noticeUnanswered = true;
       return;
     }
     if (!FINAL_REPLY.test(line)) {
@@ -140,6 +141,7 @@ function accountForEveryLine(board, from, sent, expectedReply) {
     if (codeOf(line) === 'rx-overflow') {
       overflowErrors++;
       refusedSinceLastRun = true;
+      noticeUnanswered = false;
       return;
     }
     const echo = out[k - 1];
@@ -154,12 +156,11 @@ function accountForEveryLine(board, from, sent, expectedReply) {
     lastRun = text;
     next = index + 1;
     refusedSinceLastRun = false;
-    noticeSinceLastRun = false;
   });
   assert.ok(next < sent.length || overflowErrors > 0, 'nothing was lost: the test did not test');
   if (next < sent.length) {
     assert.ok(
-      refusedSinceLastRun || noticeSinceLastRun,
+      refusedSinceLastRun || noticeUnanswered,
       `the last ${sent.length - next} lines vanished silently`,
     );
   }
@@ -266,8 +267,10 @@ test('a burst at the line rate is answered in order, one final reply per line', 
 
 test('faster than the firmware can act: lost bytes are reported, never lost silently', () => {
   const board = bootedBoard();
-  // Long moves make the firmware check ~120 poses on each path (tens of ms per line) while
-  // the rest of the burst keeps arriving at the line rate: its 512-byte queue must overflow.
+  // Long moves make the firmware check ~120 poses on each path while the rest of the burst
+  // keeps arriving at the line rate, and the error replies to the junk lines are far longer
+  // than the lines: the firmware takes input only as fast as its replies leave, and its
+  // 4,096-byte receive queue must overflow.
   const heavy = [
     'pose 30 0 0 0 0 0',
     'pose -30 0 0 0 0 0',
@@ -277,7 +280,7 @@ test('faster than the firmware can act: lost bytes are reported, never lost sile
     'pose -30 0 0 0 0 1',
   ];
   const sent = [...heavy];
-  for (let i = 0; i < 100; i++) {
+  for (let i = 0; i < 600; i++) {
     sent.push(`xyzzy ${i}`);
   }
   sent.push('pose 0 0 6 0 0 0');
@@ -285,18 +288,24 @@ test('faster than the firmware can act: lost bytes are reported, never lost sile
 
   const from = board.lines.length;
   board.sendBytes(sent.map((line) => `${line}\n`).join(''));
-  board.runMs(totalBytes * BYTE_MS + 1500);
+  board.runMs(totalBytes * BYTE_MS + 6000);
   assert.equal(board.inputPending, 0);
   assert.equal(board.rxFifoDroppedBytes, 0, 'bytes lost in the hardware FIFO, where nobody can see it');
 
   const out = board.lines.slice(from);
-  const notices = out.filter((l) => /^# warning: receive queue overflowed, \d+ bytes lost$/.test(l));
-  const lostReported = notices.reduce((n, l) => n + Number(/(\d+) bytes/.exec(l)[1]), 0);
+  const notices = out.filter((l) =>
+    /^# warning: receive queue overflowed, input lost \(at least \d+ bytes? so far\)$/.test(l),
+  );
   assert.ok(notices.length > 0, 'no overflow notice');
-
   accountForEveryLine(board, from, sent, (text) =>
     text.startsWith('pose') ? 'ok' : 'error:unknown-command',
   );
+  // The exact counts come with the refusals of the lines the gaps cut.
+  const lostReported = board.lines
+    .slice(from)
+    .map((l) => /^error:rx-overflow receive queue overflowed, (\d+) bytes? lost/.exec(l))
+    .filter(Boolean)
+    .reduce((n, m) => n + Number(m[1]), 0);
   const lastPose = lastPoseRun(board, from);
   assert.ok(lostReported > 0 && lostReported < totalBytes, `${lostReported} bytes reported lost`);
 
@@ -326,9 +335,11 @@ test('bytes the hardware FIFO could not take (interrupts held off) are reported'
   core.waiting = false;
   board.runMs(sent.length * 20 * BYTE_MS + 500);
   assert.ok(board.rxFifoDroppedBytes > 32, `${board.rxFifoDroppedBytes} bytes lost in the FIFO`);
+  // The UART cannot tell how many bytes an overrun lost: the warning and the refusal say
+  // "at least".
   assert.ok(
-    board.lines.slice(from).some((l) => l.startsWith('# warning: receive queue overflowed')),
-    'no notice',
+    board.lines.slice(from).some((l) => /^# warning: UART receive error, input lost \(at least \d+ bytes?\)$/.test(l)),
+    `no notice in ${JSON.stringify(board.lines.slice(from))}`,
   );
   // The lines before the gap ran; the one it cut was refused; after the loss the firmware
   // drops input until it has caught up with the gap (so a gap is never skipped over).
@@ -337,6 +348,38 @@ test('bytes the hardware FIFO could not take (interrupts held off) are reported'
   assert.ok(sent.indexOf(lastPose) >= 2, `only ${lastPose} ran`);
   assert.deepEqual(settle(board), referencePulses(lastPose));
   goodCommandWorks(board, referencePulses(lastPose));
+});
+
+test('after a UART overrun, a lone line end closes the cut line and a resync works as documented', () => {
+  const board = bootedBoard();
+  assert.equal(board.request('set echo off').reply, 'ok');
+  const from = board.lines.length;
+  // Half a line, then, with every interrupt held off (a long critical section), more than the
+  // 32-byte RX FIFO holds: the UART loses the rest (an overrun), which it cannot count.
+  board.sendBytes('pose 0 0 5 0 0 0 ');
+  board.runMs(20 * BYTE_MS);
+  const { core } = board.mcu;
+  const enabled = core.enabledInterrupts;
+  core.enabledInterrupts = 0;
+  board.sendBytes('y'.repeat(60));
+  board.runMs(70 * BYTE_MS);
+  core.enabledInterrupts = enabled;
+  core.interruptsUpdated = true;
+  core.waiting = false;
+  board.runMs(5);
+  assert.ok(board.rxFifoDroppedBytes >= 28, `${board.rxFifoDroppedBytes} bytes lost in the FIFO`);
+  // The warning says what the UART can know: at least one byte.
+  const warning = board.waitForLine(/^# warning: /, { timeoutMs: 100 });
+  assert.match(warning, /^# warning: UART receive error, input lost \(at least \d+ bytes?\)$/);
+  // The README's resync: a lone line end to close the cut line (it is the first byte into the
+  // FIFO after the loss, so it carries the PL011's overrun flag, and it is good), then
+  // `status`, reading until its final reply.
+  const cut = board.request('');
+  assert.match(cut.reply, /^error:rx-overflow input lost \(at least \d+ bytes?, some in the UART\); the line was discarded/);
+  const { reply, lines } = board.request('status');
+  assert.equal(reply, 'ok', JSON.stringify(board.lines.slice(from)));
+  assert.ok(lines.some((l) => l.startsWith('# state: ')));
+  assert.deepEqual(board.lines.slice(from).filter((l) => FINAL_REPLY.test(l)), [cut.reply, 'ok']);
 });
 
 test('a line split across long pauses is one line', () => {

@@ -411,3 +411,43 @@ test('line editing: ctrl-u erases the line, ctrl-c abandons it (no reply), arrow
   assert.ok(board.lines.slice(first).some((line) => line.startsWith('# state: ')), 'the first line was status');
   assert.ok(board.lines.slice(first).some((line) => line.startsWith('# duration_s: ')), 'the second was check');
 });
+
+test('ctrl-x abandons a line like ctrl-c: no reply, and what follows starts a new line', () => {
+  const board = bootQuiet(bootrom);
+  const first = board.lines.length;
+  board.sendBytes('home\x18');
+  board.runMs(50);
+  assert.deepEqual(board.lines.slice(first), [], 'no reply to an abandoned line');
+  board.sendBytes('st\x18atus\n');
+  const reply = board.waitForLine(/^(ok|error:)/);
+  assert.equal(reply, "error:unknown-command 'atus' is not a command; type help");
+});
+
+test('what terminals send for keys is ignored whole; a lone ESC swallows nothing', () => {
+  const board = bootQuiet(bootrom);
+  // The Esc key, then a command: the command runs whole.
+  assert.equal(board.request('\x1bhome').reply, 'ok');
+  assert.equal(board.request('\x1b\x1bstop').reply, 'ok');
+  // Keys inside a line, as xterm and friends send them: arrows in both modes, Home, End,
+  // Delete, PgUp, F1, F5, F12, Ctrl-Right, Shift-F3, and bracketed paste around the line.
+  const keys = [
+    '\x1b[A', '\x1bOB', '\x1b[H', '\x1b[F', '\x1b[1~', '\x1b[4~', '\x1b[3~', '\x1b[5~',
+    '\x1bOP', '\x1b[15~', '\x1b[24~', '\x1b[1;5C', '\x1b[1;2R',
+  ];
+  for (const key of keys) {
+    const { reply, lines } = board.request(`st${key}atus`);
+    assert.equal(reply, 'ok', `${JSON.stringify(key)}: ${JSON.stringify(lines)}`);
+    assert.ok(lines.some((l) => l.startsWith('# state: ')), JSON.stringify(key));
+  }
+  assert.equal(board.request('\x1b[200~home\x1b[201~').reply, 'ok');
+});
+
+test('a line of separators only is not blank: it is refused, in words', () => {
+  const board = bootQuiet(bootrom);
+  assert.equal(
+    board.request(' , ,').reply,
+    'error:unknown-command only separators, no command; type help',
+  );
+  assert.equal(board.request('status').reply, 'ok');
+});
+

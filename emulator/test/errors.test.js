@@ -108,6 +108,8 @@ const PARSE_CASES = [
   ['bad-value', 'set frame_hz 60.5', /^frame_hz: '60\.5' is not a whole number$/],
   ['out-of-range', 'set frame_hz 20', /^frame_hz 20 is outside 50\.\.333 Hz$/],
   ['out-of-range', 'set frame_hz 334', /^frame_hz 334 is outside 50\.\.333 Hz$/],
+  ['out-of-range', 'set frame_hz -50', /^frame_hz -50 is outside 50\.\.333 Hz$/],
+  ['bad-value', 'set baud -9600', /^baud: '-9600' is not one of 9600 19200 38400 57600 115200 230400 460800 921600$/],
   ['out-of-range', 'set speed_mm_s 2000', /^speed_mm_s 2000 is outside 0\.1\.\.1000 mm\/s \(or 0\/off\)$/],
   ['out-of-range', 'set servo2.trim_us 3000', /^servo2\.trim_us 3000 is outside 400\.\.2600 us$/],
   ['out-of-range', 'set servos.rate_us_rad 50', /^servos\.rate_us_rad 50 is outside 100\.\.5000 us\/rad$/],
@@ -221,20 +223,31 @@ test('rx-overflow: bytes lost while the firmware was busy refuse the line they f
   assert.ok(Math.abs(board.baud - 921600) / 921600 < 0.02, `baud ${board.baud}`);
   const widths = widthsNanos(board);
   const first = board.lines.length;
+  ok(board, 'set speed_mm_s 1');
   const pulses = capture(board, () => {
-    // A check with a long path keeps the main loop busy for tens of ms while 1,500 bytes of
-    // status lines arrive at 921600 baud: more than the 512-byte receive queue holds.
-    board.sendBytes(`check 30 -12 -13.5 5 -13 28\n${'status\n'.repeat(215)}`);
-    board.runMs(300);
+    // A check of a slow 20 mm move: its path checked at all 1,000 frames, a few poses per
+    // pass, keeps the firmware from taking input for about 150 ms while `stop` lines arrive
+    // at 921,600 baud: far more than the 4,096-byte receive queue holds.
+    board.sendBytes(`check 20 0 0 0 0 0\n${'stop\n'.repeat(3000)}`);
+    board.runMs(600);
   }, 10);
   const lines = board.lines.slice(first);
-  const warning = board.waitForLine(/^# warning: receive queue overflowed, \d+ bytes lost$/, { timeoutMs: 0 });
-  const lost = warning.match(/(\d+) bytes/)[1];
+  const warningAt = lines.findIndex((l) =>
+    /^# warning: receive queue overflowed, input lost \(at least \d+ bytes? so far\)$/.test(l),
+  );
+  assert.ok(warningAt >= 0, `no warning in ${JSON.stringify(lines.slice(0, 5))}...`);
+  const soFar = Number(lines[warningAt].match(/at least (\d+)/)[1]);
+  // The warning came at once: while the lines before the gap were still being answered.
+  const repliesAfter = lines.slice(warningAt).filter((l) => l === 'ok').length;
+  assert.ok(repliesAfter > 10, `the warning came only ${repliesAfter} replies before the gap`);
   // Every reply so far is ok: the lines that arrived whole ran, the lost ones got nothing.
   assert.ok(lines.filter((line) => !line.startsWith('# ')).every((line) => line === 'ok'));
   // The line the loss fell into ends with the next LF: refused, naming the loss.
+  board.lineCursor = board.lines.length;
   const reply = refused(board, 'status', 'rx-overflow');
   observed.add('rx-overflow');
+  const lost = Number(reply.match(/overflowed, (\d+) bytes lost/)?.[1]);
+  assert.ok(lost >= soFar, `${lost} lost, the warning said at least ${soFar}`);
   assert.equal(reply, `error:rx-overflow receive queue overflowed, ${lost} bytes lost; the line was discarded (wait for each reply before sending more)`);
   assertConstant(pulses, widths, 'nothing moved');
   assert.equal(ok(board, 'check 1 1 1 1 1 1').length, 3, 'the next good line works');

@@ -131,3 +131,39 @@ test('every completed line, even a refused one, restarts the link timer', () => 
   board.runMs(2500);
   assert.deepEqual(steadyPulses(board), home);
 });
+
+test('link loss never comes before link_timeout_s, wherever in a frame the last line ended', () => {
+  const { board } = bootedBoard();
+  assert.equal(board.request('set echo off').reply, 'ok');
+  assert.equal(board.request('set link_timeout_s 0.1').reply, 'ok');
+  // When each line's last byte reached the chip.
+  const lineEnds = [];
+  const uart = board.mcu.uart[0];
+  const feedByte = uart.feedByte.bind(uart);
+  uart.feedByte = (value) => {
+    if ((value & 0xff) === 0x0a) {
+      lineEnds.push(board.nanos);
+    }
+    feedByte(value);
+  };
+  let earliestMs = Infinity;
+  let latestMs = 0;
+  for (let phase = 0; phase < 20; phase++) {
+    // Lines ending at every millisecond of the 20 ms frame; each moves off home, so that the
+    // link loss has somewhere to go.
+    board.runMs(phase * 1.05);
+    assert.equal(board.request(`pose 0 0 ${1 + (phase % 2)} 0 0 0`).reply, 'ok');
+    const lineEnd = lineEnds.at(-1);
+    const notice = board.waitForLine(/^# link lost: /, { timeoutMs: 500 });
+    assert.ok(notice, 'no link loss');
+    const afterMs = (board.nanos - lineEnd) / 1e6;
+    earliestMs = Math.min(earliestMs, afterMs);
+    latestMs = Math.max(latestMs, afterMs);
+    assert.ok(afterMs >= 100, `link loss ${afterMs.toFixed(3)} ms after the line (phase ${phase})`);
+    board.runMs(300); // home again
+  }
+  // Up to one frame late (whole frames from the first one after the line's reply), plus the
+  // time the line's reply and the notice's own 50 bytes take (about 5 ms at 115,200 baud).
+  assert.ok(latestMs <= 100 + FRAME_MS + 10, `link loss ${latestMs} ms after the line`);
+});
+

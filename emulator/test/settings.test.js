@@ -5,6 +5,8 @@
 import assert from 'node:assert/strict';
 import { before, test } from 'node:test';
 
+import { EmulatedBoard } from '../src/board.js';
+
 import {
   assertConstant,
   assertPins,
@@ -221,6 +223,31 @@ test('set baud: the board listens at the new rate once the ok has left; config s
     );
     assert.equal(config(board).get('baud'), String(baud));
   }
+});
+
+test('set baud with echo on: nothing follows the ok at the old rate; the prompt comes at the new one', () => {
+  const board = new EmulatedBoard({ bootrom });
+  board.boot();
+  board.runMs(20);
+  // Each byte the host receives, with the rate the UART sent it at (the divisor latches when
+  // the firmware switches, between bytes).
+  const received = [];
+  board.onOutput((byte) => received.push({ byte, baud: Math.round(board.baud) }));
+  board.sendBytes('set baud 230400\r');
+  board.runMs(50);
+  const text = String.fromCharCode(...received.map((r) => r.byte));
+  const okEnd = text.indexOf('ok\r\n') + 4;
+  assert.ok(okEnd >= 4, JSON.stringify(text));
+  for (const r of received.slice(0, okEnd)) {
+    assert.ok(Math.abs(r.baud - 115200) / 115200 < 0.02, `the reply went out at ${r.baud}`);
+  }
+  const after = received.slice(okEnd);
+  assert.equal(String.fromCharCode(...after.map((r) => r.byte)), '> ');
+  for (const r of after) {
+    assert.ok(Math.abs(r.baud - 230400) / 230400 < 0.02, `the prompt went out at ${r.baud}`);
+  }
+  // And the board talks at the new rate.
+  assert.equal(board.request('status').reply, 'ok');
 });
 
 test('defaults restores every setting except baud and echo, and the pins follow', () => {

@@ -29,9 +29,11 @@ type Controller = control::Controller<RomMath>;
 #[used]
 pub static BOOT2: [u8; 256] = rp2040_boot2::BOOT_LOADER_W25Q080;
 
-/// Reset the chip if the main loop stalls this long (a pass normally takes well under a frame).
+/// Reset the chip if the main loop stalls this long. A pass takes well under a millisecond
+/// (see [`main`]), so only a hang can starve the watchdog.
 const WATCHDOG_TIMEOUT_MS: u32 = 500;
-/// Received bytes handed to the controller per pass, so servo frames are never kept waiting.
+/// Most received bytes handed to the controller in one pass (a line end ends the pass's input
+/// early, so at most one command runs per pass).
 const RX_BYTES_PER_PASS: usize = 64;
 
 #[hal::entry]
@@ -77,31 +79,52 @@ fn main() -> ! {
     controller.banner(&mut uart, &mut serial);
     defmt::info!("ready");
 
+    // The main loop. Every pass is short, whatever arrives: it runs at most one command, or
+    // one slice of a command's long work (a path check a few IK solutions at a time, a listing
+    // a line at a time: the controller splits it, see `control::Controller::work`), plus the
+    // frame that came due. The longest pass is measured in the emulator (well under 1 ms,
+    // against a 3 ms frame at 333 Hz and the 500 ms watchdog; BENCHMARKS.md).
     let mut rx_line_errors_reported = 0;
     loop {
         watchdog.feed();
 
-        // Serial bytes -> controller -> replies. Input waits in the receive queue while the
-        // transmit buffer lacks room for a whole reply, so replies are never cut.
-        for _ in 0..RX_BYTES_PER_PASS {
-            if !serial.has_room_for_reply() {
-                break;
+        // Lost input is announced at once, to every link; the line it cut is refused when the
+        // loop reaches the gap.
+        if let Some(lost) = serial.take_new_loss() {
+            defmt::warn!("serial receive: input lost (at least {} bytes)", lost.bytes);
+            controller.on_input_lost(&mut uart, lost.bytes, lost.in_uart, &mut serial);
+        }
+
+        if controller.is_busy() {
+            // A slice of the work in progress; its reply comes with the last slice.
+            if serial.has_room_for_step() {
+                controller.work(&mut uart, &mut serial);
+                write_new_pulses(&mut controller, &mut servos);
+                // The controller's own work (the return home after link loss) may notify.
+                controller.write_notices(&mut uart, &mut serial);
             }
-            match serial.read() {
-                Some(Received::Byte(byte)) => {
-                    controller.on_byte(&mut uart, byte, &mut serial);
-                    // A jump (speed limits off) is written now, not at the next frame; the
-                    // compare registers latch it at the next period start, so no pulse is cut.
-                    if let Some(pulses_us) = controller.take_new_pulses() {
-                        servos.set_pulse_widths_us_now(&pulses_us, &pulse_windows_us(&controller));
+        } else {
+            // Serial bytes -> controller, up to the end of one line. Input waits in the receive
+            // queue while the transmit buffer lacks room for a step's output, so replies are
+            // never cut.
+            for _ in 0..RX_BYTES_PER_PASS {
+                if !serial.has_room_for_step() {
+                    break;
+                }
+                match serial.read() {
+                    Some(Received::Byte(byte)) => {
+                        controller.on_byte(&mut uart, byte, &mut serial);
+                        // A jump (speed limits off) is written now, not at the next frame; the
+                        // compare registers latch it at the next period start.
+                        write_new_pulses(&mut controller, &mut servos);
+                        if byte == b'\r' || byte == b'\n' || controller.is_busy() {
+                            break;
+                        }
                     }
+                    // The gap where bytes were lost: the line it cuts is refused at its end.
+                    Some(Received::Lost(lost)) => controller.on_rx_overflow(&mut uart, lost),
+                    None => break,
                 }
-                // The main loop fell behind and bytes were lost here: that line is refused.
-                Some(Received::Lost(bytes)) => {
-                    defmt::warn!("serial receive queue full: {} bytes lost", bytes);
-                    controller.on_rx_overflow(&mut uart, bytes, &mut serial);
-                }
-                None => break,
             }
         }
 
@@ -116,7 +139,17 @@ fn main() -> ! {
             }
         }
 
-        apply_settings(&controller, &mut servos, &mut serial);
+        apply_frame_rate(&controller, &mut servos);
+        // A baud change waits for the reply announcing it to have left the UART at the old
+        // rate; then the prompt held back for it goes out at the new one.
+        let baud = controller.baud();
+        let baud_change_pending = baud != serial.baud();
+        if baud_change_pending && serial.tx_idle() {
+            match serial.set_baud(baud) {
+                Ok(()) => uart.write_deferred_prompt(&mut serial),
+                Err(_) => defmt::error!("baud rate {} out of range", baud),
+            }
+        }
         serial.send_some();
 
         let rx_line_errors = serial.rx_line_errors();
@@ -125,16 +158,23 @@ fn main() -> ! {
             defmt::warn!("serial receive: {} line errors so far", rx_line_errors);
         }
 
-        // A baud change waits only for the reply announcing it to be sent: once it has gone
-        // into the FIFO, the next pass switches (a host may talk at the new rate as soon as it
-        // reads `ok`; sleeping here would keep the old rate until the next frame, up to 20 ms).
-        let baud_change_pending = controller.baud() != serial.baud();
+        // Sleep until an interrupt (bytes received, TX FIFO half empty, a frame) unless there
+        // is something to do now. Output waiting for room in the TX FIFO is no reason to stay
+        // awake: the TX interrupt wakes the loop when the FIFO has drained.
+        let room = serial.has_room_for_step();
+        let waiting_for_tx = baud_change_pending && !serial.tx_pending() && !serial.tx_idle();
         sleep_unless(|| {
-            serial.rx_pending()
-                || serial.tx_pending()
+            (room && (controller.is_busy() || serial.rx_pending()))
                 || servos.frame_pending()
-                || baud_change_pending
+                || waiting_for_tx
         });
+    }
+}
+
+/// Writes the pulses a command changed outside the frame rhythm (a jump), if any.
+fn write_new_pulses(controller: &mut Controller, servos: &mut ServoPwm) {
+    if let Some(pulses_us) = controller.take_new_pulses() {
+        servos.set_pulse_widths_us_now(&pulses_us, &pulse_windows_us(controller));
     }
 }
 
@@ -146,16 +186,11 @@ fn pulse_windows_us(controller: &Controller) -> [PulseWindowUs; SERVO_COUNT] {
     })
 }
 
-/// Makes the hardware follow the controller's settings (frame rate, baud rate).
-fn apply_settings(controller: &Controller, servos: &mut ServoPwm, serial: &mut Serial) {
+/// Makes the PWM follow the controller's frame rate.
+fn apply_frame_rate(controller: &Controller, servos: &mut ServoPwm) {
     let frame_hz = controller.frame_hz();
     if frame_hz != servos.frame_rate_hz() && servos.set_frame_rate_hz(frame_hz).is_err() {
         defmt::error!("frame rate {} Hz out of range", frame_hz);
-    }
-    // Switch only once the reply announcing the change has been sent at the old rate.
-    let baud = controller.baud();
-    if baud != serial.baud() && !serial.tx_pending() && serial.set_baud(baud).is_err() {
-        defmt::error!("baud rate {} out of range", baud);
     }
 }
 

@@ -4,12 +4,25 @@
 //! the 32-byte hardware FIFO into a lock-free queue that the main loop reads. It never waits:
 //! when the queue is full it drops the byte and counts it, and the main loop is told where in
 //! the byte stream the loss happened ([`Received::Lost`]), so exactly the damaged line can be
-//! refused. After a loss, bytes are dropped until the main loop has reached it, so a loss is
-//! always one contiguous gap. A byte with a line error (framing, parity, break, overrun) counts
-//! as lost the same way.
+//! refused, and, at once, that a loss happened ([`Serial::take_new_loss`]), so the host hears
+//! of it without waiting for the main loop to get there.
+//!
+//! Losses in the UART itself count the same way, with what the PL011 can tell: a byte with a
+//! framing, parity or break error is lost; an overrun (bytes that found the hardware FIFO full)
+//! loses an unknown number of bytes (at least one) just before the byte that carries the OE
+//! flag, which is itself good and kept. rp2040-hal also reports an overrun from the status
+//! register when it finds the FIFO empty; the OE flag on the next byte is then the same loss
+//! again, not counted twice.
+//!
+//! A gap is one contiguous stretch at one known position: should more bytes be lost before the
+//! main loop has reached the first loss, the bytes received between the two are dropped too (the
+//! gap grows to the latest loss). Bytes after the latest loss are kept: a line end the host sends
+//! to close the cut line does arrive.
 //!
 //! Transmit: the main loop writes replies into a software buffer (`core::fmt::Write`) and calls
-//! [`Serial::send_some`] each pass, which moves only what fits into the 32-byte TX FIFO.
+//! [`Serial::send_some`] each pass, which moves only what fits into the 32-byte TX FIFO. While
+//! output waits for room, the TX FIFO interrupt (at half full) wakes the main loop, so it sleeps
+//! instead of spinning.
 
 use core::{
     cell::RefCell,
@@ -17,6 +30,7 @@ use core::{
     sync::atomic::{AtomicBool, Ordering},
 };
 
+use control::protocol::Lost;
 use critical_section::Mutex;
 use heapless::{
     spsc::{Consumer, Producer, Queue},
@@ -29,13 +43,15 @@ use rp2040_hal::{
     uart::{DataBits, Enabled, FifoWatermark, ReadErrorType, StopBits, UartConfig, UartPeripheral},
 };
 
-/// Receive queue size; holds `RX_QUEUE_BYTES - 1` bytes (~44 ms of input at 115,200 baud).
-pub const RX_QUEUE_BYTES: usize = 512;
-/// The longest reply one received byte may produce (the command interpreter's help or
-/// settings listing).
-pub const LONGEST_REPLY_BYTES: usize = 2048;
-/// Transmit buffer: room for two of the longest replies.
-pub const TX_BUFFER_BYTES: usize = 2 * LONGEST_REPLY_BYTES;
+/// Receive queue size; holds `RX_QUEUE_BYTES - 1` bytes (355 ms of input at 115,200 baud,
+/// 44 ms at 921,600): a host's burst of lines waits here while the replies, which are often
+/// longer than the lines (echo, `status`, error messages), go out at the same baud rate.
+pub const RX_QUEUE_BYTES: usize = 4096;
+/// The most one step of the controller may write (a byte with its echo and, at a line end, a
+/// quick command's reply; one slice of work; with up to four notices before it).
+pub const LONGEST_STEP_BYTES: usize = 2048;
+/// Transmit buffer: room for four of the longest steps.
+pub const TX_BUFFER_BYTES: usize = 4 * LONGEST_STEP_BYTES;
 
 /// The UART accepts the controller's baud rates (`set baud`), slowest to fastest.
 pub const BAUD_MIN: u32 = control::settings::BAUD_RATES[0];
@@ -60,8 +76,11 @@ struct Receiver {
     queue: Producer<'static, u8, RX_QUEUE_BYTES>,
     /// Bytes put into the queue so far (wrapping): positions in the received stream.
     enqueued: u32,
-    /// Bytes dropped (queue full) that the main loop has not been told about yet.
+    /// Bytes lost that the main loop has not reached yet.
     loss: Option<Loss>,
+    /// rp2040-hal reported an overrun from the status register (the FIFO was empty): the OE
+    /// flag on the next byte is the same loss.
+    overrun_counted: bool,
     /// Framing, parity, break and hardware-FIFO overrun errors.
     line_errors: u32,
 }
@@ -69,20 +88,24 @@ struct Receiver {
 static SHARED: Mutex<RefCell<Option<Shared>>> = Mutex::new(RefCell::new(None));
 /// `Receiver::loss` is set: lets the main loop skip the critical section otherwise.
 static RX_LOSS_PENDING: AtomicBool = AtomicBool::new(false);
+/// A loss began that the main loop has not announced yet ([`Serial::take_new_loss`]).
+static RX_LOSS_NEW: AtomicBool = AtomicBool::new(false);
 
-/// Dropped bytes, and where: after the first `after` bytes ever enqueued.
+/// Lost bytes, and where: the gap begins after the first `after` bytes ever enqueued and ends
+/// after the first `resume` (bytes enqueued in between are dropped when the gap is reached).
 #[derive(Clone, Copy)]
 struct Loss {
     after: u32,
-    bytes: u32,
+    resume: u32,
+    lost: Lost,
 }
 
 /// What the receiver delivers next, in stream order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Received {
     Byte(u8),
-    /// This many bytes were lost here because the main loop fell behind (queue full).
-    Lost(u32),
+    /// Bytes were lost here (the receive queue was full, or the UART lost them).
+    Lost(Lost),
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, defmt::Format)]
@@ -93,6 +116,8 @@ pub struct Serial {
     rx_queue: Consumer<'static, u8, RX_QUEUE_BYTES>,
     /// Bytes taken from the queue so far (wrapping), to match `Loss::after`.
     rx_dequeued: u32,
+    /// The gap just reached: queued bytes before this position are dropped.
+    rx_skip_until: Option<u32>,
     tx_buffer: Deque<u8, TX_BUFFER_BYTES>,
     baud: u32,
     peripheral_clock: HertzU32,
@@ -130,6 +155,7 @@ impl Serial {
                     queue: producer,
                     enqueued: 0,
                     loss: None,
+                    overrun_counted: false,
                     line_errors: 0,
                 },
             }));
@@ -140,6 +166,7 @@ impl Serial {
         Ok(Serial {
             rx_queue: consumer,
             rx_dequeued: 0,
+            rx_skip_until: None,
             tx_buffer: Deque::new(),
             baud,
             peripheral_clock,
@@ -150,27 +177,56 @@ impl Serial {
     /// nothing is waiting.
     pub fn read(&mut self) -> Option<Received> {
         if RX_LOSS_PENDING.load(Ordering::Relaxed) {
-            if let Some(bytes) = self.take_loss_at(self.rx_dequeued) {
-                return Some(Received::Lost(bytes));
+            if let Some(loss) = self.take_loss_at(self.rx_dequeued) {
+                if loss.resume != loss.after {
+                    self.rx_skip_until = Some(loss.resume);
+                }
+                return Some(Received::Lost(loss.lost));
             }
         }
-        let byte = self.rx_queue.dequeue()?;
-        self.rx_dequeued = self.rx_dequeued.wrapping_add(1);
-        Some(Received::Byte(byte))
+        loop {
+            let byte = self.rx_queue.dequeue()?;
+            self.rx_dequeued = self.rx_dequeued.wrapping_add(1);
+            match self.rx_skip_until {
+                // Inside the gap (received between two losses): dropped with it.
+                Some(resume) => {
+                    if self.rx_dequeued == resume {
+                        self.rx_skip_until = None;
+                    }
+                }
+                None => return Some(Received::Byte(byte)),
+            }
+        }
     }
 
     pub fn rx_pending(&self) -> bool {
         self.rx_queue.ready() || RX_LOSS_PENDING.load(Ordering::Relaxed)
     }
 
-    fn take_loss_at(&self, position: u32) -> Option<u32> {
+    /// If a loss began since the last call: how many bytes it has lost so far and whether the
+    /// UART lost any (then the count is only a lower bound). For a warning at once; the gap
+    /// itself comes later from [`Serial::read`].
+    pub fn take_new_loss(&mut self) -> Option<Lost> {
+        if !RX_LOSS_NEW.load(Ordering::Relaxed) {
+            return None;
+        }
+        critical_section::with(|cs| {
+            // Cleared with the interrupt masked, so a loss beginning now is not missed (the
+            // M0+ has no atomic swap).
+            RX_LOSS_NEW.store(false, Ordering::Relaxed);
+            let shared = SHARED.borrow_ref(cs);
+            shared.as_ref()?.rx.loss.map(|loss| loss.lost)
+        })
+    }
+
+    fn take_loss_at(&self, position: u32) -> Option<Loss> {
         critical_section::with(|cs| {
             let mut shared = SHARED.borrow_ref_mut(cs);
             let shared = shared.as_mut()?;
             let loss = shared.rx.loss.filter(|loss| loss.after == position)?;
             shared.rx.loss = None;
             RX_LOSS_PENDING.store(false, Ordering::Relaxed);
-            Some(loss.bytes)
+            Some(loss)
         })
     }
 
@@ -184,9 +240,21 @@ impl Serial {
         })
     }
 
-    /// True if the transmit buffer can take [`LONGEST_REPLY_BYTES`] without waiting.
-    pub fn has_room_for_reply(&self) -> bool {
-        self.tx_buffer.capacity() - self.tx_buffer.len() >= LONGEST_REPLY_BYTES
+    /// True if the transmit buffer can take [`LONGEST_STEP_BYTES`] without waiting.
+    pub fn has_room_for_step(&self) -> bool {
+        self.tx_buffer.capacity() - self.tx_buffer.len() >= LONGEST_STEP_BYTES
+    }
+
+    /// True once everything written has left the UART (FIFO empty, last stop bit sent).
+    pub fn tx_idle(&self) -> bool {
+        !self.tx_pending()
+            && critical_section::with(|cs| {
+                let shared = SHARED.borrow_ref(cs);
+                shared
+                    .as_ref()
+                    .and_then(|shared| shared.uart.as_ref())
+                    .is_none_or(|uart| !uart.uart_is_busy())
+            })
     }
 
     /// True while buffered output has not all gone into the TX FIFO yet.
@@ -194,21 +262,36 @@ impl Serial {
         !self.tx_buffer.is_empty()
     }
 
-    /// Moves as much buffered output into the TX FIFO as fits; never waits.
+    /// Moves as much buffered output into the TX FIFO as fits; never waits. If output is left
+    /// (the FIFO is full), the TX interrupt is armed to wake the main loop when the FIFO has
+    /// drained to half.
     pub fn send_some(&mut self) {
         if self.tx_buffer.is_empty() {
             return;
         }
         let written = critical_section::with(|cs| {
-            let shared = SHARED.borrow_ref(cs);
-            let Some(uart) = shared.as_ref().and_then(|shared| shared.uart.as_ref()) else {
+            let mut shared = SHARED.borrow_ref_mut(cs);
+            let Some(uart) = shared.as_mut().and_then(|shared| shared.uart.as_mut()) else {
                 return 0;
             };
-            let (front, _) = self.tx_buffer.as_slices();
-            match uart.write_raw(front) {
-                Ok(rest) => front.len() - rest.len(),
-                Err(_) => 0, // nb::WouldBlock: FIFO full
+            let mut written = 0;
+            // Both halves of the ring buffer, as far as the FIFO takes them.
+            let (front, back) = self.tx_buffer.as_slices();
+            for part in [front, back] {
+                match uart.write_raw(part) {
+                    Ok(rest) => {
+                        written += part.len() - rest.len();
+                        if !rest.is_empty() {
+                            break;
+                        }
+                    }
+                    Err(_) => break, // nb::WouldBlock: FIFO full
+                }
             }
+            if written < self.tx_buffer.len() {
+                uart.enable_tx_interrupt();
+            }
+            written
         });
         for _ in 0..written {
             self.tx_buffer.pop_front();
@@ -219,15 +302,13 @@ impl Serial {
         self.baud
     }
 
-    /// Switches to `baud` after everything already buffered has been sent at the old rate
-    /// (so the reply that announces a change arrives readably). Blocks for that long.
+    /// Switches to `baud`. Call it once everything written has gone out at the old rate
+    /// ([`Serial::tx_idle`]: the reply that announces a change must arrive readably); output
+    /// still waiting then would go out at the new rate.
     pub fn set_baud(&mut self, baud: u32) -> Result<(), BaudOutOfRange> {
         check_baud(baud)?;
         if baud == self.baud {
             return Ok(());
-        }
-        while self.tx_pending() {
-            self.send_some();
         }
         let peripheral_clock = self.peripheral_clock;
         critical_section::with(|cs| {
@@ -238,7 +319,8 @@ impl Serial {
             let Some(uart) = shared.uart.take() else {
                 return;
             };
-            // Let the last byte leave the shift register before changing its clock.
+            // The last byte has left the shift register (tx_idle); should it not have, wait
+            // for it (at most one character time) rather than garble it.
             while uart.uart_is_busy() {}
             // Cannot fail: `check_baud` keeps the divider in range for a 125 MHz clk_peri.
             let Ok(uart) = uart.disable().enable(config(baud), peripheral_clock) else {
@@ -253,7 +335,7 @@ impl Serial {
 }
 
 /// Buffers output. Should the buffer fill up anyway (the main loop checks
-/// [`Serial::has_room_for_reply`] first), it waits for the line to take bytes: back-pressure,
+/// [`Serial::has_room_for_step`] first), it waits for the line to take bytes: back-pressure,
 /// never silent loss, since a host relies on every reply arriving whole.
 impl fmt::Write for Serial {
     fn write_str(&mut self, text: &str) -> fmt::Result {
@@ -279,6 +361,20 @@ fn config(baud: u32) -> UartConfig {
 }
 
 impl Shared {
+    /// Masks the TX interrupt if it fired (the main loop, now awake, refills the FIFO and arms
+    /// it again if it must), then empties the RX FIFO.
+    fn service(&mut self) {
+        let Some(uart) = self.uart.as_mut() else {
+            return;
+        };
+        // SAFETY: a read of UART0's masked interrupt status, which has no side effect.
+        let tx_fired = unsafe { (*pac::UART0::ptr()).uartmis().read().txmis().bit_is_set() };
+        if tx_fired {
+            uart.disable_tx_interrupt();
+        }
+        self.receive();
+    }
+
     /// Empties the RX FIFO into the queue; this also clears the level and timeout interrupts.
     fn receive(&mut self) {
         let Some(uart) = self.uart.as_ref() else {
@@ -292,21 +388,33 @@ impl Shared {
                 Ok(count) => self.rx.enqueue(&chunk[..count]),
                 Err(nb::Error::WouldBlock) => break,
                 Err(nb::Error::Other(error)) => {
-                    self.rx.line_errors = self.rx.line_errors.wrapping_add(1);
                     // `discarded` holds the good bytes read before the error. A framing,
-                    // parity or break error loses the byte after them. An overrun flags a
-                    // good byte (the last one in `discarded`, if any): the bytes the full
-                    // hardware FIFO could not take were lost just before it. Either way the
-                    // line they belong to must be refused, so the loss goes in at its place.
-                    let (before, after) = match error.err_type {
-                        ReadErrorType::Overrun if !error.discarded.is_empty() => {
-                            error.discarded.split_at(error.discarded.len() - 1)
+                    // parity or break error loses the byte after them. An overrun flags a good
+                    // byte (the last one in `discarded`): the bytes the full hardware FIFO
+                    // could not take were lost just before it, how many the UART cannot tell.
+                    // With nothing in `discarded`, rp2040-hal found the overrun in the status
+                    // register with the FIFO empty: the next byte will carry its flag too.
+                    // Either way the line the loss cuts must be refused, so it goes in at its
+                    // place.
+                    match error.err_type {
+                        ReadErrorType::Overrun => match error.discarded.split_last() {
+                            Some((&flagged, before)) => {
+                                self.rx.enqueue(before);
+                                if !core::mem::take(&mut self.rx.overrun_counted) {
+                                    self.rx.uart_loss();
+                                }
+                                self.rx.enqueue(&[flagged]);
+                            }
+                            None => {
+                                self.rx.uart_loss();
+                                self.rx.overrun_counted = true;
+                            }
+                        },
+                        _ => {
+                            self.rx.enqueue(error.discarded);
+                            self.rx.uart_loss();
                         }
-                        _ => (error.discarded, &[][..]),
-                    };
-                    self.rx.enqueue(before);
-                    self.rx.lose(1);
-                    self.rx.enqueue(after);
+                    }
                 }
             }
         }
@@ -316,24 +424,45 @@ impl Shared {
 impl Receiver {
     fn enqueue(&mut self, bytes: &[u8]) {
         for &byte in bytes {
-            // Once a byte is lost, every byte is dropped until the main loop has reached the
-            // gap (the queue is then empty) and taken the loss: the gap stays one contiguous
-            // stretch at one known position, so the line it cuts is refused and no line is
-            // ever pieced together from fragments around a gap the main loop was not told of.
-            if self.loss.is_none() && self.queue.enqueue(byte).is_ok() {
+            if self.queue.enqueue(byte).is_ok() {
                 self.enqueued = self.enqueued.wrapping_add(1);
-                continue;
+            } else {
+                self.lose(1, false);
             }
-            self.lose(1);
         }
     }
 
-    fn lose(&mut self, bytes: u32) {
-        let loss = self.loss.get_or_insert(Loss {
-            after: self.enqueued,
-            bytes: 0,
+    /// The UART lost at least one byte here.
+    fn uart_loss(&mut self) {
+        self.line_errors = self.line_errors.wrapping_add(1);
+        self.lose(1, true);
+    }
+
+    /// `bytes` were lost here. A gap the main loop has not reached yet grows to this point (the
+    /// bytes queued since its start are dropped with it, and counted), so it stays one stretch
+    /// at one known position: the line it cuts is refused, and no line is ever pieced together
+    /// from fragments around a gap the main loop was not told of.
+    fn lose(&mut self, bytes: u32, in_uart: bool) {
+        let at = self.enqueued;
+        let loss = self.loss.get_or_insert_with(|| {
+            RX_LOSS_NEW.store(true, Ordering::Relaxed);
+            Loss {
+                after: at,
+                resume: at,
+                lost: Lost {
+                    bytes: 0,
+                    in_uart: false,
+                },
+            }
         });
-        loss.bytes = loss.bytes.wrapping_add(bytes);
+        let dropped_between = at.wrapping_sub(loss.resume);
+        loss.resume = at;
+        loss.lost.bytes = loss
+            .lost
+            .bytes
+            .wrapping_add(bytes)
+            .wrapping_add(dropped_between);
+        loss.lost.in_uart |= in_uart;
         RX_LOSS_PENDING.store(true, Ordering::Relaxed);
     }
 }
@@ -342,7 +471,7 @@ impl Receiver {
 fn UART0_IRQ() {
     critical_section::with(|cs| {
         if let Some(shared) = SHARED.borrow_ref_mut(cs).as_mut() {
-            shared.receive();
+            shared.service();
         }
     });
 }
