@@ -117,6 +117,8 @@ enum Rebuild {
 enum Done {
     /// Reply `ok` (after any data already written).
     Ok,
+    /// Data lines to write first, a line per slice, then `ok`.
+    List(Listing),
     /// Reply with this error.
     Refused(Error),
     /// The job was the controller's own (link loss): no reply.
@@ -369,7 +371,7 @@ impl<M: Math> Controller<M> {
                     });
                     return;
                 }
-                Some(result) => self.finish_path(purpose, solution, segment, result, out),
+                Some(result) => self.finish_path(purpose, solution, segment, result),
             },
             Job::Listing { listing, next } => {
                 if listing.write_line(next, &self.settings, &self.solver, out) {
@@ -389,6 +391,7 @@ impl<M: Math> Controller<M> {
         };
         self.holding = false;
         match done {
+            Done::List(listing) => self.job = Some(Job::Listing { listing, next: 0 }),
             Done::Quiet => {}
             Done::Ok => self.reply(session, Ok(()), out),
             Done::Refused(e) => self.reply(session, Err(e), out),
@@ -655,7 +658,6 @@ impl<M: Math> Controller<M> {
         solution: Solution,
         segment: Segment,
         result: Result<(), Error>,
-        out: &mut impl Write,
     ) -> Done {
         match (purpose, result) {
             (Purpose::Move { jump: false }, Ok(())) => {
@@ -677,8 +679,11 @@ impl<M: Math> Controller<M> {
                 } else {
                     segment.frames() as f32 / f32::from(self.settings.frame_hz)
                 };
-                report::write_check(out, &solution.arm_rad, &solution.pulse_us, duration_s);
-                Done::Ok
+                Done::List(Listing::Check {
+                    arm_rad: solution.arm_rad,
+                    pulse_us: solution.pulse_us,
+                    duration_s,
+                })
             }
             (Purpose::ReturnHome, Ok(())) => {
                 self.start(segment);

@@ -9,19 +9,77 @@ use kinematics_core::{Direction, Pose, Vec3, LEGS};
 
 use crate::settings::{Kind, SettingId, SettingValue};
 
-/// A number with a fixed count of decimals, never shown as `-0.000`.
+/// A number with a fixed count of decimals (at most 6), never shown as `-0.000`. The same
+/// digits as `format!("{:.decimals$}")` (the exact value rounded half to even), computed in
+/// integers: core's float formatting costs thousands of cycles per number on a chip without
+/// an FPU, and a `status` or `config` reply writes dozens of them.
 #[derive(Debug, Clone, Copy)]
 pub struct Fixed(pub f32, pub usize);
+
+/// Powers of ten up to the most decimals [`Fixed`] writes in integers.
+const POW10: [u64; 7] = [1, 10, 100, 1_000, 10_000, 100_000, 1_000_000];
 
 impl Display for Fixed {
     fn fmt(&self, f: &mut Formatter<'_>) -> fmt::Result {
         let Fixed(value, decimals) = *self;
-        // Values that round to zero print as an unsigned zero.
-        const HALF_STEP: [f32; 7] = [0.5, 0.05, 5e-3, 5e-4, 5e-5, 5e-6, 5e-7];
-        let half_step = HALF_STEP.get(decimals).copied().unwrap_or(0.0);
-        let value = if value.abs() < half_step { 0.0 } else { value };
-        write!(f, "{value:.decimals$}")
+        match rounded_scaled(value, decimals) {
+            Some((negative, scaled)) => {
+                let scale = POW10[decimals];
+                // A value that rounds to zero prints as an unsigned zero.
+                if negative && scaled != 0 {
+                    f.write_char('-')?;
+                }
+                write!(f, "{}", scaled / scale)?;
+                if decimals > 0 {
+                    write!(f, ".{:0width$}", scaled % scale, width = decimals)?;
+                }
+                Ok(())
+            }
+            None => {
+                // Large, not finite, or many decimals: core's formatting (and the same zero
+                // rule).
+                const HALF_STEP: [f32; 7] = [0.5, 0.05, 5e-3, 5e-4, 5e-5, 5e-6, 5e-7];
+                let half_step = HALF_STEP.get(decimals).copied().unwrap_or(0.0);
+                let value = if value.abs() < half_step { 0.0 } else { value };
+                write!(f, "{value:.decimals$}")
+            }
+        }
     }
+}
+
+/// `|value| * 10^decimals` rounded half to even to an integer, and the sign; `None` where
+/// the integer computation does not apply (not finite, `|value| >= 2^40`, or more than 6
+/// decimals).
+fn rounded_scaled(value: f32, decimals: usize) -> Option<(bool, u64)> {
+    let scale = *POW10.get(decimals)?;
+    let bits = value.to_bits();
+    let negative = bits >> 31 != 0;
+    let exponent = ((bits >> 23) & 0xff) as i32;
+    if exponent == 0xff {
+        return None;
+    }
+    // |value| = mantissa * 2^shift, exactly.
+    let (mantissa, shift) = if exponent == 0 {
+        (u64::from(bits & 0x7f_ffff), -149)
+    } else {
+        (u64::from((bits & 0x7f_ffff) | 0x80_0000), exponent - 150)
+    };
+    // mantissa < 2^24 and scale <= 10^6 < 2^20: the product fits in 44 bits.
+    let n = mantissa * scale;
+    if shift >= 0 {
+        // |value| < 2^40 keeps n << shift within 64 bits.
+        return (shift <= 16).then(|| (negative, n << shift));
+    }
+    let right = shift.unsigned_abs();
+    if right >= 64 {
+        // Below 2^-20 of a step: rounds to zero (n < 2^44 is less than half of 2^right).
+        return Some((negative, 0));
+    }
+    let quotient = n >> right;
+    let rest = n & ((1u64 << right) - 1);
+    let half = 1u64 << (right - 1);
+    let up = rest > half || (rest == half && quotient & 1 == 1);
+    Some((negative, quotient + u64::from(up)))
 }
 
 /// Six values in servo order with a fixed number of decimals, separated by spaces.
@@ -103,6 +161,70 @@ impl Display for ValueText {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn fixed_writes_the_digits_core_writes() {
+        // core's float formatting is the reference: the exact value, rounded half to even.
+        let mut seed = 0x2545_f491_u32;
+        let check = |v: f32| {
+            for decimals in 0..=6 {
+                let core = std::format!("{v:.decimals$}");
+                let core = if core
+                    .trim_start_matches('-')
+                    .bytes()
+                    .all(|b| b == b'0' || b == b'.')
+                {
+                    core.trim_start_matches('-').to_owned()
+                } else {
+                    core
+                };
+                assert_eq!(
+                    std::format!("{}", Fixed(v, decimals)),
+                    core,
+                    "{v:e} .{decimals}"
+                );
+            }
+        };
+        for v in [
+            0.0,
+            -0.0,
+            0.5,
+            1.5,
+            2.5,
+            -2.5,
+            0.125,
+            0.375,
+            1e-45,
+            -1e-45,
+            1500.0,
+            1499.999,
+            0.0005,
+            -0.0005,
+            0.00049999,
+            509.2958,
+            118.458,
+            3e38,
+            -3e38,
+            1.0e12,
+            1099511627775.0,
+        ] {
+            check(v);
+        }
+        for _ in 0..200_000 {
+            seed ^= seed << 13;
+            seed ^= seed >> 17;
+            seed ^= seed << 5;
+            let v = f32::from_bits(seed);
+            if v.is_finite() {
+                check(v);
+                // Values where the digits matter: typical magnitudes.
+                check(v % 5000.0);
+                check((v % 1.0) * 0.01);
+            }
+        }
+        assert_eq!(std::format!("{}", Fixed(f32::NAN, 2)), "NaN");
+        assert_eq!(std::format!("{}", Fixed(1.23456, 9)), "1.234560013");
+    }
 
     #[test]
     fn fixed_never_prints_negative_zero() {

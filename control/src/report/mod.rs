@@ -34,8 +34,8 @@ mod replies;
 pub use errors::{usage, Code};
 pub use format::{degrees, Fixed, PoseText, Six, ValueText, Vector};
 pub use replies::{
-    refusal, write_banner, write_check, write_echo, write_error, write_notice, write_ok,
-    write_prompt, Fault, Listing, MotionReport, Notice, StatusReport, EOL, HELP, PROMPT, VERSION,
+    refusal, write_banner, write_echo, write_error, write_notice, write_ok, write_prompt, Fault,
+    Listing, MotionReport, Notice, StatusReport, EOL, HELP, PROMPT, VERSION,
 };
 
 #[cfg(test)]

@@ -244,6 +244,16 @@ pub enum Listing {
     Config(LinkSettings),
     /// `help`.
     Help,
+    /// `check` of an acceptable pose: its arm angles (rad), pulses (us) and the move's
+    /// duration (s).
+    Check {
+        /// Arm angles, rad.
+        arm_rad: [f32; LEGS],
+        /// Pulse widths, us.
+        pulse_us: [f32; LEGS],
+        /// How long the move would take, s.
+        duration_s: f32,
+    },
 }
 
 impl Listing {
@@ -264,6 +274,19 @@ impl Listing {
                 line(out, format_args!("{text}"));
                 true
             }),
+            Listing::Check {
+                arm_rad,
+                pulse_us,
+                duration_s,
+            } => {
+                match index {
+                    0 => line(out, format_args!("arm_deg: {}", Six(&degrees(arm_rad), 3))),
+                    1 => line(out, format_args!("pulse_us: {}", Six(pulse_us, 2))),
+                    2 => line(out, format_args!("duration_s: {}", Fixed(*duration_s, 3))),
+                    _ => return false,
+                }
+                true
+            }
         }
     }
 
@@ -317,18 +340,6 @@ fn status_line(out: &mut impl Write, s: &StatusReport, index: usize) -> bool {
         _ => return false,
     }
     true
-}
-
-/// Writes the `check` data lines for an acceptable pose.
-pub fn write_check(
-    out: &mut impl Write,
-    arm_rad: &[f32; LEGS],
-    pulse_us: &[f32; LEGS],
-    duration_s: f32,
-) {
-    line(out, format_args!("arm_deg: {}", Six(&degrees(arm_rad), 3)));
-    line(out, format_args!("pulse_us: {}", Six(pulse_us, 2)));
-    line(out, format_args!("duration_s: {}", Fixed(duration_s, 3)));
 }
 
 /// `geometry`: the layout, a, s, h0, then a line per leg.
