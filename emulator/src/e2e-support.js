@@ -181,6 +181,13 @@ export function status(board) {
     target: poseIn(field('target')),
     arm_deg: six('arm_deg', 3),
     pulse_us: six('pulse_us', 2),
+    /** `{ frames, applied, damaged, clamped, refused }`. */
+    stream: Object.fromEntries(field('stream').split(' ').map((kv) => {
+      const [key, value] = kv.split('=');
+      return [key, Number(value)];
+    })),
+    'e-stop': field('e-stop'),
+    servo_power: field('servo_power'),
   };
 }
 
