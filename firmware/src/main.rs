@@ -58,6 +58,8 @@ fn main() -> ! {
     let pins = hal::gpio::Pins::new(p.IO_BANK0, p.PADS_BANK0, sio.gpio_bank0, &mut p.RESETS);
 
     let mut controller = Controller::with_math(Settings::default());
+    let mut timer = hal::Timer::new(p.TIMER, &mut p.RESETS, &clocks);
+    let rx_poll = timer.alarm_0().expect("alarm 0 is taken once, here");
     let mut serial = Serial::new(
         p.UART0,
         pins.gpio0,
@@ -65,6 +67,7 @@ fn main() -> ! {
         &mut p.RESETS,
         clocks.peripheral_clock.freq(),
         controller.baud(),
+        rx_poll,
     )
     .expect("the default baud rate is in range");
     let mut servos = ServoPwm::new(
