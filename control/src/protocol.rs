@@ -224,12 +224,12 @@ impl LineBuffer {
             BinaryFeed::Frame(counts) => Feed::Frame(Frame::Binary(counts)),
             BinaryFeed::Damaged => Feed::DamagedFrame,
             // `A5` then not `5A`: a stray byte, not a frame: it spoils the line (if nothing
-            // did already), which this byte joins.
+            // did already). This byte is read afresh (another `A5` may begin a frame).
             BinaryFeed::NotAFrame => {
                 if self.spoiled.is_none() {
                     self.spoiled = Some(Spoiled::BadByte(stream::BINARY_HEADER[0]));
                 }
-                self.feed_line(byte)
+                self.feed(byte)
             }
         }
     }
@@ -598,6 +598,10 @@ mod tests {
             ["spoiled BadByte(165)", "line home"]
         );
         assert_eq!(inputs(b"sta\xA5tus\n"), ["spoiled BadByte(165)"]);
+        // A5 A5 5A: the first is stray, the second begins a frame.
+        let mut input = b"\xA5".to_vec();
+        input.extend(binary([4; 6]));
+        assert_eq!(inputs(&input), ["damaged", "binary [4, 4, 4, 4, 4, 4]"]);
     }
 
     #[test]

@@ -154,11 +154,11 @@ impl LineModel {
         self.previous_was_cr = false;
         let mut bytes = self.frame.take().unwrap_or_default();
         if bytes.len() == 1 && b != 0x5A {
-            // A stray A5: a byte outside ASCII in the line, which this byte joins.
+            // A stray A5: a byte outside ASCII in the line; this byte is read afresh.
             if !self.refused() {
                 self.bad_character = true;
             }
-            return self.line_byte(b);
+            return self.byte(b);
         }
         bytes.push(b);
         if bytes.len() == 2 && self.refused() {
