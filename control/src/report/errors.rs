@@ -16,6 +16,7 @@ use crate::command::{Missing, ParseError, Verb};
 use crate::error::Error;
 use crate::protocol::{Lost, Spoiled, MAX_LINE};
 use crate::settings::{Expected, SettingError};
+use crate::store::SaveError;
 
 /// The error codes, one per kind of refusal. `error:<code>` is what programs match on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -68,11 +69,13 @@ pub enum Code {
     PoseConflict,
     /// Not possible while moving.
     Busy,
+    /// The settings could not be written to flash.
+    SaveFailed,
 }
 
 impl Code {
     /// Every code, for documentation checks.
-    pub const ALL: [Code; 24] = [
+    pub const ALL: [Code; 25] = [
         Code::LineTooLong,
         Code::RxOverflow,
         Code::BadCharacter,
@@ -97,6 +100,7 @@ impl Code {
         Code::PathBlocked,
         Code::PoseConflict,
         Code::Busy,
+        Code::SaveFailed,
     ];
 
     /// The code as written after `error:`.
@@ -126,6 +130,7 @@ impl Code {
             Code::PathBlocked => "path-blocked",
             Code::PoseConflict => "pose-conflict",
             Code::Busy => "busy",
+            Code::SaveFailed => "save-failed",
         }
     }
 }
@@ -147,6 +152,7 @@ impl Error {
             Error::PathBlocked { .. } => Code::PathBlocked,
             Error::PoseConflict { .. } => Code::PoseConflict,
             Error::Busy | Error::Pending => Code::Busy,
+            Error::SaveFailed(_) => Code::SaveFailed,
         }
     }
 }
@@ -239,6 +245,18 @@ impl Display for Error {
             Error::Busy => f.write_str("the platform is moving; wait for it or send stop first"),
             Error::Pending => f.write_str(
                 "the previous command is still being carried out; wait for its reply",
+            ),
+            Error::SaveFailed(SaveError::Flash) => f.write_str(
+                "the flash refused the write; the settings saved before are kept",
+            ),
+            Error::SaveFailed(SaveError::Verify {
+                offset,
+                wrote,
+                read,
+            }) => write!(
+                f,
+                "the flash did not keep what was written (byte {offset} of the settings storage \
+                 read 0x{read:02X}, not 0x{wrote:02X}); the settings saved before are kept"
             ),
         }
     }
