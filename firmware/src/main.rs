@@ -160,9 +160,12 @@ fn main() -> ! {
 
         // Sleep until an interrupt (bytes received, TX FIFO half empty, a frame) unless there
         // is something to do now. Output waiting for room in the TX FIFO is no reason to stay
-        // awake: the TX interrupt wakes the loop when the FIFO has drained.
+        // awake: the TX interrupt wakes the loop when the FIFO has drained. But a baud change
+        // whose output is all in the UART waits for its last character (nothing would wake the
+        // loop when the UART goes idle), and is made in the next pass if the UART has gone
+        // idle since the check above.
         let room = serial.has_room_for_step();
-        let waiting_for_tx = baud_change_pending && !serial.tx_pending() && !serial.tx_idle();
+        let waiting_for_tx = controller.baud() != serial.baud() && !serial.tx_pending();
         sleep_unless(|| {
             (room && (controller.is_busy() || serial.rx_pending()))
                 || servos.frame_pending()
