@@ -26,7 +26,7 @@
 //! Decoding checks magic, version, length, checksum, every enumerated byte and finally
 //! [`Settings::validate`], so decoded settings are always usable.
 
-use kinematics_core::{Direction, ServoSet};
+use kinematics_core::{Direction, Libm, Math, ServoSet};
 
 use crate::settings::{LayoutParam, SettingError, Settings};
 
@@ -190,6 +190,12 @@ pub fn encode(record: &Record) -> [u8; ENCODED_LEN] {
 /// Reads a record back (trailing bytes are ignored), refusing anything damaged, foreign or
 /// invalid.
 pub fn decode(bytes: &[u8]) -> Result<Record, DecodeError> {
+    decode_with::<Libm>(bytes)
+}
+
+/// [`decode`], the settings' geometry validated with `M`'s maths (the board's own, so that it
+/// need not carry `libm` for this alone).
+pub fn decode_with<M: Math>(bytes: &[u8]) -> Result<Record, DecodeError> {
     if bytes.len() < ENCODED_LEN {
         return Err(DecodeError::TooShort);
     }
@@ -242,7 +248,9 @@ pub fn decode(bytes: &[u8]) -> Result<Record, DecodeError> {
         };
         r.zeros(SERVO_RECORD_LEN - 17)?;
     }
-    settings.validate().map_err(DecodeError::Invalid)?;
+    settings
+        .validate_with::<M>()
+        .map_err(DecodeError::Invalid)?;
     Ok(Record {
         sequence: le32(SEQUENCE_OFFSET),
         settings,

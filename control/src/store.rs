@@ -19,6 +19,8 @@
 //! Offsets given to [`NorFlash`] are bytes from the start of the storage (sector 0 at 0,
 //! sector 1 at [`SECTOR_BYTES`]); where the storage lies in the chip is the board's business.
 
+use kinematics_core::{Libm, Math};
+
 use crate::record::{self, DecodeError, Record, ENCODED_LEN};
 use crate::settings::Settings;
 
@@ -74,7 +76,7 @@ pub enum Found {
         other: DecodeError,
     },
     /// No good record: why (another format version if either sector holds one, as that is what
-    /// a user can act on; otherwise the first sector's reason).
+    /// a user can act on; otherwise the first unusable sector's reason).
     Unusable(DecodeError),
 }
 
@@ -128,47 +130,40 @@ impl Store {
 
     /// Reads both sectors: the newest good record, and what to say about the other.
     pub fn load<F: NorFlash>(flash: &mut F) -> Loaded {
-        let sectors: [Sector; SECTORS] =
-            core::array::from_fn(|i| read_sector(flash, i as u32 * SECTOR_BYTES));
-        let newest = match (&sectors[0], &sectors[1]) {
-            (Sector::Saved(a), Sector::Saved(b)) => {
-                if record::is_newer(b.sequence, a.sequence) {
-                    Some((1, *b))
-                } else {
-                    Some((0, *a))
-                }
+        Self::load_with::<Libm, F>(flash)
+    }
+
+    /// [`Store::load`], the records' geometry validated with `M`'s maths
+    /// ([`record::decode_with`]).
+    pub fn load_with<M: Math, F: NorFlash>(flash: &mut F) -> Loaded {
+        let first = read_sector::<M, F>(flash, 0);
+        let second = read_sector::<M, F>(flash, SECTOR_BYTES);
+        // The newest good record, and what the other sector holds.
+        let (newest, other) = match (first, second) {
+            (Sector::Saved(a), Sector::Saved(b)) if record::is_newer(b.sequence, a.sequence) => {
+                (Some((1, b)), Sector::Saved(a))
             }
-            (Sector::Saved(a), _) => Some((0, *a)),
-            (_, Sector::Saved(b)) => Some((1, *b)),
-            _ => None,
+            (Sector::Saved(a), other) => (Some((0, a)), other),
+            (other, Sector::Saved(b)) => (Some((1, b)), other),
+            // Another format version is what a user can act on.
+            (Sector::Unusable(_), Sector::Unusable(e @ DecodeError::UnsupportedVersion(_))) => {
+                (None, Sector::Unusable(e))
+            }
+            (Sector::Unusable(e), _) | (Sector::Erased, Sector::Unusable(e)) => {
+                (None, Sector::Unusable(e))
+            }
+            (Sector::Erased, Sector::Erased) => (None, Sector::Erased),
         };
-        let found = match newest {
-            Some((i, r)) => match &sectors[1 - i] {
-                Sector::Unusable(e) => Found::SavedOtherUnusable {
-                    sequence: r.sequence,
-                    other: e.clone(),
-                },
-                _ => Found::Saved {
-                    sequence: r.sequence,
-                },
+        let found = match (&newest, other) {
+            (Some((_, r)), Sector::Unusable(other)) => Found::SavedOtherUnusable {
+                sequence: r.sequence,
+                other,
             },
-            None => {
-                let why = |s: &Sector| match s {
-                    Sector::Unusable(e) => Some(e.clone()),
-                    _ => None,
-                };
-                let version = sectors.iter().find_map(|s| match s {
-                    Sector::Unusable(e @ DecodeError::UnsupportedVersion(_)) => Some(e.clone()),
-                    _ => None,
-                });
-                match version
-                    .or_else(|| why(&sectors[0]))
-                    .or_else(|| why(&sectors[1]))
-                {
-                    Some(e) => Found::Unusable(e),
-                    None => Found::Nothing,
-                }
-            }
+            (Some((_, r)), _) => Found::Saved {
+                sequence: r.sequence,
+            },
+            (None, Sector::Unusable(e)) => Found::Unusable(e),
+            (None, _) => Found::Nothing,
         };
         Loaded {
             store: Store { newest },
@@ -274,14 +269,15 @@ impl Write {
     }
 }
 
-/// What the sector at `offset` holds.
-pub fn read_sector<F: NorFlash>(flash: &mut F, offset: u32) -> Sector {
+/// What the sector at `offset` holds (its geometry validated with `M`'s maths).
+#[inline(never)] // once in the firmware, for both sectors
+pub fn read_sector<M: Math, F: NorFlash>(flash: &mut F, offset: u32) -> Sector {
     let mut page = [0u8; PAGE_BYTES];
     flash.read(offset, &mut page);
     if page.iter().all(|&b| b == 0xFF) {
         return Sector::Erased;
     }
-    match record::decode(&page) {
+    match record::decode_with::<M>(&page) {
         Ok(r) => Sector::Saved(r),
         Err(e) => Sector::Unusable(e),
     }
