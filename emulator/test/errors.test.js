@@ -197,7 +197,7 @@ test('busy: frame rate, geometry, servo settings and defaults are refused while 
   const target = [0, 0, 10, 0, 0, 0]; // 2 s
   const config = ok(board, 'config');
   ok(board, `pose ${poseText(target)}`);
-  for (const line of ['set frame_hz 100', 'set rod_mm 121', 'set servo3.trim_us 1510', 'set servos.dir normal', 'defaults']) {
+  for (const line of ['set frame_hz 100', 'set rod_mm 121', 'set servo3.trim_us 1510', 'set servos.dir normal', 'defaults', 'save']) {
     const reply = refused(board, line, 'busy');
     observed.add('busy');
     assert.equal(reply, 'error:busy the platform is moving; wait for it or send stop first');
@@ -252,6 +252,31 @@ test('rx-overflow: bytes lost while the firmware was busy refuse the line they f
   assertConstant(pulses, widths, 'nothing moved');
   assert.equal(ok(board, 'check 1 1 1 1 1 1').length, 3, 'the next good line works');
   assert.equal(board.rxFifoDroppedBytes, 0, 'the loss was in the firmware queue, not the UART FIFO');
+});
+
+test('save-failed: the flash did not keep what was written; the save before stays and loads', () => {
+  const board = bootQuiet(bootrom);
+  ok(board, 'set servo1.trim_us 1510');
+  ok(board, 'save'); // save 1, sector 0
+  ok(board, 'set servo1.trim_us 1520');
+  // A worn cell in sector 1, where save 2 goes: byte 5 (the format version's high byte, 0)
+  // keeps its bit 0 set, whatever is programmed.
+  const { offset } = board.settingsStorage;
+  board.flash.wearOut(offset + 4096 + 5, 0x01);
+  const reply = expectRefusal(board, 'save', 'save-failed', /^the flash did not keep what was written/);
+  assert.equal(
+    reply,
+    'error:save-failed the flash did not keep what was written (byte 4101 of the settings storage read 0x01, not 0x00); the settings saved before are kept',
+  );
+  // At the next power-up: save 1, and a word about the copy that failed (cleared to zeros).
+  board.powerCycle();
+  board.waitForLine(/hexapod\b.*\bhelp\b/);
+  assert.equal(
+    board.waitForLine(/^# warning/),
+    '# warning: one of the two saved copies of the settings cannot be used (damaged: not a settings record); loaded the other, save 1: check config',
+  );
+  assert.equal(board.request('set echo off').reply, 'ok');
+  assert.ok(ok(board, 'config').includes('servo1: trim_us=1510.00 rate_us_rad=509.296 dir=reversed min_us=1100.00 max_us=1900.00'));
 });
 
 test('every documented error code exists in the firmware and was produced above through the wire', () => {

@@ -3,13 +3,14 @@
 //! Data flows one way: UART0 bytes -> controller (lines, commands, motion) -> six pulse
 //! widths per servo frame (and right after a command that jumps) -> PWM registers. This file
 //! only wires the pieces together: clocks and watchdog, UART0 ([`serial`]) with its link
-//! [`control::Session`], the six servo outputs ([`servo_pwm`]) and the hardware-independent
-//! [`control::Controller`], which runs on the boot ROM's float routines
-//! ([`firmware::rom_math`]).
+//! [`control::Session`], the six servo outputs ([`servo_pwm`]), the settings saved in flash
+//! ([`flash`]) and the hardware-independent [`control::Controller`], which runs on the boot
+//! ROM's float routines ([`firmware::rom_math`]).
 
 #![no_std]
 #![no_main]
 
+mod flash;
 mod serial;
 mod servo_pwm;
 
@@ -17,8 +18,10 @@ use defmt_rtt as _;
 use panic_probe as _;
 use rp2040_hal::{self as hal, clocks::Clock, fugit::ExtU32, pac, Sio, Watchdog};
 
-use control::{Session, Settings};
+use control::store::Store;
+use control::Session;
 use firmware::rom_math::RomMath;
+use flash::SettingsFlash;
 use serial::{Received, Serial};
 use servo_pwm::{PulseWindowUs, ServoPwm, SERVO_COUNT};
 
@@ -32,6 +35,10 @@ pub static BOOT2: [u8; 256] = rp2040_boot2::BOOT_LOADER_W25Q080;
 /// Reset the chip if the main loop stalls this long. A pass takes well under a millisecond
 /// (see [`main`]), so only a hang can starve the watchdog.
 const WATCHDOG_TIMEOUT_MS: u32 = 500;
+/// The watchdog's time for a `save`'s flash write: a 4 KiB sector erase takes the W25Q080 up
+/// to 400 ms and a page program up to 3 ms (datasheet maxima), with interrupts masked; 2 s
+/// leaves a wide margin and still resets a write that hangs.
+const SAVE_WATCHDOG_MS: u32 = 2000;
 /// Most received bytes handed to the controller in one pass (a line end ends the pass's input
 /// early, so at most one command runs per pass).
 const RX_BYTES_PER_PASS: usize = 64;
@@ -51,7 +58,13 @@ fn main() -> ! {
     let sio = Sio::new(p.SIO);
     let pins = hal::gpio::Pins::new(p.IO_BANK0, p.PADS_BANK0, sio.gpio_bank0, &mut p.RESETS);
 
-    let mut controller = Controller::with_math(Settings::default());
+    // The newest good settings saved in flash, or the defaults (with a warning saying why).
+    let mut settings_flash = SettingsFlash::new();
+    let mut controller = Controller::power_up(Store::load_with::<RomMath, _>(&mut settings_flash));
+    defmt::info!(
+        "settings storage at flash offset {=u32:#x}",
+        settings_flash.base()
+    );
     let mut serial = Serial::new(
         p.UART0,
         pins.gpio0,
@@ -60,7 +73,7 @@ fn main() -> ! {
         clocks.peripheral_clock.freq(),
         controller.baud(),
     )
-    .expect("the default baud rate is in range");
+    .expect("the power-up baud rate is in range");
     let mut servos = ServoPwm::new(
         p.PWM,
         &mut p.RESETS,
@@ -71,7 +84,7 @@ fn main() -> ! {
         &controller.pulses_us(),
         &pulse_windows_us(&controller),
     )
-    .expect("the default frame rate is in range");
+    .expect("the settings' frame rate is in range (they are validated)");
     watchdog.start(WATCHDOG_TIMEOUT_MS.millis());
 
     // UART0's line assembly, echo and prompt (the platform's state is the controller's).
@@ -83,7 +96,9 @@ fn main() -> ! {
     // one slice of a command's long work (a path check a few IK solutions at a time, a listing
     // a line at a time: the controller splits it, see `control::Controller::work`), plus the
     // frame that came due. The longest pass is measured in the emulator (well under 1 ms,
-    // against a 3 ms frame at 333 Hz and the 500 ms watchdog; BENCHMARKS.md).
+    // against a 3 ms frame at 333 Hz and the 500 ms watchdog; BENCHMARKS.md). The one
+    // exception is a `save`'s flash write (a sector erase: tens to hundreds of milliseconds
+    // with interrupts masked), alone in its pass, with the watchdog given longer.
     let mut rx_line_errors_reported = 0;
     loop {
         watchdog.feed();
@@ -96,8 +111,24 @@ fn main() -> ! {
         }
 
         if controller.is_busy() {
-            // A slice of the work in progress; its reply comes with the last slice.
-            if serial.has_room_for_step() {
+            if let Some(write) = controller.take_flash_write() {
+                // `save`: erase the older sector, program its page, read it back. The PWM
+                // holds the pulses meanwhile (nothing moves: save is refused while moving);
+                // input waits in the UART's FIFO. The reply comes in the next pass.
+                watchdog.start(SAVE_WATCHDOG_MS.millis());
+                let result = write.perform(&mut settings_flash);
+                watchdog.start(WATCHDOG_TIMEOUT_MS.millis());
+                match result {
+                    Ok(()) => defmt::info!(
+                        "settings saved: save {} in sector {}",
+                        write.record().sequence,
+                        write.sector()
+                    ),
+                    Err(_) => defmt::error!("settings not saved: the flash did not keep them"),
+                }
+                controller.flash_written(result);
+            } else if serial.has_room_for_step() {
+                // A slice of the work in progress; its reply comes with the last slice.
                 controller.work(&mut uart, &mut serial);
                 write_new_pulses(&mut controller, &mut servos);
                 // The controller's own work (the return home after link loss) may notify.
