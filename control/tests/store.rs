@@ -293,11 +293,11 @@ fn a_flipped_bit_in_either_copy_is_found_and_the_other_copy_loaded() {
                     Some(&settings(good)),
                     "{sector}/{byte}/{bit}"
                 );
-                assert!(
-                    matches!(loaded.found, Found::SavedOtherUnusable { sequence: s, .. } if s == sequence),
-                    "{:?}",
-                    loaded.found
+                let other_unusable = matches!(
+                    loaded.found,
+                    Found::SavedOtherUnusable { sequence: s, .. } if s == sequence
                 );
+                assert!(other_unusable, "{:?}", loaded.found);
                 // The next save overwrites the damaged copy, never the good one.
                 let mut store = loaded.store.clone();
                 let write = store.prepare(&settings(9));

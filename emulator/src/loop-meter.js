@@ -64,7 +64,8 @@ export function attachLoopMeter(mcu, { boundCycles = PASS_BOUND_CYCLES } = {}) {
           stats.longestPassAtNanos = mcu.clock.nanos;
         }
         if (pass >= boundCycles) {
-          stats.longPasses.push({ cycles: pass, startNanos: lastFeedNanos, endNanos: mcu.clock.nanos });
+          const endNanos = mcu.clock.nanos;
+          stats.longPasses.push({ cycles: pass, startNanos: lastFeedNanos, endNanos });
         }
       }
       lastFeedCycles = core.cycles;

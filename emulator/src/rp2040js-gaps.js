@@ -615,7 +615,8 @@ const FLASH_ROUTINES = [
 ].map(([code, name], i) => ({ code, name, bkpt: 0xf0 + i }));
 
 const hex = (value) => `0x${(value >>> 0).toString(16)}`;
-const inFlashWindow = (address) => address >>> 0 >= FLASH_WINDOW_START && address >>> 0 < FLASH_WINDOW_END;
+const inFlashWindow = (address) =>
+  address >>> 0 >= FLASH_WINDOW_START && address >>> 0 < FLASH_WINDOW_END;
 
 /**
  * The flash chip: its contents (which survive power cycles), its timing, the erases and
@@ -704,7 +705,11 @@ export function attachFlashChip(mcu, chip, { onFault, onPowerCut }) {
   mcu.flash = chip.image;
   mcu.flash16 = new Uint16Array(buffer);
   mcu.flashView = new StoreGuardedView(buffer, (offset, value) => {
-    onFault(`CPU store of ${hex(value)} into the flash window at ${hex(FLASH_WINDOW_START + offset)} (PC ${hex(core.PC)}): a real chip never writes flash that way`);
+    const at = hex(FLASH_WINDOW_START + offset);
+    onFault(
+      `CPU store of ${hex(value)} into the flash window at ${at} (PC ${hex(core.PC)}): ` +
+        'a real chip never writes flash that way',
+    );
   });
 
   // The ROM function table: (code, 16-bit pointer) pairs, ending with code 0.
@@ -725,7 +730,8 @@ export function attachFlashChip(mcu, chip, { onFault, onPowerCut }) {
     }
   }
   if (routines.size !== FLASH_ROUTINES.length) {
-    throw new Error(`boot ROM function table: found ${routines.size} of the ${FLASH_ROUTINES.length} flash routines`);
+    const found = `${routines.size} of the ${FLASH_ROUTINES.length}`;
+    throw new Error(`boot ROM function table: found ${found} flash routines`);
   }
 
   let connected = false;
@@ -736,7 +742,10 @@ export function attachFlashChip(mcu, chip, { onFault, onPowerCut }) {
     for (const [method, read] of Object.entries(saved)) {
       mcu[method] = (address) => {
         if (inFlashWindow(address)) {
-          onFault(`flash read at ${hex(address)} while XIP is off (PC ${hex(core.PC)}): the chip is in command mode`);
+          onFault(
+            `flash read at ${hex(address)} while XIP is off (PC ${hex(core.PC)}): ` +
+              'the chip is in command mode',
+          );
         }
         return read.call(mcu, address);
       };
@@ -782,10 +791,13 @@ export function attachFlashChip(mcu, chip, { onFault, onPowerCut }) {
       return onFault(`flash_range_program(${hex(offset)}, ${count}): not whole 256-byte pages`);
     }
     if (offset + count > PICO_FLASH_BYTES) {
-      return onFault(`flash_range_program(${hex(offset)}, ${count}): beyond the Pico's 2 MiB flash`);
+      return onFault(`flash_range_program(${hex(offset)}, ${count}): beyond the 2 MiB flash`);
     }
     if (data < SRAM_START || data + count > SRAM_END) {
-      return onFault(`flash_range_program: data at ${hex(data)} is not in SRAM (flash cannot be read while XIP is off)`);
+      return onFault(
+        `flash_range_program: data at ${hex(data)} is not in SRAM ` +
+          '(flash cannot be read while XIP is off)',
+      );
     }
     chip.ops.push({ routine: 'program', offset, bytes: count, nanos: mcu.clock.nanos });
     const cut = chip.cutIn('program');
@@ -812,10 +824,16 @@ export function attachFlashChip(mcu, chip, { onFault, onPowerCut }) {
     }
     const lr = core.LR >>> 0;
     if (lr < SRAM_START || lr >= SRAM_END) {
-      return onFault(`${routine.name} called from ${hex(lr)}, not from SRAM: the caller's code would be fetched from flash while XIP is off`);
+      return onFault(
+        `${routine.name} called from ${hex(lr)}, not from SRAM: ` +
+          "the caller's code would be fetched from flash while XIP is off",
+      );
     }
     if (!core.PM) {
-      return onFault(`${routine.name} called with interrupts enabled (PRIMASK clear): a handler in flash could run while XIP is off`);
+      return onFault(
+        `${routine.name} called with interrupts enabled (PRIMASK clear): ` +
+          'a handler in flash could run while XIP is off',
+      );
     }
     const [r0, r1, r2] = core.registers;
     switch (routine.code) {
@@ -836,7 +854,10 @@ export function attachFlashChip(mcu, chip, { onFault, onPowerCut }) {
         if (!xipOff) {
           return onFault(`${routine.name} while XIP is on (flash_exit_xip first)`);
         }
-        return routine.code === 'RE' ? erase(r0 >>> 0, r1 >>> 0) : program(r0 >>> 0, r1 >>> 0, r2 >>> 0);
+        if (routine.code === 'RE') {
+          return erase(r0 >>> 0, r1 >>> 0);
+        }
+        return program(r0 >>> 0, r1 >>> 0, r2 >>> 0);
       case 'FC':
         break;
       case 'CX':

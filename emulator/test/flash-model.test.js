@@ -95,7 +95,7 @@ function putPage(mcu, bytes) {
   mcu.sram.set(bytes, PAGE_DATA - SRAM);
 }
 
-test('erase sets 4096-byte sectors to 0xFF, program ANDs pages in, each taking the datasheet time', () => {
+test('erase: 0xFF over 4 KiB sectors; program: AND over pages; each in the datasheet time', () => {
   const c = bareChip();
   c.chip.image.fill(0x5a, SECTOR - 16, SECTOR + 8192 + 16);
   let before = c.mcu.clock.nanos;
@@ -148,7 +148,8 @@ const BROKEN_RULES = {
     c.call('RE', [SECTOR, 4096, 1 << 16, 0xd8]);
   },
   'an unaligned erase': (c) => sequence(c, () => c.call('RE', [SECTOR + 256, 4096, 1 << 16, 0xd8])),
-  'an erase of part of a sector': (c) => sequence(c, () => c.call('RE', [SECTOR, 1024, 1 << 16, 0xd8])),
+  'an erase of part of a sector': (c) =>
+    sequence(c, () => c.call('RE', [SECTOR, 1024, 1 << 16, 0xd8])),
   'an erase beyond 2 MiB': (c) => sequence(c, () => c.call('RE', [0x200000, 4096, 1 << 16, 0xd8])),
   'an unaligned program': (c) => sequence(c, () => c.call('RP', [SECTOR + 16, PAGE_DATA, 256])),
   'a program of part of a page': (c) => sequence(c, () => c.call('RP', [SECTOR, PAGE_DATA, 100])),
@@ -198,7 +199,7 @@ test('after flash_enter_cmd_xip the flash reads again without a fault', () => {
   assert.deepEqual(c.faults, []);
 });
 
-test('a power cut stops an erase or a program at the chosen byte, half-way through its bits', () => {
+test('a power cut stops an erase or a program at the chosen byte, half-way through it', () => {
   const c = bareChip();
   c.chip.image.fill(0x00, SECTOR, SECTOR + 4096);
   c.chip.cutPowerDuring({ routine: 'erase', bytes: 100, mask: 0x0f });

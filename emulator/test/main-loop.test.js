@@ -179,7 +179,7 @@ test('while a long reply drains at 9,600 baud the main loop sleeps instead of sp
   assert.ok(busyCycles < 5_000_000, `${busyCycles} cycles busy while the reply drained`);
 });
 
-test('a save is the one pass over 1 ms: its erase and program alone; the pins hold meanwhile', () => {
+test('a save is the one pass over 1 ms: its erase and program; the pins hold meanwhile', () => {
   const board = quietBoard();
   ok(board, 'pose 0 0 5 0 3 0');
   board.runMs(500);

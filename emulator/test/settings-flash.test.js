@@ -35,8 +35,10 @@ const SEQUENCE_AT = 168;
 const CRC_AT = 172;
 const NOTHING_SAVED = '# warning: no settings saved in flash; using the defaults';
 const USING_DEFAULTS = /^# warning: .*using the defaults$/;
-const OTHER_COPY =
-  /^# warning: one of the two saved copies of the settings cannot be used \((.*)\); loaded the other, save (\d+): check config$/;
+const OTHER_COPY = new RegExp(
+  '^# warning: one of the two saved copies of the settings cannot be used \\((.*)\\); ' +
+    'loaded the other, save (\\d+): check config$',
+);
 
 /** CRC-32 (IEEE 802.3), bit by bit. */
 function crc32(bytes) {
@@ -179,7 +181,13 @@ const CUTS = [
   { routine: 'program', bytes: SEQUENCE_AT + 2, loads: 'old', what: 'mid sequence number' },
   { routine: 'program', bytes: CRC_AT, loads: 'old', what: 'before the CRC' },
   // Half of the last byte's bits: whether that completes the record depends on its value.
-  { routine: 'program', bytes: RECORD_BYTES - 1, mask: 0x7f, loads: 'either', what: 'in the last byte' },
+  {
+    routine: 'program',
+    bytes: RECORD_BYTES - 1,
+    mask: 0x7f,
+    loads: 'either',
+    what: 'in the last byte',
+  },
   { routine: 'program', bytes: RECORD_BYTES, loads: 'new', what: 'after the record' },
   { routine: 'program', bytes: 256, loads: 'new', what: 'after the program, before the reply' },
 ];
@@ -207,7 +215,8 @@ for (const cut of CUTS) {
     const loads = cut.loads === 'either' ? (state.sequence === 3 ? 'new' : 'old') : cut.loads;
     assert.deepEqual(after.settings, loads === 'new' ? fresh : old, 'the settings loaded');
     assert.equal(after.saved, 'yes');
-    assert.deepEqual(bootLines.filter((l) => USING_DEFAULTS.test(l)), [], 'defaults although a good copy exists');
+    const defaults = bootLines.filter((l) => USING_DEFAULTS.test(l));
+    assert.deepEqual(defaults, [], 'defaults although a good copy exists');
     // A sector left holding something that is not a record is reported; an erased one is not.
     const warning = bootLines.find((l) => OTHER_COPY.test(l));
     if (state === 'unusable') {
@@ -228,7 +237,7 @@ for (const cut of CUTS) {
   });
 }
 
-test('a flipped bit in the newest copy is found and the other copy loaded, with the warning', () => {
+test('a flipped bit in the newest copy is found; the other copy loads, with the warning', () => {
   const board = freshBoard();
   apply(board, 1);
   ok(board, 'save');
@@ -241,7 +250,8 @@ test('a flipped bit in the newest copy is found and the other copy loaded, with 
   const bootLines = powerCycle(board);
   assert.ok(
     bootLines.includes(
-      '# warning: one of the two saved copies of the settings cannot be used (damaged: checksum mismatch); loaded the other, save 1: check config',
+      '# warning: one of the two saved copies of the settings cannot be used ' +
+        '(damaged: checksum mismatch); loaded the other, save 1: check config',
     ),
     JSON.stringify(bootLines),
   );
@@ -294,7 +304,7 @@ test('1,000 saves in a row alternate between the two sectors, each erasing only 
   assert.match(trim, /^servo2: trim_us=1400\.00 /); // save 1000: 1400 + 1000 % 200
 });
 
-test('during a save at the datasheet maximum erase time the pins hold and the watchdog is quiet', () => {
+test('during a save at the maximum erase time the pins hold and the watchdog is quiet', () => {
   // 400 ms for the sector, 3 ms for the page: the W25Q80DV's maxima. The board fails the run
   // if the watchdog expires (its default `onWatchdog: 'fail'`).
   const board = freshBoard({ flashTiming: 'max' });
@@ -319,10 +329,13 @@ test('during a save at the datasheet maximum erase time the pins hold and the wa
   assert.deepEqual(board.resets, []);
 });
 
-test('the watchdog has time even for a flash slower than its datasheet, and 500 ms again after', () => {
+test('the watchdog has time for a flash slower than its datasheet, and 500 ms again after', () => {
   // A sector erase of 1.5 s, beyond the 500 ms the watchdog normally allows: the firmware gives
   // it 2 s around the write. (Without that the run fails with "watchdog expired".)
-  const board = freshBoard({ flashTiming: { sectorEraseMs: 1500, pageProgramMs: 3 }, onWatchdog: 'reset' });
+  const board = freshBoard({
+    flashTiming: { sectorEraseMs: 1500, pageProgramMs: 3 },
+    onWatchdog: 'reset',
+  });
   ok(board, 'save', { timeoutMs: 3000 });
   assert.deepEqual(board.resets, []);
   // Afterwards a stall is caught at 500 ms as before: every interrupt masked, the loop asleep.
@@ -334,7 +347,7 @@ test('the watchdog has time even for a flash slower than its datasheet, and 500 
   assert.ok(after <= 500, `reset ${after} ms after the stall`);
 });
 
-test('lines sent during a save without waiting for its ok are lost in the UART, and said so', () => {
+test('lines sent during a save without waiting for its ok are lost, and said so', () => {
   // No input is read while the flash is written (interrupts masked): what arrives beyond the
   // UART's 32-byte FIFO is lost. The README asks hosts to wait for save's ok; a host that does
   // not hears of the loss at once, and no line runs with bytes missing.
@@ -344,7 +357,9 @@ test('lines sent during a save without waiting for its ok are lost in the UART, 
   board.runMs(300);
   const lines = board.lines.slice(from);
   assert.ok(
-    lines.some((l) => /^# warning: UART receive error, input lost \(at least \d+ bytes?\)$/.test(l)),
+    lines.some((l) =>
+      /^# warning: UART receive error, input lost \(at least \d+ bytes?\)$/.test(l),
+    ),
     JSON.stringify(lines),
   );
   const finals = lines.filter((l) => /^(ok|error:)/.test(l));
