@@ -190,7 +190,7 @@ test('pose-conflict: a setting the held pose could not be driven with is refused
   ok(board, 'set servo1.max_us 1600');
 });
 
-test('busy: frame rate, geometry, servo settings, defaults and save are refused while moving; the move goes on', () => {
+test('busy while moving: frame rate, geometry, servos, defaults, save; the move goes on', () => {
   const settings = defaultSettings();
   const board = bootQuiet(bootrom);
   ok(board, 'set speed_mm_s 5');
