@@ -408,3 +408,29 @@ fn a_write_that_does_not_read_back_fails_and_is_never_loaded() {
     // The next try goes to the same sector again (the good copy stays untouched).
     assert_eq!(store.prepare(&settings(2)).sector(), 1);
 }
+
+proptest::proptest! {
+    /// Flash contents are outside data: whatever the two sectors hold (here: two good saves
+    /// with random bytes overwritten, or random pages), loading never panics, a loaded record
+    /// is valid, and the next save goes to the other sector than the one loaded.
+    #[test]
+    fn loading_any_flash_contents_never_panics(
+        damage in proptest::collection::vec((0usize..2 * PAGE_BYTES, proptest::num::u8::ANY), 0..40),
+        random in proptest::option::of(proptest::collection::vec(proptest::num::u8::ANY, 512)),
+    ) {
+        let (mut flash, _) = after_saves(2);
+        if let Some(bytes) = random {
+            flash.bytes[..256].copy_from_slice(&bytes[..256]);
+            flash.bytes[4096..4096 + 256].copy_from_slice(&bytes[256..]);
+        }
+        for (at, value) in damage {
+            let sector = at / PAGE_BYTES;
+            flash.bytes[sector * SECTOR_BYTES as usize + at % PAGE_BYTES] = value;
+        }
+        let loaded = Store::load(&mut flash);
+        if let Some((sector, record)) = loaded.store.newest() {
+            proptest::prop_assert!(record.settings.validate().is_ok());
+            proptest::prop_assert_ne!(loaded.store.prepare(&settings(7)).sector(), sector);
+        }
+    }
+}
