@@ -167,3 +167,13 @@ impl Rng {
         )
     }
 }
+
+/// Rotation centres the tests try (platform frame, mm): the platform frame's origin, the
+/// Simscape documentation's default {B} 50 mm above it, a point below and off-axis (a motion
+/// platform's pivot under a seat), and one far below.
+pub const CENTRES_MM: [[f32; 3]; 4] = [
+    [0.0, 0.0, 0.0],
+    [0.0, 0.0, 50.0],
+    [12.0, -7.5, -35.0],
+    [0.0, 0.0, -118.0],
+];

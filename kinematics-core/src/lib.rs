@@ -8,11 +8,14 @@
 //! (eq. 2, 3) -> servo arm angles `alpha_i` (eq. 9) -> pulse widths `W_i` (eq. 13, 14).
 //!
 //! - [`geometry`]: where the servos and rod joints are; derived home height `h0` (eq. 10).
+//! - [`configuration`]: the anchors of the legs, the frames and the rotation centre a pose turns
+//!   the platform about; the general and cubic configuration generators of the Stewart
+//!   platform Simscape model documentation.
 //! - [`pose`]: the platform pose and its rotation matrix.
 //! - [`servo`]: per-servo pulse mapping (home pulse, rate, direction, limits).
 //! - [`ik`]: pose -> arm angles -> pulse widths, all-or-nothing with errors naming the leg/servo;
-//!   an [`ik::Solver`] is the IK of one geometry: it owns it, derives the home arm angles
-//!   `alpha0` (eq. 12) and holds what it computes once per geometry.
+//!   an [`ik::Solver`] is the IK of one geometry: it owns it (and its rotation centre), derives
+//!   the home arm angles `alpha0` (eq. 12) and holds what it computes once per geometry.
 //! - [`math`]: the few transcendental functions the IK needs, behind a trait so the firmware can
 //!   supply the RP2040 boot ROM's fast routines while the host uses `libm`.
 //! - `fixed` (private): the fixed-point arithmetic of the IK's hot loop (integer instructions for
@@ -23,6 +26,7 @@
 #![cfg_attr(not(test), no_std)]
 #![deny(missing_docs)]
 
+pub mod configuration;
 mod fixed;
 pub mod geometry;
 pub mod ik;
