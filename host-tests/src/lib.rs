@@ -17,7 +17,10 @@
 //!   garbage inputs, servo limits, error naming) and eq. 1-3, 13, 14 directly;
 //! - `tests/golden.rs`: the core against `golden.md` (written by `scripts/golden.py`);
 //! - `tests/geometry.rs`: h0 and alpha0 against eq. 10 and 12, every `GeometryError`;
-//! - `tests/rotation_centre.rs`: the IK with a rotation centre against the chain of frames.
+//! - `tests/rotation_centre.rs`: the IK (servos and struts) with a rotation centre against the
+//!   chain of frames;
+//! - `tests/jacobian.rs`: Jacobians and rates against finite differences of the f64 IK, and
+//!   singular poses (never a NaN).
 
 pub mod fixtures;
 pub mod platform;

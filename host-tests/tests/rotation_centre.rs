@@ -1,14 +1,15 @@
-//! The rotation centre: the core's IK with a centre set, against the
+//! The rotation centre: the core's IK (servo arms and struts) with a centre set, against the
 //! f64 reference's chain of frames base -> {A} -> {B} -> platform (`host_tests::platform`),
 //! and the default centre changing nothing. Run with `--nocapture` to see the measured errors.
 
 // Legs are numbered; index loops over them read like the equations.
 #![allow(clippy::needless_range_loop)]
 
-use host_tests::fixtures::{cases, Rng, CENTRES_MM};
+use host_tests::fixtures::{cases, strut_cases, Rng, CENTRES_MM};
 use host_tests::platform::{RefAnchors, RefArms};
 use host_tests::reference::{solve_leg, RefPose};
 use kinematics_core::configuration::ConfigurationError;
+use kinematics_core::legs::Actuators;
 use kinematics_core::{ik, IkError, Libm, ServoSet, Vec3, LEGS};
 
 /// Arm angles, as the joint displacement the angle error is equivalent to
@@ -18,6 +19,8 @@ use kinematics_core::{ik, IkError, Libm, ServoSet, Vec3, LEGS};
 const JOINT_TOL_MM: f64 = 1e-4;
 /// Reachability may differ this close to the workspace boundary, mm.
 const BAND_MM: f64 = 1e-3;
+/// Strut lengths, mm: a few roundings of coordinates of 100-200 mm (ulp 8-15 nm).
+const LENGTH_TOL_MM: f64 = 1e-4;
 
 #[test]
 fn servo_ik_turns_the_platform_about_the_centre() {
@@ -153,6 +156,32 @@ fn a_rotation_alone_leaves_the_centre_where_it_was() {
                 .fold(0.0, f64::max);
             assert!(d < 1e-4, "leg {}: {d} mm", i + 1);
         }
+    }
+}
+
+#[test]
+fn strut_lengths_turn_about_the_centre() {
+    eprintln!();
+    for case in strut_cases() {
+        let reference = RefAnchors::from_core(&case.struts.anchors());
+        let mut rng = Rng::new(17);
+        let mut worst = 0.0f64;
+        for _ in 0..3000 {
+            let pose = rng.pose(&case.range);
+            let lengths = case.struts.joint_values::<Libm>(&pose).expect("a length");
+            let exact = reference.strut_lengths(&RefPose::from_core(&pose));
+            for i in 0..LEGS {
+                let d = (f64::from(lengths[i]) - exact[i]).abs();
+                worst = worst.max(d);
+                assert!(
+                    d <= LENGTH_TOL_MM,
+                    "{} {pose:?} leg {}: {d} mm",
+                    case.name,
+                    i + 1
+                );
+            }
+        }
+        eprintln!("{:<46} strut lengths: max error {worst:.1e} mm", case.name);
     }
 }
 

@@ -1,8 +1,10 @@
-//! Inverse kinematics of a six-servo Stewart platform ("hexapod"), `no_std`, `f32`, no allocation.
+//! The kinematics of six-legged Stewart platforms ("hexapods"), `no_std`, `f32`, no allocation:
+//! RC-servo platforms (the firmware's) and platforms of linear struts.
 //!
 //! The maths follows "The Mathematics of the Stewart Platform" (a rotary RC-servo platform);
-//! equation numbers in comments are that document's. The general circular layout follows the
-//! Stewart platform Simscape model documentation. Data flows one way:
+//! equation numbers in comments are that document's. The configurations, frames, struts and
+//! Jacobian follow the Stewart platform Simscape model documentation (cited by function name).
+//! The servo IK's data flows one way:
 //!
 //! [`Pose`] (mm, rad) -> rotation `R` (eq. 1) -> platform joints `q_i` and leg vectors `l_i`
 //! (eq. 2, 3) -> servo arm angles `alpha_i` (eq. 9) -> pulse widths `W_i` (eq. 13, 14).
@@ -16,24 +18,35 @@
 //! - [`ik`]: pose -> arm angles -> pulse widths, all-or-nothing with errors naming the leg/servo;
 //!   an [`ik::Solver`] is the IK of one geometry: it owns it (and its rotation centre), derives
 //!   the home arm angles `alpha0` (eq. 12) and holds what it computes once per geometry.
+//! - [`legs`]: the legs at a pose: linear [`legs::Struts`] (lengths, unit vectors, strokes) and
+//!   servo arms ([`legs::ArmState`]); the [`legs::Actuators`] trait both implement.
+//! - [`jacobian`]: joint rates per unit twist, condition number, Euler-angle rates.
+//! - [`rates`]: joint rates from a twist and back, servo speed limits.
+//! - [`linalg`]: the 6x6 linear algebra; [`error`]: [`KinematicsError`].
 //! - [`math`]: the few transcendental functions the IK needs, behind a trait so the firmware can
 //!   supply the RP2040 boot ROM's fast routines while the host uses `libm`.
 //! - `fixed` (private): the fixed-point arithmetic of the IK's hot loop (integer instructions for
 //!   a chip without an FPU).
 //!
-//! Legs and servos are numbered 1..=6 in everything a user sees (errors, reports) and indexed
+//! Lengths are mm, angles rad, unless a name says otherwise. Legs and servos are numbered 1..=6 in everything a user sees (errors, reports) and indexed
 //! 0..=5 in arrays. Leg `i` is driven by servo `i`.
 #![cfg_attr(not(test), no_std)]
 #![deny(missing_docs)]
 
 pub mod configuration;
+pub mod error;
 mod fixed;
 pub mod geometry;
 pub mod ik;
+pub mod jacobian;
+pub mod legs;
+pub mod linalg;
 pub mod math;
 pub mod pose;
+pub mod rates;
 pub mod servo;
 
+pub use error::KinematicsError;
 pub use geometry::{Geometry, GeometryError, Leg};
 pub use ik::{IkError, Solution, Solver};
 pub use math::{Libm, Math};

@@ -122,6 +122,22 @@ pub fn lt(a: f32, b: f32) -> bool {
     not_nan(a_bits) && not_nan(b_bits) && !le(b, a)
 }
 
+/// `u . v` with `M`'s arithmetic.
+pub(crate) fn dot<M: Math>(u: Vec3, v: Vec3) -> f32 {
+    let r = Real::<M>::new;
+    (r(u.x) * r(v.x) + r(u.y) * r(v.y) + r(u.z) * r(v.z)).0
+}
+
+/// `u x v` with `M`'s arithmetic.
+pub(crate) fn cross<M: Math>(u: Vec3, v: Vec3) -> Vec3 {
+    let r = Real::<M>::new;
+    Vec3::new(
+        (r(u.y) * r(v.z) - r(u.z) * r(v.y)).0,
+        (r(u.z) * r(v.x) - r(u.x) * r(v.z)).0,
+        (r(u.x) * r(v.y) - r(u.y) * r(v.x)).0,
+    )
+}
+
 /// `u + v` with `M`'s arithmetic.
 pub(crate) fn add<M: Math>(u: Vec3, v: Vec3) -> Vec3 {
     let r = Real::<M>::new;
@@ -162,6 +178,13 @@ pub(crate) fn mul_mat_vec<M: Math>(m: &Mat3, v: Vec3) -> Vec3 {
 #[inline]
 pub(crate) fn is_zero(x: f32) -> bool {
     x.to_bits() << 1 == 0
+}
+
+/// `|x|` as bits: non-negative floats (and NaN above them all) order like their bit patterns,
+/// so the largest magnitude can be found in integer instructions.
+#[inline]
+pub(crate) fn abs_bits(x: f32) -> u32 {
+    x.to_bits() & 0x7fff_ffff
 }
 
 /// [`Math`] backed by the portable `libm` crate (correctly rounded or nearly so).
