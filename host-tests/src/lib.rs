@@ -20,7 +20,10 @@
 //! - `tests/rotation_centre.rs`: the IK (servos and struts) with a rotation centre against the
 //!   chain of frames;
 //! - `tests/jacobian.rs`: Jacobians and rates against finite differences of the f64 IK, and
-//!   singular poses (never a NaN).
+//!   singular poses (never a NaN);
+//! - `tests/statics.rs`: joint forces by virtual work, holding torques by the work of lifting,
+//!   stiffness as the Hessian of the spring energy, the cubic configuration's orthogonality,
+//!   link and arm motions along f64 trajectories, actuation with inertia by Newton-Euler.
 
 pub mod fixtures;
 pub mod platform;

@@ -2,9 +2,11 @@
 //! RC-servo platforms (the firmware's) and platforms of linear struts.
 //!
 //! The maths follows "The Mathematics of the Stewart Platform" (a rotary RC-servo platform);
-//! equation numbers in comments are that document's. The configurations, frames, struts and
-//! Jacobian follow the Stewart platform Simscape model documentation (cited by function name).
-//! The servo IK's data flows one way:
+//! equation numbers in comments are that document's. The configurations, frames, struts,
+//! Jacobian and stiffness follow the Stewart platform Simscape model documentation (cited by
+//! function name), link motions and actuation the ROBOOP `LinkStewart` class reference, statics
+//! the report on a force applied at the centre of a Stewart platform. The servo IK's data flows
+//! one way:
 //!
 //! [`Pose`] (mm, rad) -> rotation `R` (eq. 1) -> platform joints `q_i` and leg vectors `l_i`
 //! (eq. 2, 3) -> servo arm angles `alpha_i` (eq. 9) -> pulse widths `W_i` (eq. 13, 14).
@@ -22,18 +24,22 @@
 //!   servo arms ([`legs::ArmState`]); the [`legs::Actuators`] trait both implement.
 //! - [`jacobian`]: joint rates per unit twist, condition number, Euler-angle rates.
 //! - [`rates`]: joint rates from a twist and back, servo speed limits.
+//! - [`statics`]: joint forces for a wrench, holding torques of a payload, stiffness, compliance.
+//! - [`dynamics`]: link and arm motions along a trajectory, actuation with inertia.
 //! - [`linalg`]: the 6x6 linear algebra; [`error`]: [`KinematicsError`].
 //! - [`math`]: the few transcendental functions the IK needs, behind a trait so the firmware can
 //!   supply the RP2040 boot ROM's fast routines while the host uses `libm`.
 //! - `fixed` (private): the fixed-point arithmetic of the IK's hot loop (integer instructions for
 //!   a chip without an FPU).
 //!
-//! Lengths are mm, angles rad, unless a name says otherwise. Legs and servos are numbered 1..=6 in everything a user sees (errors, reports) and indexed
+//! Lengths are mm, angles rad, forces N, moments and servo torques N mm, masses kg, unless a
+//! name says otherwise. Legs and servos are numbered 1..=6 in everything a user sees (errors, reports) and indexed
 //! 0..=5 in arrays. Leg `i` is driven by servo `i`.
 #![cfg_attr(not(test), no_std)]
 #![deny(missing_docs)]
 
 pub mod configuration;
+pub mod dynamics;
 pub mod error;
 mod fixed;
 pub mod geometry;
@@ -45,6 +51,7 @@ pub mod math;
 pub mod pose;
 pub mod rates;
 pub mod servo;
+pub mod statics;
 
 pub use error::KinematicsError;
 pub use geometry::{Geometry, GeometryError, Leg};
