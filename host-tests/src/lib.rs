@@ -23,7 +23,9 @@
 //!   singular poses (never a NaN);
 //! - `tests/statics.rs`: joint forces by virtual work, holding torques by the work of lifting,
 //!   stiffness as the Hessian of the spring energy, the cubic configuration's orthogonality,
-//!   link and arm motions along f64 trajectories, actuation with inertia by Newton-Euler.
+//!   link and arm motions along f64 trajectories, actuation with inertia by Newton-Euler;
+//! - `tests/forward.rs`: IK -> FK round trips against the f64 IK, against an f64 Newton, the
+//!   solution nearest the start, the errors.
 
 pub mod fixtures;
 pub mod platform;

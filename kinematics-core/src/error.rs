@@ -76,6 +76,13 @@ pub enum KinematicsError {
         /// Leg number, 1..=6.
         leg: u8,
     },
+    /// The forward kinematics closed leg `leg`'s rod with its arm at the angle asked for, but
+    /// there the IK puts the arm on eq. 9's other root (the elbow folded through the rod): not
+    /// a pose this servo platform takes.
+    ElbowFlipped {
+        /// Leg number, 1..=6.
+        leg: u8,
+    },
     /// The Jacobian (or stiffness) is singular or too nearly so to be inverted in `f32`: the
     /// platform is at or next to a singular pose.
     Singular {
@@ -88,6 +95,14 @@ pub enum KinematicsError {
     GimbalLock {
         /// The pitch, rad.
         pitch_rad: f32,
+    },
+    /// The forward kinematics did not converge within the iterations allowed.
+    NotConverged {
+        /// Iterations made.
+        iterations: u8,
+        /// The largest joint residual left, in the joint's unit (mm for struts, rad for
+        /// servo arms).
+        residual: f32,
     },
     /// An input is NaN or infinite.
     NonFinite {
@@ -117,12 +132,22 @@ impl fmt::Display for KinematicsError {
             ),
             KinematicsError::ZeroLength { leg } => write!(f, "leg {leg}: zero length"),
             KinematicsError::DeadCentre { leg } => write!(f, "leg {leg}: arm at dead centre"),
+            KinematicsError::ElbowFlipped { leg } => {
+                write!(f, "leg {leg}: the pose needs the arm on eq. 9's other root")
+            }
             KinematicsError::Singular { pivot_ratio } => {
                 write!(f, "singular Jacobian (pivot ratio {pivot_ratio:e})")
             }
             KinematicsError::GimbalLock { pitch_rad } => {
                 write!(f, "pitch {pitch_rad} rad: Euler angles at gimbal lock")
             }
+            KinematicsError::NotConverged {
+                iterations,
+                residual,
+            } => write!(
+                f,
+                "no convergence in {iterations} iterations (residual {residual:e})"
+            ),
             KinematicsError::NonFinite { input } => write!(f, "non-finite {input}"),
         }
     }

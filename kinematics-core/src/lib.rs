@@ -5,8 +5,9 @@
 //! equation numbers in comments are that document's. The configurations, frames, struts,
 //! Jacobian and stiffness follow the Stewart platform Simscape model documentation (cited by
 //! function name), link motions and actuation the ROBOOP `LinkStewart` class reference, statics
-//! the report on a force applied at the centre of a Stewart platform. The servo IK's data flows
-//! one way:
+//! the report on a force applied at the centre of a Stewart platform, and the forward
+//! kinematics the lesson of the planar 3-RPR forward kinematics project. The servo IK's data
+//! flows one way:
 //!
 //! [`Pose`] (mm, rad) -> rotation `R` (eq. 1) -> platform joints `q_i` and leg vectors `l_i`
 //! (eq. 2, 3) -> servo arm angles `alpha_i` (eq. 9) -> pulse widths `W_i` (eq. 13, 14).
@@ -26,6 +27,7 @@
 //! - [`rates`]: joint rates from a twist and back, servo speed limits.
 //! - [`statics`]: joint forces for a wrench, holding torques of a payload, stiffness, compliance.
 //! - [`dynamics`]: link and arm motions along a trajectory, actuation with inertia.
+//! - [`forward`]: forward kinematics, approximate and by Newton's method, a step at a time.
 //! - [`linalg`]: the 6x6 linear algebra; [`error`]: [`KinematicsError`].
 //! - [`math`]: the few transcendental functions the IK needs, behind a trait so the firmware can
 //!   supply the RP2040 boot ROM's fast routines while the host uses `libm`.
@@ -42,6 +44,7 @@ pub mod configuration;
 pub mod dynamics;
 pub mod error;
 mod fixed;
+pub mod forward;
 pub mod geometry;
 pub mod ik;
 pub mod jacobian;
