@@ -25,7 +25,9 @@
 //!   stiffness as the Hessian of the spring energy, the cubic configuration's orthogonality,
 //!   link and arm motions along f64 trajectories, actuation with inertia by Newton-Euler;
 //! - `tests/forward.rs`: IK -> FK round trips against the f64 IK, against an f64 Newton, the
-//!   solution nearest the start, the errors.
+//!   solution nearest the start, the errors;
+//! - `tests/workspace.rs`: every reported reach along the twelve axis-directions checked with
+//!   the f64 IK on both sides of its bound and all along the way; the sampled grid.
 
 pub mod fixtures;
 pub mod platform;
