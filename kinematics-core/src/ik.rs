@@ -513,10 +513,10 @@ impl Solver {
     }
 
     /// Each arm's angle from its home angle, `alpha_i - alpha0_i` wrapped into `(-pi, pi]`, rad.
-    /// Always inlined into [`Solver::solve`] and [`Solver::arm_angles`]: as a function of its
-    /// own (as it becomes once a firmware calls the IK from several places) it cost about 400
-    /// cycles more per pose on the RP2040 (measured with `./dev bench`).
-    #[inline(always)]
+    /// Only [`Solver::solve`] calls it, so it is inlined there: [`Solver::arm_angles`] repeats
+    /// the same steps rather than call it, because a second caller made the compiler keep it
+    /// as a function of its own, which cost the firmware's IK about 400 cycles per pose on the
+    /// RP2040 (measured with `./dev bench`).
     fn arm_offsets<M: Math>(&self, pose: &Pose) -> Result<[f32; LEGS], IkError> {
         check_pose(pose)?;
         let mut alpha = self
@@ -531,9 +531,15 @@ impl Solver {
 
     /// Arm angles `alpha_i` for a pose (eq. 9), rad, each within `(-pi, pi]` of its `alpha0`.
     pub fn arm_angles<M: Math>(&self, pose: &Pose) -> Result<[f32; LEGS], IkError> {
-        let mut alpha = self.arm_offsets::<M>(pose)?;
+        // The steps of `arm_offsets`, then back from the offsets (the same operations).
+        check_pose(pose)?;
+        let mut alpha = self
+            .arm_angles_raw::<M>(pose)
+            .map_err(|leg| IkError::Unreachable { leg })?;
         for (i, a) in alpha.iter_mut().enumerate() {
-            *a = (Real::<M>::new(self.constants[i].alpha0_rad) + Real::new(*a)).0;
+            let alpha0 = Real::<M>::new(self.constants[i].alpha0_rad);
+            let offset = wrap_angle_rad::<M>((Real::new(*a) - alpha0).0);
+            *a = (alpha0 + Real::new(offset)).0;
         }
         Ok(alpha)
     }
