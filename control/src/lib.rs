@@ -16,6 +16,7 @@
 //!   binary form for flash; [`store`]: the two flash sectors used in turn (A/B), so a power cut
 //!   during a save never loses the last good one.
 //! - [`motion`]: straight-line moves at bounded speed, path checks.
+//! - [`payload`]: the payload carried, the servos' torque ratings, the holding torques.
 //! - [`error`]: [`Error`], why a line is refused (each layer's error type gathered).
 //! - [`report`]: every reply, error code and message, data line and notice, worded once (the
 //!   output conventions are documented there).
@@ -59,6 +60,7 @@ pub mod controller;
 pub mod error;
 pub mod motion;
 pub mod number;
+pub mod payload;
 pub mod protocol;
 pub mod record;
 pub mod report;

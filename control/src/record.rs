@@ -13,7 +13,7 @@
 //! | 10 | 2 | reserved, 0 |
 //! | 12 | 12 | `speed_mm_s`, `speed_deg_s`, `link_timeout_s` (f32) |
 //! | 24 | 24 | layout (f32): base radius, base half angle, platform radius and half angle, a, s |
-//! | 48 | 6 x 20 | per servo: trim, rate, min, max (f32), dir (0 normal, 1 reversed), 3 x 0 |
+//! | 48 | 6 x 20 | per servo: trim, rate, min, max (f32), dir (0 normal, 1 reversed), 0, torque rating (u16, hundredths of a kgf cm, 0 not rated) |
 //! | 168 | 8 | `accel_mm_s2`, `accel_deg_s2` (f32) |
 //! | 176 | 24 | stream full scales x, y, z (mm), roll, pitch, yaw (deg) (f32) |
 //! | 200 | 1 | `stream.bits` |
@@ -22,8 +22,14 @@
 //! | 208 | 1 | `estop_action`: 0 freeze, 1 home |
 //! | 209 | 1 | `power_pin`: GPIO, `0xFF` off |
 //! | 210 | 2 | reserved, 0 |
-//! | 212 | 4 | sequence number of the save (u32; the newer of two records has the higher one) |
-//! | 216 | 4 | CRC-32 (IEEE 802.3) of bytes 0..216 |
+//! | 212 | 4 | `payload_g` (f32) |
+//! | 216 | 12 | `payload_com_x_mm`, `payload_com_y_mm`, `payload_com_z_mm` (f32) |
+//! | 228 | 4 | sequence number of the save (u32; the newer of two records has the higher one) |
+//! | 232 | 4 | CRC-32 (IEEE 802.3) of bytes 0..232 |
+//!
+//! The whole record fits one 256-byte flash page. The payload and the torque ratings joined
+//! format 3 before any board had a format-3 record in its flash (no release wrote one), so the
+//! version stayed 3: every format-3 record ever written has them.
 //!
 //! The sequence number and the checksum come last, so a write that stops anywhere before its
 //! end leaves a record whose checksum does not match (a flash page is programmed from its first
@@ -37,14 +43,16 @@
 use kinematics_core::pose::Axis;
 use kinematics_core::{Direction, Libm, Math, ServoSet};
 
+use crate::payload::hundredths;
 use crate::safety::EstopAction;
 use crate::settings::{LayoutParam, SettingError, Settings};
 
 /// Binary format version (1 also held the link settings, 2 had no sequence number and none of
-/// the acceleration, stream and safety settings; neither was ever written to a board's flash).
+/// the acceleration, stream and safety settings; neither was ever written to a board's flash;
+/// 3 gained the payload and the torque ratings before any board had it: see the module docs).
 pub const FORMAT_VERSION: u16 = 3;
 /// Bytes of settings between the header and the sequence number.
-pub const PAYLOAD_LEN: usize = 204;
+pub const PAYLOAD_LEN: usize = 220;
 /// A pin byte meaning "off".
 const PIN_OFF: u8 = 0xFF;
 /// A `stream.axisN` byte meaning `none`.
@@ -58,6 +66,7 @@ pub const CRC_OFFSET: usize = SEQUENCE_OFFSET + 4;
 const HEADER_LEN: usize = 8;
 const MAGIC: [u8; 4] = *b"HXPS";
 const SERVO_RECORD_LEN: usize = 20;
+const LEGS_LEN: usize = kinematics_core::LEGS;
 
 /// One saved copy of the platform's settings.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -98,7 +107,7 @@ pub enum DecodeError {
 }
 
 /// CRC-32 (IEEE 802.3, reflected, polynomial 0xEDB88320), bit by bit: small and fast enough
-/// for a 216-byte record.
+/// for a 232-byte record.
 pub fn crc32(bytes: &[u8]) -> u32 {
     let mut crc = 0xFFFF_FFFFu32;
     for &b in bytes {
@@ -144,6 +153,9 @@ impl Reader<'_> {
     fn f32(&mut self) -> f32 {
         f32::from_le_bytes(self.take())
     }
+    fn u16(&mut self) -> u16 {
+        u16::from_le_bytes(self.take())
+    }
     /// A byte that must be 0 or 1.
     fn bit(&mut self) -> Result<bool, DecodeError> {
         let offset = self.at;
@@ -183,7 +195,7 @@ pub fn encode(record: &Record) -> [u8; ENCODED_LEN] {
     for p in LayoutParam::ALL {
         w.f32(p.get(&settings.layout));
     }
-    for s in &settings.servos.0 {
+    for (s, rating) in settings.servos.0.iter().zip(settings.payload.torque_kgcm) {
         w.f32(s.home_us);
         w.f32(s.rate_us_per_rad);
         w.f32(s.min_us);
@@ -192,7 +204,9 @@ pub fn encode(record: &Record) -> [u8; ENCODED_LEN] {
             Direction::Normal => 0,
             Direction::Reversed => 1,
         };
-        w.bytes(&[dir, 0, 0, 0]);
+        w.bytes(&[dir, 0]);
+        // Ratings are kept to hundredths (crate::payload): exact.
+        w.bytes(&hundredths(rating).to_le_bytes());
     }
     w.f32(settings.accel_mm_s2);
     w.f32(settings.accel_deg_s2);
@@ -215,6 +229,10 @@ pub fn encode(record: &Record) -> [u8; ENCODED_LEN] {
         0,
         0,
     ]);
+    w.f32(settings.payload.mass_g);
+    for v in settings.payload.com_mm {
+        w.f32(v);
+    }
     debug_assert_eq!(w.at, SEQUENCE_OFFSET);
     w.bytes(&record.sequence.to_le_bytes());
     let crc = crc32(&buf[..CRC_OFFSET]);
@@ -271,7 +289,12 @@ pub fn decode_with<M: Math>(bytes: &[u8]) -> Result<Record, DecodeError> {
     for p in LayoutParam::ALL {
         *p.slot(&mut settings.layout) = r.f32();
     }
-    for s in settings.servos.0.iter_mut() {
+    for (s, rating) in settings
+        .servos
+        .0
+        .iter_mut()
+        .zip(settings.payload.torque_kgcm.iter_mut())
+    {
         s.home_us = r.f32();
         s.rate_us_per_rad = r.f32();
         s.min_us = r.f32();
@@ -281,8 +304,10 @@ pub fn decode_with<M: Math>(bytes: &[u8]) -> Result<Record, DecodeError> {
         } else {
             Direction::Normal
         };
-        r.zeros(SERVO_RECORD_LEN - 17)?;
+        r.zeros(1)?;
+        *rating = f32::from(r.u16()) / 100.0;
     }
+    debug_assert_eq!(r.at, HEADER_LEN + 40 + LEGS_LEN * SERVO_RECORD_LEN);
     settings.accel_mm_s2 = r.f32();
     settings.accel_deg_s2 = r.f32();
     for v in settings.stream.full_scale.iter_mut() {
@@ -310,6 +335,10 @@ pub fn decode_with<M: Math>(bytes: &[u8]) -> Result<Record, DecodeError> {
     };
     settings.safety.power_pin = pin(r.u8());
     r.zeros(2)?;
+    settings.payload.mass_g = r.f32();
+    for v in settings.payload.com_mm.iter_mut() {
+        *v = r.f32();
+    }
     settings
         .validate_with::<M>()
         .map_err(DecodeError::Invalid)?;
@@ -359,12 +388,19 @@ mod tests {
         s.safety.estop_pin = Some(15);
         s.safety.estop_action = EstopAction::Home;
         s.safety.power_pin = Some(22);
+        s.payload.mass_g = 1234.5;
+        s.payload.com_mm = [-3.0, 4.25, 60.0];
+        s.payload.torque_kgcm = [0.0, 2.51, 600.0, 0.01, 12.0, 0.0];
         s.validate().unwrap();
         let bytes = encode(&record(0xDEAD_BEEF, s));
-        assert_eq!(bytes.len(), 220);
+        assert_eq!(bytes.len(), 236);
+        assert!(bytes.len() <= crate::store::PAGE_BYTES, "one flash page");
         assert_eq!(&bytes[..4], b"HXPS");
         // The sequence number at its documented place, little-endian.
-        assert_eq!(&bytes[212..216], &[0xEF, 0xBE, 0xAD, 0xDE]);
+        assert_eq!(&bytes[228..232], &[0xEF, 0xBE, 0xAD, 0xDE]);
+        // Servo 2's rating, 2.51 kgf cm, in hundredths at offset 48 + 20 + 18.
+        assert_eq!(&bytes[86..88], &251u16.to_le_bytes());
+        assert_eq!(&bytes[212..216], &1234.5f32.to_le_bytes());
         assert_eq!(decode(&bytes), Ok(record(0xDEAD_BEEF, s)));
         assert_eq!(
             decode(&encode(&record(0, Settings::default()))),
@@ -430,8 +466,8 @@ mod tests {
 
     /// Re-seals damaged contents with a correct checksum, as a buggy writer would.
     fn reseal(mut bytes: [u8; ENCODED_LEN]) -> [u8; ENCODED_LEN] {
-        let crc = crc32(&bytes[..216]);
-        bytes[216..].copy_from_slice(&crc.to_le_bytes());
+        let crc = crc32(&bytes[..CRC_OFFSET]);
+        bytes[CRC_OFFSET..].copy_from_slice(&crc.to_le_bytes());
         bytes
     }
 
@@ -489,6 +525,27 @@ mod tests {
         assert!(matches!(
             decode(&reseal(bytes)),
             Err(DecodeError::Invalid(SettingError::StreamAxisTwice { .. }))
+        ));
+        let mut bytes = default;
+        bytes[48 + 17] = 1; // servo 1's reserved byte
+        assert_eq!(
+            decode(&reseal(bytes)),
+            Err(DecodeError::BadField { offset: 65 })
+        );
+        let mut bytes = default;
+        bytes[48 + 18..48 + 20].copy_from_slice(&60_001u16.to_le_bytes()); // 600.01 kgf cm
+        assert!(matches!(
+            decode(&reseal(bytes)),
+            Err(DecodeError::Invalid(SettingError::OutOfRange { .. }))
+        ));
+        let mut bytes = default;
+        bytes[212..216].copy_from_slice(&(-1.0f32).to_le_bytes()); // payload_g -1
+        assert!(matches!(
+            decode(&reseal(bytes)),
+            Err(DecodeError::Invalid(SettingError::OutOfRange {
+                setting: SettingId::PayloadG,
+                ..
+            }))
         ));
         let mut bytes = default;
         bytes[24 + 20..24 + 24].copy_from_slice(&5.0f32.to_le_bytes()); // rod 5 mm

@@ -38,8 +38,12 @@
 //! | `estop_pin` | emergency-stop input GPIO (active low, pull-up), or `off` | off |
 //! | `estop_action` | `freeze` or `home` when the e-stop input opens | freeze |
 //! | `power_pin` | servo-power enable output GPIO (high = on), or `off` | off |
+//! | `payload_g` | mass the platform carries, 0..=100000 g (0: none) | 0 |
+//! | `payload_com_x_mm`, `payload_com_y_mm`, `payload_com_z_mm` | its centre of mass, platform frame, -1000..=1000 mm | 0 |
+//! | `servoN.torque_kgcm` | rated torque of servo N, 0.01..=600 kgf cm (hundredths), `0`/`off` = not rated | off |
 //!
-//! The stream settings are [`crate::stream`]'s, the pins and the e-stop [`crate::safety`]'s.
+//! The stream settings are [`crate::stream`]'s, the pins and the e-stop [`crate::safety`]'s,
+//! the payload and the torque ratings [`crate::payload`]'s.
 //! `servos.<field>` sets that field of all six servos at once. Equation numbers are those of
 //! "The Mathematics of the Stewart Platform". The binary form kept in flash is
 //! [`crate::record`]'s; the words of every refusal ([`SettingError`]) are [`crate::report`]'s.
@@ -56,6 +60,9 @@ use kinematics_core::{Direction, Libm, Math, ServoConfig, ServoSet, LEGS};
 use kinematics_core::pose::Axis;
 
 use crate::number::{parse_f32, parse_u32, NumberError};
+use crate::payload::{
+    PayloadSettings, MAX_COM_MM, MAX_PAYLOAD_G, MAX_TORQUE_KGCM, MIN_TORQUE_KGCM,
+};
 use crate::safety::{EstopAction, SafetySettings, FREE_GPIOS};
 use crate::stream::{StreamSettings, TEXT_BITS_MAX, TEXT_BITS_MIN};
 use crate::word::{word, Word};
@@ -101,6 +108,8 @@ pub struct Settings {
     pub stream: StreamSettings,
     /// The emergency-stop input and the servo-power output.
     pub safety: SafetySettings,
+    /// The payload and the servos' torque ratings.
+    pub payload: PayloadSettings,
 }
 
 impl Default for Settings {
@@ -116,6 +125,7 @@ impl Default for Settings {
             frame_hz: DEFAULT_FRAME_HZ,
             stream: StreamSettings::default(),
             safety: SafetySettings::default(),
+            payload: PayloadSettings::default(),
         }
     }
 }
@@ -234,16 +244,19 @@ pub enum ServoParam {
     MinUs,
     /// Upper pulse limit, us.
     MaxUs,
+    /// Rated torque, kgf cm (a payload setting: [`PayloadSettings::torque_kgcm`]).
+    TorqueKgcm,
 }
 
 impl ServoParam {
     /// All, in listing order.
-    pub const ALL: [ServoParam; 5] = [
+    pub const ALL: [ServoParam; 6] = [
         ServoParam::TrimUs,
         ServoParam::RateUsRad,
         ServoParam::Dir,
         ServoParam::MinUs,
         ServoParam::MaxUs,
+        ServoParam::TorqueKgcm,
     ];
 
     /// The field name after `servoN.`.
@@ -254,7 +267,14 @@ impl ServoParam {
             ServoParam::Dir => "dir",
             ServoParam::MinUs => "min_us",
             ServoParam::MaxUs => "max_us",
+            ServoParam::TorqueKgcm => "torque_kgcm",
         }
+    }
+
+    /// True for the fields of the servo's pulse mapping ([`ServoConfig`]): changing them moves
+    /// the pulses of a pose (the torque rating does not).
+    pub const fn is_mapping(self) -> bool {
+        !matches!(self, ServoParam::TorqueKgcm)
     }
 
     fn get(self, s: &ServoConfig) -> SettingValue {
@@ -264,6 +284,8 @@ impl ServoParam {
             ServoParam::Dir => SettingValue::Dir(s.direction),
             ServoParam::MinUs => SettingValue::Number(s.min_us),
             ServoParam::MaxUs => SettingValue::Number(s.max_us),
+            // Not a mapping field: see Settings::get.
+            ServoParam::TorqueKgcm => SettingValue::Number(0.0),
         }
     }
 
@@ -314,6 +336,11 @@ pub enum SettingId {
     EstopAction,
     /// `power_pin`.
     PowerPin,
+    /// `payload_g`.
+    PayloadG,
+    /// `payload_com_x_mm`, `payload_com_y_mm`, `payload_com_z_mm`: the centre of mass along
+    /// x (0), y (1) or z (2).
+    PayloadCom(u8),
 }
 
 /// The words `stream.axisN` takes, [`SettingValue::Choice`] indices: the axes in pose order,
@@ -490,7 +517,7 @@ const fn number_or_off(min: f32, max: f32, unit: &'static str) -> Kind {
 
 impl SettingId {
     /// The settings that are not per servo, in listing order.
-    pub const GLOBAL: [SettingId; 30] = [
+    pub const GLOBAL: [SettingId; 34] = [
         SettingId::FrameHz,
         SettingId::Baud,
         SettingId::Echo,
@@ -521,6 +548,10 @@ impl SettingId {
         SettingId::EstopPin,
         SettingId::EstopAction,
         SettingId::PowerPin,
+        SettingId::PayloadG,
+        SettingId::PayloadCom(0),
+        SettingId::PayloadCom(1),
+        SettingId::PayloadCom(2),
     ];
 
     /// Looks a name up (already lowercase).
@@ -578,6 +609,12 @@ impl SettingId {
             SettingId::EstopPin => "estop_pin",
             SettingId::EstopAction => "estop_action",
             SettingId::PowerPin => "power_pin",
+            SettingId::PayloadG => "payload_g",
+            SettingId::PayloadCom(k) => match k {
+                0 => "payload_com_x_mm",
+                1 => "payload_com_y_mm",
+                _ => "payload_com_z_mm",
+            },
         })
     }
 
@@ -618,6 +655,8 @@ impl SettingId {
             SettingId::StreamAxis(_) => Kind::Choice(STREAM_AXIS_WORDS),
             SettingId::EstopAction => Kind::Choice(ESTOP_ACTION_WORDS),
             SettingId::EstopPin | SettingId::PowerPin => Kind::Pin,
+            SettingId::PayloadG => number(0.0, MAX_PAYLOAD_G, "g", 1),
+            SettingId::PayloadCom(_) => number(-MAX_COM_MM, MAX_COM_MM, "mm", 3),
             SettingId::Layout(p) => match p {
                 LayoutParam::BaseRadiusMm | LayoutParam::PlatformRadiusMm => {
                     number(1.0, 1000.0, "mm", 3)
@@ -636,6 +675,13 @@ impl SettingId {
                     number(MIN_RATE_US_PER_RAD, MAX_RATE_US_PER_RAD, "us/rad", 3)
                 }
                 ServoParam::Dir => Kind::Dir,
+                ServoParam::TorqueKgcm => Kind::Number {
+                    min: MIN_TORQUE_KGCM,
+                    max: MAX_TORQUE_KGCM,
+                    unit: "kgf cm",
+                    off_allowed: true,
+                    decimals: 2,
+                },
             },
         }
     }
@@ -864,12 +910,19 @@ impl Settings {
             SettingId::EstopPin => SettingValue::Pin(self.safety.estop_pin),
             SettingId::EstopAction => SettingValue::Choice(self.safety.estop_action as u8),
             SettingId::PowerPin => SettingValue::Pin(self.safety.power_pin),
+            SettingId::PayloadG => SettingValue::Number(self.payload.mass_g),
+            SettingId::PayloadCom(k) => {
+                SettingValue::Number(self.payload.com_mm[usize::from(k).min(2)])
+            }
             SettingId::Servo(sel, p) => {
                 let index = match sel {
                     ServoSel::One(n) => usize::from(n).saturating_sub(1).min(LEGS - 1),
                     ServoSel::All => 0,
                 };
-                p.get(&self.servos.0[index])
+                match p {
+                    ServoParam::TorqueKgcm => SettingValue::Number(self.payload.torque_kgcm[index]),
+                    _ => p.get(&self.servos.0[index]),
+                }
             }
         })
     }
@@ -906,6 +959,24 @@ impl Settings {
                 }
             }
             (SettingId::PowerPin, SettingValue::Pin(pin)) => s.safety.power_pin = pin,
+            (SettingId::PayloadG, SettingValue::Number(v)) => s.payload.mass_g = v,
+            (SettingId::PayloadCom(k @ 0..=2), SettingValue::Number(v)) => {
+                s.payload.com_mm[usize::from(k)] = v
+            }
+            (SettingId::Servo(sel, ServoParam::TorqueKgcm), SettingValue::Number(v)) => {
+                // Kept to hundredths, as the flash record holds it (out-of-range values stay
+                // out of range for validation to refuse).
+                let v = if (0.0..=MAX_TORQUE_KGCM).contains(&v) {
+                    PayloadSettings::quantise_kgcm(v)
+                } else {
+                    v
+                };
+                for (i, rating) in s.payload.torque_kgcm.iter_mut().enumerate() {
+                    if sel == ServoSel::All || sel == ServoSel::One(i as u8 + 1) {
+                        *rating = v;
+                    }
+                }
+            }
             (SettingId::Servo(sel, p), value) => {
                 for (i, servo) in s.servos.0.iter_mut().enumerate() {
                     if sel == ServoSel::All || sel == ServoSel::One(i as u8 + 1) {
@@ -1033,6 +1104,49 @@ mod tests {
         assert_eq!(s.servos.0[1].direction, Direction::Reversed);
         let s = parse("servos.rate_us_rad", "600").unwrap();
         assert!(s.servos.0.iter().all(|c| c.rate_us_per_rad == 600.0));
+        assert_eq!(parse("payload_g", "1250.5").unwrap().payload.mass_g, 1250.5);
+        let s = parse("payload_com_z_mm", "-30").unwrap();
+        assert_eq!(s.payload.com_mm, [0.0, 0.0, -30.0]);
+        let s = parse("servo4.torque_kgcm", "2.505").unwrap();
+        assert_eq!(s.payload.torque_kgcm, [0.0, 0.0, 0.0, 2.51, 0.0, 0.0]);
+        assert_eq!(
+            s.servos,
+            ServoSet::default(),
+            "a rating is not a pulse mapping"
+        );
+        let s = parse("servos.torque_kgcm", "12").unwrap();
+        assert_eq!(s.payload.torque_kgcm, [12.0; 6]);
+        assert_eq!(
+            s.get(SettingId::parse("servo6.torque_kgcm").unwrap()),
+            Some(SettingValue::Number(12.0))
+        );
+        let s = parse("servos.torque_kgcm", "off").unwrap();
+        assert_eq!(s.payload.torque_kgcm, [0.0; 6]);
+    }
+
+    #[test]
+    fn payload_values_outside_their_ranges_are_refused() {
+        use SettingError as E;
+        let err = |name, value| parse(name, value).unwrap_err();
+        assert!(matches!(err("payload_g", "-1"), E::OutOfRange { .. }));
+        assert!(matches!(err("payload_g", "100001"), E::OutOfRange { .. }));
+        assert!(matches!(
+            err("payload_com_x_mm", "1001"),
+            E::OutOfRange { .. }
+        ));
+        assert!(matches!(
+            err("servo1.torque_kgcm", "601"),
+            E::OutOfRange { .. }
+        ));
+        assert!(matches!(
+            err("servo1.torque_kgcm", "0.001"),
+            E::OutOfRange { .. }
+        ));
+        assert!(matches!(
+            err("servo1.torque_kgcm", "-2"),
+            E::OutOfRange { .. }
+        ));
+        assert!(matches!(err("payload_g", "nan"), E::NotFinite { .. }));
     }
 
     #[test]

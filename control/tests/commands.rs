@@ -285,6 +285,9 @@ fn config_values_can_be_set_back_unchanged() {
     s.ok("set estop_pin 15");
     s.ok("set estop_action home");
     s.ok("set power_pin 16");
+    s.ok("set payload_g 850");
+    s.ok("set payload_com_z_mm 25.5");
+    s.ok("set servo2.torque_kgcm 4.25");
     let before = *s.ctl.settings();
     let mut data = s.ok("config");
     // The last line says how the settings stand against those saved; it is not a setting.
@@ -305,7 +308,10 @@ fn config_values_can_be_set_back_unchanged() {
             commands.push(format!("set {name} {}", rest.trim()));
         }
     }
-    assert_eq!(commands.len(), SettingId::GLOBAL.len() + 6 * 5);
+    assert_eq!(
+        commands.len(),
+        SettingId::GLOBAL.len() + 6 * control::settings::ServoParam::ALL.len()
+    );
     s.ok("defaults");
     for c in &commands {
         s.ok(c);
@@ -313,6 +319,7 @@ fn config_values_can_be_set_back_unchanged() {
     let after = *s.ctl.settings();
     assert_eq!(after.stream, before.stream);
     assert_eq!(after.safety, before.safety);
+    assert_eq!(after.payload, before.payload);
     assert_eq!(after.accel_mm_s2, 250.0);
     // Values shown with 2-3 decimals come back within that rounding.
     assert_eq!(after.servos.0[2].home_us, 1512.5);

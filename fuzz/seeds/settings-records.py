@@ -14,7 +14,7 @@ import struct
 import zlib
 
 FORMAT_VERSION = 3
-PAYLOAD_LEN = 204
+PAYLOAD_LEN = 220
 PIN_OFF = 0xFF
 AXES = ['x', 'y', 'z', 'roll', 'pitch', 'yaw']
 RATE = 1600 / math.pi  # the default servo rate, us/rad
@@ -23,19 +23,23 @@ RATE = 1600 / math.pi  # the default servo rate, us/rad
 def record(sequence, frame_hz, speeds, layout, servos, accels=(0.0, 0.0),
            stream_scale=(25.0, 25.0, 15.0, 15.0, 15.0, 20.0), stream_bits=8,
            stream_order=('x', 'y', 'z', 'roll', 'pitch', 'yaw'), estop_pin=None,
-           estop_home=False, power_pin=None):
+           estop_home=False, power_pin=None, payload_g=0.0, com_mm=(0.0, 0.0, 0.0),
+           ratings_kgcm=(0.0,) * 6):
     """sequence: the save's number; speeds: (mm/s, deg/s, link timeout s); layout: base radius,
     base half angle, platform radius, platform half angle, arm, rod; servos: six (trim, rate,
     min, max, reversed); accels: (mm/s^2, deg/s^2); stream_order: six axis names or None;
-    pins: GPIO or None."""
+    pins: GPIO or None; payload_g, com_mm: the payload; ratings_kgcm: six torque ratings
+    (kgf cm, kept in hundredths; 0 not rated)."""
     payload = struct.pack('<HH', frame_hz, 0) + struct.pack('<3f', *speeds)
     payload += struct.pack('<6f', *layout)
-    for trim, rate, lo, hi, reversed_ in servos:
-        payload += struct.pack('<4fB3x', trim, rate, lo, hi, 1 if reversed_ else 0)
+    for (trim, rate, lo, hi, reversed_), rating in zip(servos, ratings_kgcm):
+        payload += struct.pack('<4fBxH', trim, rate, lo, hi, 1 if reversed_ else 0,
+                               round(rating * 100))
     payload += struct.pack('<2f', *accels) + struct.pack('<6f', *stream_scale)
     payload += bytes([stream_bits] + [6 if a is None else AXES.index(a) for a in stream_order])
     pin = lambda p: PIN_OFF if p is None else p
     payload += bytes([pin(estop_pin), 1 if estop_home else 0, pin(power_pin), 0, 0])
+    payload += struct.pack('<f3f', payload_g, *com_mm)
     assert len(payload) == PAYLOAD_LEN
     body = b'HXPS' + struct.pack('<HH', FORMAT_VERSION, PAYLOAD_LEN) + payload
     body += struct.pack('<I', sequence)
@@ -56,7 +60,8 @@ SEEDS = {
          for n, trim in zip(range(1, 7), (1450.0, 1500.0, 1520.0, 1490.0, 1510.0, 1500.0))],
         accels=(400.0, 0.0), stream_scale=(30.0, -30.0, 10.0, 0.0, 12.5, 45.0), stream_bits=12,
         stream_order=('roll', None, 'z', 'x', 'yaw', 'pitch'), estop_pin=15, estop_home=True,
-        power_pin=22),
+        power_pin=22, payload_g=1500.0, com_mm=(5.0, -2.5, 40.0),
+        ratings_kgcm=(10.0, 10.0, 12.5, 0.0, 9.99, 600.0)),
 }
 
 if __name__ == '__main__':
