@@ -44,10 +44,14 @@ pub enum Verb {
     Nudge,
     /// `check`.
     Check,
+    /// `limits`.
+    Limits,
     /// `home`.
     Home,
     /// `stop`.
     Stop,
+    /// `servo`.
+    Servo,
     /// `reset`.
     Reset,
     /// `status` (or `?`).
@@ -68,13 +72,15 @@ pub enum Verb {
 
 impl Verb {
     /// Every command word.
-    pub const ALL: [Verb; 14] = [
+    pub const ALL: [Verb; 16] = [
         Verb::Pose,
         Verb::Move,
         Verb::Nudge,
         Verb::Check,
+        Verb::Limits,
         Verb::Home,
         Verb::Stop,
+        Verb::Servo,
         Verb::Reset,
         Verb::Status,
         Verb::Geometry,
@@ -92,8 +98,10 @@ impl Verb {
             Verb::Move => "move",
             Verb::Nudge => "nudge",
             Verb::Check => "check",
+            Verb::Limits => "limits",
             Verb::Home => "home",
             Verb::Stop => "stop",
+            Verb::Servo => "servo",
             Verb::Reset => "reset",
             Verb::Status => "status",
             Verb::Geometry => "geometry",
@@ -114,11 +122,24 @@ impl Verb {
     }
 }
 
+/// A number a command takes, for the errors that name it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Field {
+    /// A pose coordinate (or the value after `axis=`).
+    Axis(Axis),
+    /// `servo`'s pulse width, us.
+    PulseUs,
+}
+
 /// What a [`ParseError::MissingField`] is missing.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Missing {
     /// A pose coordinate (or the value after `axis=`).
     Axis(Axis),
+    /// `servo`'s servo number.
+    ServoNumber,
+    /// `servo`'s pulse width.
+    PulseUs,
     /// `move`/`nudge` without any `axis=value`.
     AxisValue,
     /// `set` without a setting name.
@@ -153,24 +174,29 @@ pub enum ParseError {
         /// The command.
         verb: Verb,
     },
-    /// A pose value is not a decimal number.
+    /// A value is not a decimal number.
     BadNumber {
-        /// The coordinate.
-        axis: Axis,
+        /// Which value.
+        field: Field,
         /// What was typed.
         word: Word,
     },
-    /// A pose value is NaN or infinity.
+    /// A value is NaN or infinity.
     NotFinite {
-        /// The coordinate.
-        axis: Axis,
+        /// Which value.
+        field: Field,
         /// What was typed.
         word: Word,
     },
-    /// A pose value does not fit (e.g. `1e39`).
+    /// A value does not fit (e.g. `1e39`).
     NumberTooLarge {
-        /// The coordinate.
-        axis: Axis,
+        /// Which value.
+        field: Field,
+        /// What was typed.
+        word: Word,
+    },
+    /// `servo` named something that is not a servo number (1..=6).
+    BadServo {
         /// What was typed.
         word: Word,
     },
@@ -215,6 +241,15 @@ pub enum Command {
     Nudge(AxisValues),
     /// `check x y z roll pitch yaw`: would `pose` accept this? Nothing moves.
     Check(Pose),
+    /// `limits`: how far each axis reaches from the current pose, both ways.
+    Limits,
+    /// `servo n us`: drive servo `n` directly to a pulse width; the others hold.
+    Servo {
+        /// Servo number, 1..=6.
+        servo: u8,
+        /// Pulse width, us (finite).
+        pulse_us: f32,
+    },
     /// `home`.
     Home,
     /// `stop`.
@@ -260,16 +295,32 @@ impl<'a> Iterator for Words<'a> {
     }
 }
 
-/// Parses one number for `axis`.
-fn number(axis: Axis, text: &str) -> Result<f32, ParseError> {
+/// Parses one number for `field`.
+fn number(field: Field, text: &str) -> Result<f32, ParseError> {
     parse_f32(text).map_err(|e| {
         let word = word(text);
         match e {
-            NumberError::NotFinite => ParseError::NotFinite { axis, word },
-            NumberError::TooLarge => ParseError::NumberTooLarge { axis, word },
-            NumberError::Syntax | NumberError::NotWhole => ParseError::BadNumber { axis, word },
+            NumberError::NotFinite => ParseError::NotFinite { field, word },
+            NumberError::TooLarge => ParseError::NumberTooLarge { field, word },
+            NumberError::Syntax | NumberError::NotWhole => ParseError::BadNumber { field, word },
         }
     })
+}
+
+/// `n us`: a servo number 1..=6 and a pulse width.
+fn servo_pulse(words: &mut Words<'_>, verb: Verb) -> Result<Command, ParseError> {
+    let missing = |what| ParseError::MissingField { what, verb };
+    let n = words.next().ok_or(missing(Missing::ServoNumber))?;
+    let servo = match n.as_bytes() {
+        [d @ b'1'..=b'6'] => d - b'0',
+        _ => return Err(ParseError::BadServo { word: word(n) }),
+    };
+    let pulse_us = number(
+        Field::PulseUs,
+        words.next().ok_or(missing(Missing::PulseUs))?,
+    )?;
+    no_more(words, verb)?;
+    Ok(Command::Servo { servo, pulse_us })
 }
 
 fn no_more(words: &mut Words<'_>, verb: Verb) -> Result<(), ParseError> {
@@ -290,7 +341,7 @@ fn full_pose(words: &mut Words<'_>, verb: Verb) -> Result<Pose, ParseError> {
             what: Missing::Axis(axis),
             verb,
         })?;
-        *slot = number(axis, text)?;
+        *slot = number(Field::Axis(axis), text)?;
     }
     no_more(words, verb)?;
     Ok(Pose::from_degrees(v[0], v[1], v[2], v[3], v[4], v[5]))
@@ -318,7 +369,7 @@ fn axis_values(words: &mut Words<'_>, verb: Verb) -> Result<AxisValues, ParseErr
                 verb,
             });
         }
-        *slot = Some(number(axis, value)?);
+        *slot = Some(number(Field::Axis(axis), value)?);
         any = true;
     }
     if any {
@@ -358,6 +409,8 @@ pub fn parse(line: &str) -> Result<Command, ParseError> {
     match verb {
         Verb::Pose => full_pose(&mut words, verb).map(Command::Pose),
         Verb::Check => full_pose(&mut words, verb).map(Command::Check),
+        Verb::Limits => simple(Command::Limits, &mut words),
+        Verb::Servo => servo_pulse(&mut words, verb),
         Verb::Move => axis_values(&mut words, verb).map(Command::Move),
         Verb::Nudge => axis_values(&mut words, verb).map(Command::Nudge),
         Verb::Home => simple(Command::Home, &mut words),
@@ -432,34 +485,37 @@ mod tests {
         assert_eq!(
             parse("pose 1 2 x 0 0 0"),
             Err(ParseError::BadNumber {
-                axis: Axis::Z,
+                field: Field::Axis(Axis::Z),
                 word: word("x")
             })
         );
         assert_eq!(
             parse("pose 0 0 0 nan 0 0"),
             Err(ParseError::NotFinite {
-                axis: Axis::Roll,
+                field: Field::Axis(Axis::Roll),
                 word: word("nan")
             })
         );
         assert_eq!(
             parse("pose 0 0 0 0 0 -inf"),
             Err(ParseError::NotFinite {
-                axis: Axis::Yaw,
+                field: Field::Axis(Axis::Yaw),
                 word: word("-inf")
             })
         );
         assert_eq!(
             parse("pose 1e39 0 0 0 0 0"),
             Err(ParseError::NumberTooLarge {
-                axis: Axis::X,
+                field: Field::Axis(Axis::X),
                 word: word("1e39")
             })
         );
         assert!(matches!(
             err("pose 0x10 0 0 0 0 0"),
-            ParseError::BadNumber { axis: Axis::X, .. }
+            ParseError::BadNumber {
+                field: Field::Axis(Axis::X),
+                ..
+            }
         ));
         assert!(matches!(
             err("check 0 0 0 0 0"),
@@ -539,6 +595,7 @@ mod tests {
             ("config", Command::Config),
             ("HELP", Command::Help),
             ("defaults", Command::Defaults),
+            ("limits", Command::Limits),
         ] {
             assert_eq!(parse(text), Ok(cmd), "{text}");
             let extra = std::format!("{text} now");
@@ -547,6 +604,64 @@ mod tests {
                 "{extra}"
             );
         }
+    }
+
+    #[test]
+    fn servo_takes_a_servo_number_and_a_pulse() {
+        assert_eq!(
+            parse("servo 3 1520.5"),
+            Ok(Command::Servo {
+                servo: 3,
+                pulse_us: 1520.5
+            })
+        );
+        assert_eq!(
+            parse("SERVO,6,900"),
+            Ok(Command::Servo {
+                servo: 6,
+                pulse_us: 900.0
+            })
+        );
+        for bad in [
+            "servo 0 1500",
+            "servo 7 1500",
+            "servo x 1500",
+            "servo 12 1500",
+        ] {
+            assert!(matches!(err(bad), ParseError::BadServo { .. }), "{bad}");
+        }
+        assert_eq!(
+            err("servo"),
+            ParseError::MissingField {
+                what: Missing::ServoNumber,
+                verb: Verb::Servo
+            }
+        );
+        assert_eq!(
+            err("servo 2"),
+            ParseError::MissingField {
+                what: Missing::PulseUs,
+                verb: Verb::Servo
+            }
+        );
+        assert_eq!(
+            err("servo 2 fast"),
+            ParseError::BadNumber {
+                field: Field::PulseUs,
+                word: word("fast")
+            }
+        );
+        assert!(matches!(
+            err("servo 2 nan"),
+            ParseError::NotFinite {
+                field: Field::PulseUs,
+                ..
+            }
+        ));
+        assert!(matches!(
+            err("servo 2 1500 3"),
+            ParseError::ExtraField { .. }
+        ));
     }
 
     #[test]

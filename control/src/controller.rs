@@ -70,12 +70,15 @@
 use core::fmt::Write;
 use core::marker::PhantomData;
 
+use kinematics_core::forward::{self, Newton};
 use kinematics_core::ik::{self, IkError, Solution};
-use kinematics_core::{Geometry, Libm, Math, Pose, LEGS};
+use kinematics_core::workspace;
+use kinematics_core::{Geometry, KinematicsError, Libm, Math, Pose, LEGS};
 
 use crate::command::{self, Command};
-use crate::error::Error;
+use crate::error::{Error, PoseError};
 use crate::motion::{lerp, Checkpoints, Motion, Segment, SpeedLimits};
+use crate::payload::TorqueError;
 use crate::protocol::{Feed, Frame, Lost};
 use crate::report::{
     self, Fault, Listing, MotionReport, Notice, Saved, StatusReport, StreamCounts, EOL,
@@ -93,7 +96,9 @@ pub const LINK_LOSS_SPEED_MM_S: f32 = 10.0;
 /// Angular speed for returning home after link loss when `speed_deg_s` is off, deg/s.
 pub const LINK_LOSS_SPEED_DEG_S: f32 = 15.0;
 /// Most IK solutions of a path check in one slice of work ([`Controller::work`]): on the
-/// RP2040 one takes about 0.15 ms, so a slice stays under half a millisecond.
+/// RP2040 one takes about 0.15 ms, so a slice stays under half a millisecond. With a payload
+/// and torque ratings, each pose checked also needs its holding torques (about three IK
+/// solutions' worth): then a slice checks one pose ([`Controller::poses_per_slice`]).
 pub const CHECKS_PER_SLICE: u32 = 3;
 
 /// IK solutions of a clamp's bisection: the clamped pose is within 1/64 of the way from the
@@ -139,6 +144,68 @@ struct Streaming {
     goal: Pose,
     /// Where the tracker is and how fast it goes.
     tracker: Tracker,
+    /// The newest target's check (and clamp), a slice per [`Controller::apply_stream`].
+    search: Option<Clamp>,
+}
+
+/// The check of a stream target, clamped to the last pose on the straight line from where the
+/// platform was that can be taken (the IK within the servo limits, and with torque ratings the
+/// holding torques), a slice at a time: the target first, then [`CLAMP_STEPS`] bisection steps.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Clamp {
+    from: Pose,
+    to: Pose,
+    /// The target has been tried (and could not be taken).
+    tried: bool,
+    /// Fractions of the way known to be reachable and not.
+    reachable: f32,
+    unreachable: f32,
+    /// Bisection steps made.
+    steps: u32,
+    /// The farthest reachable pose found and its solution (`None`: `from`, whose solution is
+    /// the current one).
+    best: (Pose, Option<Solution>),
+}
+
+impl Clamp {
+    fn new(from: Pose, to: Pose) -> Clamp {
+        Clamp {
+            from,
+            to,
+            tried: false,
+            reachable: 0.0,
+            unreachable: 1.0,
+            steps: 0,
+            best: (from, None),
+        }
+    }
+}
+
+/// The pulses set with `servo`: the pose they correspond to (the forward kinematics), or why
+/// there is none.
+type Located = Result<Pose, KinematicsError>;
+
+/// Why the pose of a set of pulses is being found ([`Job::Locate`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Relocate {
+    /// `servo` drives a servo directly.
+    Servo,
+    /// The settings change while the pulses are set directly: the pulses stay.
+    Settings,
+}
+
+/// How far a [`Job::Locate`] has got.
+#[allow(clippy::large_enum_variant)] // see Job
+#[derive(Debug, Clone)]
+enum LocateStage {
+    /// Newton's method, an iteration per slice ([`forward::Newton::step`]).
+    Newton(Newton),
+    /// Found: the IK must agree (the arms on eq. 9's root the IK takes).
+    Arms(Pose),
+    /// The holding torques at the pose found, against the ratings.
+    Torque(Pose),
+    /// There is none: why.
+    NoPose(KinematicsError),
 }
 
 /// A command's work left for later slices ([`Controller::work`]).
@@ -153,9 +220,29 @@ enum Job {
         solution: Solution,
         segment: Segment,
         checkpoints: Checkpoints,
+        /// The target's holding torques: `None` until computed (the first slice, when there
+        /// is a payload to check or report), then what `check` reports.
+        torque: Option<Option<Torques>>,
     },
     /// A listing being written, line `next` next.
     Listing { listing: Listing, next: usize },
+    /// `status` with a payload: the holding torques are computed (a slice), then listed.
+    Status(StatusReport),
+    /// `limits`: the reach along each axis-direction, a few poses per slice.
+    Limits {
+        start: Pose,
+        search: workspace::Limits<PoseError>,
+    },
+    /// Pulses whose pose is being found (forward kinematics, a Newton iteration per slice),
+    /// and the settings they go with; committed when found (or found to be no pose).
+    Locate {
+        why: Relocate,
+        candidate: Settings,
+        solver: ik::Solver,
+        /// The pulses and the arm angles they command.
+        solution: Solution,
+        stage: LocateStage,
+    },
     /// New settings with new build numbers: their geometry and IK are built a step per slice.
     Rebuild { candidate: Settings, stage: Rebuild },
     /// `save`: the flash write the board performs, and its outcome.
@@ -183,9 +270,15 @@ enum Rebuild {
     Solver(Geometry),
     /// The IK is built; the pose being held must be drivable with it.
     HeldPose(ik::Solver),
+    /// The held pose can be driven; with torque ratings, it must be held too.
+    HeldTorque(ik::Solver, Solution),
 }
 
+/// Holding torques (kgf cm), or why there are none.
+type Torques = Result<[f32; LEGS], KinematicsError>;
+
 /// A job's outcome, for the reply.
+#[allow(clippy::large_enum_variant)] // see Job
 enum Done {
     /// Reply `ok` (after any data already written).
     Ok,
@@ -238,6 +331,9 @@ pub struct Controller<M: Math = Libm> {
     new_pulses: bool,
     /// The stream being followed, if the last motion input was a stream frame.
     stream: Option<Streaming>,
+    /// The pulses were set one servo at a time (`servo`) and where that put the platform:
+    /// the motion's pose is that pose (when there is one), moves start from there.
+    direct: Option<Located>,
     /// Stream frames counted since start-up.
     stream_counts: StreamCounts,
     /// The emergency stop.
@@ -297,6 +393,7 @@ impl<M: Math> Controller<M> {
             fault: None,
             new_pulses: false,
             stream: None,
+            direct: None,
             stream_counts: StreamCounts::default(),
             estop: Estop::Clear,
             servo_power: false,
@@ -372,15 +469,26 @@ impl<M: Math> Controller<M> {
     /// True while a move is in progress, or a stream's tracker has not settled on its goal.
     pub fn is_moving(&self) -> bool {
         self.motion.is_moving()
-            || self
-                .stream
-                .as_ref()
-                .is_some_and(|s| s.fresh || !s.tracker.at_rest() || s.tracker.pose() != s.goal)
+            || self.stream.as_ref().is_some_and(|s| {
+                s.fresh || s.search.is_some() || !s.tracker.at_rest() || s.tracker.pose() != s.goal
+            })
     }
 
     /// True while stream frames drive the platform.
     pub fn is_streaming(&self) -> bool {
         self.stream.is_some()
+    }
+
+    /// True while a stream target waits to be applied or checked: keep calling
+    /// [`Controller::apply_stream`] (a slice of the check per call) without sleeping.
+    pub fn stream_pending(&self) -> bool {
+        self.stream.is_some_and(|s| s.fresh || s.search.is_some())
+    }
+
+    /// With pulses set by `servo`: the pose they correspond to, or why there is none; `None`
+    /// when the pulses are the IK's for [`Controller::pose`].
+    pub fn direct(&self) -> Option<&Result<Pose, KinematicsError>> {
+        self.direct.as_ref()
     }
 
     /// Stream frames counted since start-up.
@@ -514,30 +622,42 @@ impl<M: Math> Controller<M> {
         }
     }
 
-    /// Applies the newest stream frame if one arrived since the last call: its pose, clamped
-    /// to the workspace, becomes the pose now (pass-through: the new pulses are ready from
-    /// [`Controller::take_new_pulses`]) or the tracker's goal. Up to 1 + [`CLAMP_STEPS`] IK
-    /// solutions. The board calls it after feeding the bytes waiting.
+    /// Applies the newest stream frame: its pose, clamped to what can be taken, becomes the
+    /// pose now (pass-through: the new pulses are ready from
+    /// [`Controller::take_new_pulses`]) or the tracker's goal. The check is done a slice per
+    /// call (up to [`CHECKS_PER_SLICE`] IK solutions, or one pose with its holding torques;
+    /// a target that needs clamping takes 1 + [`CLAMP_STEPS`] poses): the board calls it after
+    /// feeding the bytes waiting, every pass while [`Controller::stream_pending`]. A newer frame
+    /// starts the check afresh.
     pub fn apply_stream(&mut self) {
-        let Some(mut stream) = self.stream.filter(|s| s.fresh) else {
+        let Some(mut stream) = self.stream else {
             return;
         };
-        stream.fresh = false;
-        self.stream_counts.applied = self.stream_counts.applied.wrapping_add(1);
-        let from = *self.motion.pose();
-        let (pose, solution) = self.clamp(&from, &stream.target);
-        if self.track_limits() == TrackLimits::OFF {
-            if let Some(solution) = solution {
-                self.motion = Motion::new(pose);
-                self.solution = solution;
-                self.new_pulses = true;
-            }
-            stream.tracker.hold_at(&pose);
+        if stream.fresh {
+            stream.fresh = false;
+            self.stream_counts.applied = self.stream_counts.applied.wrapping_add(1);
+            stream.search = Some(Clamp::new(*self.motion.pose(), stream.target));
+            self.servo_power = true;
+            self.fault = None;
         }
-        stream.goal = pose;
+        if let Some(mut search) = stream.search {
+            match self.clamp_slice(&mut search) {
+                None => stream.search = Some(search),
+                Some((pose, solution)) => {
+                    stream.search = None;
+                    if self.track_limits() == TrackLimits::OFF {
+                        if let Some(solution) = solution {
+                            self.motion = Motion::new(pose);
+                            self.solution = solution;
+                            self.new_pulses = true;
+                        }
+                        stream.tracker.hold_at(&pose);
+                    }
+                    stream.goal = pose;
+                }
+            }
+        }
         self.stream = Some(stream);
-        self.servo_power = true;
-        self.fault = None;
     }
 
     /// The emergency-stop input, as the board reads it (`open`: the pin is high; call it every
@@ -590,7 +710,30 @@ impl<M: Math> Controller<M> {
                 purpose,
                 solution,
                 segment,
+                checkpoints,
+                torque: None,
+            } => {
+                // The target's holding torques first, in a slice of their own.
+                match self.target_torque(purpose, &segment, &solution) {
+                    Ok(torque) => {
+                        self.job = Some(Job::Path {
+                            purpose,
+                            solution,
+                            segment,
+                            checkpoints,
+                            torque: Some(torque),
+                        });
+                        return;
+                    }
+                    Err(e) => self.finish_path(purpose, solution, segment, None, Err(e)),
+                }
+            }
+            Job::Path {
+                purpose,
+                solution,
+                segment,
                 mut checkpoints,
+                torque: Some(torque),
             } => match self.check_slice(&segment, &mut checkpoints) {
                 None => {
                     self.job = Some(Job::Path {
@@ -598,10 +741,11 @@ impl<M: Math> Controller<M> {
                         solution,
                         segment,
                         checkpoints,
+                        torque: Some(torque),
                     });
                     return;
                 }
-                Some(result) => self.finish_path(purpose, solution, segment, result),
+                Some(result) => self.finish_path(purpose, solution, segment, torque, result),
             },
             Job::Listing { listing, next } => {
                 if listing.write_line(next, &self.settings, &self.solver, out) {
@@ -613,6 +757,28 @@ impl<M: Math> Controller<M> {
                 }
                 Done::Ok
             }
+            Job::Status(mut report) => {
+                report.torque_kgcm = Some(self.status_torques(&report));
+                Done::List(Listing::Status(report))
+            }
+            Job::Limits { start, mut search } => match self.limits_slice(&mut search) {
+                None => {
+                    self.job = Some(Job::Limits { start, search });
+                    return;
+                }
+                Some(reaches) => Done::List(Listing::Limits { start, reaches }),
+            },
+            Job::Locate {
+                why,
+                candidate,
+                solver,
+                solution,
+                stage,
+            } => match self.locate_step(why, candidate, solver, solution, stage) {
+                None => return,
+                Some(Ok(())) => Done::Ok,
+                Some(Err(e)) => Done::Refused(e),
+            },
             Job::Rebuild { candidate, stage } => match self.rebuild_step(candidate, stage) {
                 None => return,
                 Some(Ok(())) => Done::Ok,
@@ -780,6 +946,7 @@ impl<M: Math> Controller<M> {
             cmd,
             Command::Pose(_) | Command::Move(_) | Command::Nudge(_) | Command::Home
         );
+        let moves = moves || matches!(cmd, Command::Servo { .. });
         if moves && self.estop.stops_motion() {
             return Err(Error::Estop(self.estop));
         }
@@ -803,7 +970,28 @@ impl<M: Math> Controller<M> {
                     Ok(Begun::Answered)
                 }
             },
-            Command::Status => Ok(self.list(Listing::Status(self.status()))),
+            Command::Status => {
+                let report = self.status();
+                if self.settings.payload.carried() {
+                    // The holding torques at the pose: a slice of their own.
+                    self.job = Some(Job::Status(report));
+                    Ok(Begun::Pending)
+                } else {
+                    Ok(self.list(Listing::Status(report)))
+                }
+            }
+            Command::Limits => {
+                if let Some(Err(e)) = self.direct {
+                    return Err(Error::NoPose(e));
+                }
+                let start = *self.motion.pose();
+                self.job = Some(Job::Limits {
+                    start,
+                    search: workspace::Limits::new(start, workspace::Options::default()),
+                });
+                Ok(Begun::Pending)
+            }
+            Command::Servo { servo, pulse_us } => self.drive_servo(servo, pulse_us),
             Command::Geometry => Ok(self.list(Listing::Geometry)),
             Command::Config => {
                 let saved = match self.store.saved() {
@@ -833,9 +1021,14 @@ impl<M: Math> Controller<M> {
                 Ok(Begun::Answered)
             }
             Command::Set(id, value) => {
+                // (A payload or a rating changes what the path in progress was checked for.)
                 let moves_matter = matches!(
                     id,
-                    SettingId::FrameHz | SettingId::Layout(_) | SettingId::Servo(..)
+                    SettingId::FrameHz
+                        | SettingId::Layout(_)
+                        | SettingId::Servo(..)
+                        | SettingId::PayloadG
+                        | SettingId::PayloadCom(_)
                 );
                 if moves_matter && self.motion.is_moving() {
                     return Err(Error::Busy);
@@ -916,8 +1109,11 @@ impl<M: Math> Controller<M> {
             return;
         };
         counts.frames = counts.frames.wrapping_add(1);
-        if self.estop.stops_motion() || self.job.is_some() {
-            // (The board feeds no bytes while a job runs; refused all the same if it did.)
+        // No pose to start from (pulses set with servo that correspond to none) is refused
+        // like the e-stop. (The board feeds no bytes while a job runs; refused all the same if
+        // it did.)
+        let no_pose = matches!(self.direct, Some(Err(_)));
+        if self.estop.stops_motion() || self.job.is_some() || no_pose {
             counts.refused = counts.refused.wrapping_add(1);
             return;
         }
@@ -929,14 +1125,17 @@ impl<M: Math> Controller<M> {
                 stream.fresh = true;
             }
             None => {
-                // The stream starts (again) from where the platform is; a move in progress ends.
+                // The stream starts (again) from where the platform is; a move in progress ends,
+                // and so does driving the servos one by one.
                 self.motion = Motion::new(here);
                 self.returning_home = false;
+                self.direct = None;
                 self.stream = Some(Streaming {
                     target,
                     fresh: true,
                     goal: here,
                     tracker: Tracker::new(&here),
+                    search: None,
                 });
             }
         }
@@ -965,7 +1164,7 @@ impl<M: Math> Controller<M> {
             }
             Err(_) => {
                 let from = *self.motion.pose();
-                let (pose, solution) = self.clamp(&from, &next.pose());
+                let (pose, solution) = self.clamp_now(&from, &next.pose());
                 if let Some(solution) = solution {
                     self.motion = Motion::new(pose);
                     self.solution = solution;
@@ -977,11 +1176,45 @@ impl<M: Math> Controller<M> {
         self.stream = Some(stream);
     }
 
+    /// A slice of a stream target's check ([`Clamp`]): `None` while poses remain to be tried,
+    /// then the pose to take and its solution (`None` when that is where it started, whose
+    /// solution is the current one). Counts a clamp when the target cannot be taken.
+    fn clamp_slice(&mut self, c: &mut Clamp) -> Option<(Pose, Option<Solution>)> {
+        let torque = self.settings.payload.checked();
+        for _ in 0..self.poses_per_slice() {
+            if !c.tried {
+                c.tried = true;
+                match self.pose_check(&c.to, torque) {
+                    Ok(solution) => return Some((c.to, Some(solution))),
+                    Err(_) => {
+                        self.stream_counts.clamped = self.stream_counts.clamped.wrapping_add(1);
+                    }
+                }
+                continue;
+            }
+            let t = 0.5 * (c.reachable + c.unreachable);
+            let pose = lerp(&c.from, &c.to, t);
+            match self.pose_check(&pose, torque) {
+                Ok(solution) => {
+                    c.reachable = t;
+                    c.best = (pose, Some(solution));
+                }
+                Err(_) => c.unreachable = t,
+            }
+            c.steps += 1;
+            if c.steps >= CLAMP_STEPS {
+                return Some(c.best);
+            }
+        }
+        None
+    }
+
     /// The last pose on the straight line from `from` (which can be driven) to `to` that can
     /// be driven, within 1/2^[`CLAMP_STEPS`] of the way, and its solution (`None` when that is
-    /// `from` itself, whose solution is the current one). Counts a clamp if `to` cannot be
+    /// `from` itself, whose solution is the current one), at once (up to 1 + [`CLAMP_STEPS`]
+    /// IK solutions; the tracker's step within a frame). Counts a clamp if `to` cannot be
     /// driven.
-    fn clamp(&mut self, from: &Pose, to: &Pose) -> (Pose, Option<Solution>) {
+    fn clamp_now(&mut self, from: &Pose, to: &Pose) -> (Pose, Option<Solution>) {
         let servos = &self.settings.servos;
         if let Ok(solution) = self.solver.solve::<M>(servos, to) {
             return (*to, Some(solution));
@@ -1048,6 +1281,10 @@ impl<M: Math> Controller<M> {
         limits: SpeedLimits,
         purpose: Purpose,
     ) -> Result<Begun, Error> {
+        if let Some(Err(e)) = self.direct {
+            // Pulses set with servo that correspond to no pose: no pose to start from.
+            return Err(Error::NoPose(e));
+        }
         let solution = self.solver.solve::<M>(&self.settings.servos, &target)?;
         let segment = Segment::plan(
             *self.motion.pose(),
@@ -1064,31 +1301,107 @@ impl<M: Math> Controller<M> {
             solution,
             segment,
             checkpoints: segment.checkpoints(),
+            // The target's torques take a slice of their own, if they are needed at all.
+            torque: if self.target_torque_needed(purpose) {
+                None
+            } else {
+                Some(None)
+            },
         });
         Ok(Begun::Pending)
     }
 
-    /// Checks up to [`CHECKS_PER_SLICE`] more poses of the path: `None` if poses remain,
+    /// Whether a path check starts with the target's holding torques: with ratings to check,
+    /// or for `check` to report.
+    fn target_torque_needed(&self, purpose: Purpose) -> bool {
+        let payload = &self.settings.payload;
+        payload.checked() || (purpose == Purpose::Check && payload.carried())
+    }
+
+    /// The first slice of a path check: the target's holding torques, if there is a payload
+    /// to check against ratings (refused if one is exceeded) or to report (`check`);
+    /// `Ok(None)` otherwise.
+    fn target_torque(
+        &self,
+        purpose: Purpose,
+        segment: &Segment,
+        solution: &Solution,
+    ) -> Result<Option<Torques>, Error> {
+        let payload = &self.settings.payload;
+        let report = purpose == Purpose::Check && payload.carried();
+        if !self.target_torque_needed(purpose) {
+            return Ok(None);
+        }
+        let torques =
+            payload.holding_torques_kgcm::<M>(&self.solver, segment.target(), &solution.arm_rad);
+        if payload.checked() {
+            match torques {
+                Ok(t) => payload.within_ratings(&t)?,
+                Err(e) => return Err(TorqueError::Unknown(e).into()),
+            }
+        }
+        Ok(report.then_some(torques))
+    }
+
+    /// How many poses a slice of work checks: [`CHECKS_PER_SLICE`] by the IK alone, or one
+    /// with its holding torques when there are ratings to check.
+    fn poses_per_slice(&self) -> u32 {
+        if self.settings.payload.checked() {
+            1
+        } else {
+            CHECKS_PER_SLICE
+        }
+    }
+
+    /// Whether a pose can be taken: the IK within the servo limits and, if `torque`, every
+    /// servo's holding torque within its rating. Its solution if so.
+    fn pose_check(&self, pose: &Pose, torque: bool) -> Result<Solution, PoseError> {
+        let solution = self.solver.solve::<M>(&self.settings.servos, pose)?;
+        if torque {
+            self.settings
+                .payload
+                .check::<M>(&self.solver, pose, &solution.arm_rad)?;
+        }
+        Ok(solution)
+    }
+
+    /// Checks [`Controller::poses_per_slice`] more poses of the path: `None` if poses remain,
     /// `Some(Ok)` if the whole path is clear, `Some(Err)` at the first that is not.
     fn check_slice(
         &self,
         segment: &Segment,
         checkpoints: &mut Checkpoints,
     ) -> Option<Result<(), Error>> {
+        let torque = self.settings.payload.checked();
         let mut solved = 0;
-        while solved < CHECKS_PER_SLICE {
+        while solved < self.poses_per_slice() {
             let Some((pose, fraction)) = checkpoints.next() else {
                 return Some(Ok(()));
             };
             if pose == *segment.target() {
-                continue; // solved when the command came
+                continue; // checked when the command came and in the first slice
             }
             solved += 1;
-            if let Err(cause) = self.solver.solve::<M>(&self.settings.servos, &pose) {
+            if let Err(cause) = self.pose_check(&pose, torque) {
                 return Some(Err(Error::PathBlocked {
                     percent: fraction * 100.0,
                     cause,
                 }));
+            }
+        }
+        None
+    }
+
+    /// A slice of `limits`' search: `None` while poses remain, then the twelve reaches.
+    fn limits_slice(
+        &self,
+        search: &mut workspace::Limits<PoseError>,
+    ) -> Option<[workspace::Reach<PoseError>; 12]> {
+        let torque = self.settings.payload.checked();
+        for _ in 0..self.poses_per_slice() {
+            let found = search.step(|pose| self.pose_check(pose, torque).map(|_| ()));
+            if found.is_some() {
+                return found;
             }
         }
         None
@@ -1100,6 +1413,7 @@ impl<M: Math> Controller<M> {
         purpose: Purpose,
         solution: Solution,
         segment: Segment,
+        torque_kgcm: Option<Torques>,
         result: Result<(), Error>,
     ) -> Done {
         if self.estop.stops_motion()
@@ -1121,8 +1435,9 @@ impl<M: Math> Controller<M> {
         }
         match (purpose, result) {
             (Purpose::Move { jump: false }, Ok(())) => {
-                // An accepted move ends the stream.
+                // An accepted move ends the stream (and driving the servos one by one).
                 self.end_stream();
+                self.direct = None;
                 self.start(segment);
                 self.servo_power = true;
                 Done::Ok
@@ -1130,6 +1445,7 @@ impl<M: Math> Controller<M> {
             (Purpose::Move { jump: true }, Ok(())) => {
                 // No speed limit: a jump, made now (see the module docs on latency).
                 self.end_stream();
+                self.direct = None;
                 self.motion = Motion::new(*segment.target());
                 self.solution = solution;
                 self.new_pulses = true;
@@ -1140,6 +1456,7 @@ impl<M: Math> Controller<M> {
             }
             (Purpose::EstopHome, Ok(())) => {
                 self.end_stream();
+                self.direct = None;
                 self.start(segment);
                 Done::Quiet
             }
@@ -1157,11 +1474,13 @@ impl<M: Math> Controller<M> {
                 Done::List(Listing::Check {
                     arm_rad: solution.arm_rad,
                     pulse_us: solution.pulse_us,
+                    torque_kgcm,
                     duration_s,
                 })
             }
             (Purpose::ReturnHome, Ok(())) => {
                 self.end_stream();
+                self.direct = None;
                 self.start(segment);
                 self.returning_home = true;
                 self.notify(Notice::LinkLost {
@@ -1184,23 +1503,63 @@ impl<M: Math> Controller<M> {
         self.fault = None;
     }
 
-    /// Commits `candidate` if it is valid and the pose being held can still be driven with it.
-    /// New build numbers mean a new geometry and IK: that is built as a job, a step per slice.
+    /// Commits `candidate` if it is valid and the pose being held can still be driven (and,
+    /// with torque ratings, held) with it. New build numbers mean a new geometry and IK: that
+    /// is built as a job, a step per slice; so are a torque check and, with pulses set by
+    /// `servo`, finding their pose again.
     fn change_settings(&mut self, candidate: Settings) -> Result<Begun, Error> {
         candidate.check_values()?;
+        // A stream holds while the job runs (the held pose is what is checked).
         if candidate.layout != self.settings.layout {
+            self.holding = self.is_streaming();
             self.job = Some(Job::Rebuild {
                 candidate,
                 stage: Rebuild::Geometry,
             });
             return Ok(Begun::Pending);
         }
-        self.commit_settings(candidate, self.solver.clone())?;
+        self.hold_with(candidate, self.solver.clone())
+    }
+
+    /// The last step of a settings change: the pose being held with the new settings and
+    /// their IK. Committed now, or a job that checks more (the held pose's torques, or the
+    /// pose of pulses set by `servo`).
+    fn hold_with(&mut self, candidate: Settings, solver: ik::Solver) -> Result<Begun, Error> {
+        let torque_changed =
+            candidate.payload != self.settings.payload || candidate.layout != self.settings.layout;
+        if self.direct.is_some() {
+            let pulses_changed = candidate.servos != self.settings.servos
+                || candidate.layout != self.settings.layout;
+            if !(pulses_changed || (torque_changed && candidate.payload.checked())) {
+                self.commit_settings(candidate, solver, self.solution);
+                return Ok(Begun::Answered);
+            }
+            // The pulses stay as they are: where they put the platform is found again.
+            let solution = self
+                .direct_solution(&candidate, &solver, self.solution.pulse_us)
+                .map_err(|cause| Error::PoseConflict { cause })?;
+            self.start_locate(Relocate::Settings, candidate, solver, solution);
+            return Ok(Begun::Pending);
+        }
+        let solution = solver
+            .solve::<M>(&candidate.servos, self.motion.pose())
+            .map_err(|cause| Error::PoseConflict {
+                cause: cause.into(),
+            })?;
+        if torque_changed && candidate.payload.checked() {
+            self.holding = self.is_streaming();
+            self.job = Some(Job::Rebuild {
+                candidate,
+                stage: Rebuild::HeldTorque(solver, solution),
+            });
+            return Ok(Begun::Pending);
+        }
+        self.commit_settings(candidate, solver, solution);
         Ok(Begun::Answered)
     }
 
-    /// One step of building new settings' geometry and IK: `None` while steps remain, then the
-    /// outcome (committed, or why not).
+    /// One step of building new settings' geometry and IK, or checking the held pose's
+    /// torques: `None` while steps remain, then the outcome (committed, or why not).
     fn rebuild_step(&mut self, candidate: Settings, stage: Rebuild) -> Option<Result<(), Error>> {
         let next = match stage {
             Rebuild::Geometry => match candidate.layout.build_with::<M>() {
@@ -1211,7 +1570,25 @@ impl<M: Math> Controller<M> {
                 Ok(solver) => Rebuild::HeldPose(solver),
                 Err(e) => return Some(Err(SettingError::BadGeometry(e).into())),
             },
-            Rebuild::HeldPose(solver) => return Some(self.commit_settings(candidate, solver)),
+            Rebuild::HeldPose(solver) => {
+                return match self.hold_with(candidate, solver) {
+                    Ok(Begun::Answered) => Some(Ok(())),
+                    Ok(Begun::Pending) => None, // a job of its own follows
+                    Err(e) => Some(Err(e)),
+                };
+            }
+            Rebuild::HeldTorque(solver, solution) => {
+                let pose = *self.motion.pose();
+                return Some(
+                    candidate
+                        .payload
+                        .check::<M>(&solver, &pose, &solution.arm_rad)
+                        .map_err(|cause| Error::PoseConflict {
+                            cause: cause.into(),
+                        })
+                        .map(|()| self.commit_settings(candidate, solver, solution)),
+                );
+            }
         };
         self.job = Some(Job::Rebuild {
             candidate,
@@ -1220,18 +1597,191 @@ impl<M: Math> Controller<M> {
         None
     }
 
-    /// Commits checked settings and their IK if the pose being held can be driven with them
-    /// (its pulses change right away).
-    fn commit_settings(&mut self, candidate: Settings, solver: ik::Solver) -> Result<(), Error> {
-        let solution = solver
-            .solve::<M>(&candidate.servos, self.motion.pose())
-            .map_err(|cause| Error::PoseConflict { cause })?;
+    /// Commits checked settings, their IK and the pulses to give with them (which change
+    /// right away).
+    fn commit_settings(&mut self, candidate: Settings, solver: ik::Solver, solution: Solution) {
         self.settings = candidate;
         self.solver = solver;
         self.new_pulses |= solution.pulse_us != self.solution.pulse_us;
         self.solution = solution;
         self.generation = self.generation.wrapping_add(1);
-        Ok(())
+    }
+
+    // ----- servos driven one by one -----
+
+    /// `servo n us`: refused while a move is in progress and with the e-stop on; the pulse
+    /// within the servo's limits. Its pose is found (a job); the pulse is given once found.
+    fn drive_servo(&mut self, servo: u8, pulse_us: f32) -> Result<Begun, Error> {
+        if self.motion.is_moving() {
+            return Err(Error::Busy);
+        }
+        let index = usize::from(servo.clamp(1, LEGS as u8) - 1);
+        let config = &self.settings.servos.0[index];
+        if !config.allows(pulse_us) {
+            return Err(Error::PulseOutsideLimits {
+                servo,
+                pulse_us,
+                min_us: config.min_us,
+                max_us: config.max_us,
+            });
+        }
+        let mut pulses = self.safe_pulses();
+        pulses[index] = pulse_us;
+        let solution = self
+            .direct_solution(&self.settings, &self.solver, pulses)
+            .map_err(Error::from)?;
+        // A stream holds while the pose is found; the command ends it.
+        self.holding = self.is_streaming();
+        self.start_locate(
+            Relocate::Servo,
+            self.settings,
+            self.solver.clone(),
+            solution,
+        );
+        Ok(Begun::Pending)
+    }
+
+    /// The solution of pulses set directly: the pulses, within `settings`' limits, and the arm
+    /// angles they command (the inverse of eq. 13, 14).
+    fn direct_solution(
+        &self,
+        settings: &Settings,
+        solver: &ik::Solver,
+        pulse_us: [f32; LEGS],
+    ) -> Result<Solution, PoseError> {
+        for (i, (servo, &pulse)) in settings.servos.0.iter().zip(&pulse_us).enumerate() {
+            if !servo.allows(pulse) {
+                return Err(IkError::ServoLimit {
+                    servo: i as u8 + 1,
+                    pulse_us: pulse,
+                    min_us: servo.min_us,
+                    max_us: servo.max_us,
+                }
+                .into());
+            }
+        }
+        // Finite pulses within valid servo settings: finite angles.
+        let arm_rad =
+            forward::arm_angles_for_pulses(solver, &settings.servos, &pulse_us).map_err(|_| {
+                IkError::NonFinite {
+                    axis: kinematics_core::pose::Axis::X,
+                }
+            })?;
+        Ok(Solution { arm_rad, pulse_us })
+    }
+
+    /// Starts finding the pose of `solution`'s arm angles (forward kinematics), from the pose
+    /// the platform was last known at.
+    fn start_locate(
+        &mut self,
+        why: Relocate,
+        candidate: Settings,
+        solver: ik::Solver,
+        solution: Solution,
+    ) {
+        let stage = match forward::Closure::arms::<M>(&solver, &solution.arm_rad) {
+            Ok(closure) => LocateStage::Newton(Newton::new(
+                closure,
+                *self.motion.pose(),
+                forward::Options::default(),
+            )),
+            // (Only for angles that are not finite, which pulses within limits never give.)
+            Err(e) => LocateStage::NoPose(e),
+        };
+        self.job = Some(Job::Locate {
+            why,
+            candidate,
+            solver,
+            solution,
+            stage,
+        });
+    }
+
+    /// One step of finding the pose of pulses set directly: a Newton iteration, the IK's
+    /// agreement, the holding torques. `None` while steps remain, then the outcome: committed
+    /// (with the pose, or knowing there is none), or refused (a servo would be overloaded).
+    fn locate_step(
+        &mut self,
+        why: Relocate,
+        candidate: Settings,
+        solver: ik::Solver,
+        solution: Solution,
+        stage: LocateStage,
+    ) -> Option<Result<(), Error>> {
+        let next = match stage {
+            LocateStage::Newton(mut newton) => match newton.step::<M>() {
+                None => LocateStage::Newton(newton),
+                Some(Ok(found)) => LocateStage::Arms(found.pose),
+                Some(Err(e)) => LocateStage::NoPose(e),
+            },
+            LocateStage::Arms(pose) => {
+                match forward::check_arms::<M>(&solver, &pose, &solution.arm_rad) {
+                    Err(e) => LocateStage::NoPose(e),
+                    Ok(()) if candidate.payload.checked() => LocateStage::Torque(pose),
+                    Ok(()) => {
+                        self.commit_direct(why, candidate, solver, solution, Ok(pose));
+                        return Some(Ok(()));
+                    }
+                }
+            }
+            LocateStage::Torque(pose) => {
+                let held = candidate
+                    .payload
+                    .check::<M>(&solver, &pose, &solution.arm_rad);
+                return Some(match (held, why) {
+                    (Ok(()), _) => {
+                        self.commit_direct(why, candidate, solver, solution, Ok(pose));
+                        Ok(())
+                    }
+                    (Err(e), Relocate::Servo) => Err(Error::Torque(e)),
+                    (Err(e), Relocate::Settings) => Err(Error::PoseConflict { cause: e.into() }),
+                });
+            }
+            LocateStage::NoPose(e) => {
+                // Pulses that correspond to no pose are given all the same (rods unhooked,
+                // calibration): moves are refused until they do again.
+                self.commit_direct(why, candidate, solver, solution, Err(e));
+                return Some(Ok(()));
+            }
+        };
+        self.job = Some(Job::Locate {
+            why,
+            candidate,
+            solver,
+            solution,
+            stage: next,
+        });
+        None
+    }
+
+    /// Gives pulses set directly, with their settings, and where they put the platform.
+    fn commit_direct(
+        &mut self,
+        why: Relocate,
+        candidate: Settings,
+        solver: ik::Solver,
+        solution: Solution,
+        located: Located,
+    ) {
+        if why == Relocate::Servo {
+            // Like an accepted move: the stream ends, the servos are powered, a fault is
+            // cleared.
+            self.end_stream();
+            self.returning_home = false;
+            self.servo_power = true;
+            self.fault = None;
+        }
+        if candidate != self.settings {
+            self.generation = self.generation.wrapping_add(1);
+        }
+        self.settings = candidate;
+        self.solver = solver;
+        self.new_pulses |= solution.pulse_us != self.solution.pulse_us;
+        self.solution = solution;
+        if let Ok(pose) = located {
+            self.motion = Motion::new(pose);
+        }
+        self.direct = Some(located);
     }
 
     fn status(&self) -> StatusReport {
@@ -1240,6 +1790,7 @@ impl<M: Math> Controller<M> {
             None if self.stream.is_some() => MotionReport::Streaming {
                 tracking: self.track_limits() != TrackLimits::OFF,
             },
+            None if self.direct.is_some() => MotionReport::Direct,
             None => MotionReport::Idle,
             Some((done, total)) => {
                 let (elapsed_s, duration_s) = (done as f32 / hz, total as f32 / hz);
@@ -1271,7 +1822,21 @@ impl<M: Math> Controller<M> {
             stream: self.stream_counts,
             estop: self.estop,
             servo_power: self.servo_power,
+            pulse_pose: self.direct,
+            // Computed in a slice of their own (Job::Status).
+            torque_kgcm: None,
         }
+    }
+
+    /// The holding torques `status` shows: at its pose, with its arm angles (with pulses set
+    /// by `servo` that correspond to no pose, there are none).
+    fn status_torques(&self, report: &StatusReport) -> Torques {
+        if let Some(Err(e)) = report.pulse_pose {
+            return Err(e);
+        }
+        self.settings
+            .payload
+            .holding_torques_kgcm::<M>(&self.solver, &report.pose, &report.arm_rad)
     }
 
     // ----- link loss -----
@@ -1306,15 +1871,24 @@ impl<M: Math> Controller<M> {
         }
     }
 
-    /// Link loss, but home cannot be reached: stop and hold, and say so.
+    /// Link loss (or the e-stop's `home`), but home cannot be reached: stop and hold, and say
+    /// so.
     fn home_blocked(&mut self, e: Error) {
         self.motion.stop();
-        let cause = match e {
-            Error::Pose(cause) | Error::PathBlocked { cause, .. } => cause,
-            // Only the two above come from a path.
-            _ => IkError::Unreachable { leg: 0 },
+        let fault = match e {
+            Error::Pose(cause) => Fault::HomeBlocked {
+                cause: cause.into(),
+            },
+            Error::Torque(cause) => Fault::HomeBlocked {
+                cause: cause.into(),
+            },
+            Error::PathBlocked { cause, .. } => Fault::HomeBlocked { cause },
+            Error::NoPose(cause) => Fault::NoPose { cause },
+            // Only the four above come from a path.
+            _ => Fault::HomeBlocked {
+                cause: IkError::Unreachable { leg: 0 }.into(),
+            },
         };
-        let fault = Fault::HomeBlocked { cause };
         self.fault = Some(fault);
         self.notify(Notice::Fault(fault));
     }

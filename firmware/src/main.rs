@@ -190,7 +190,8 @@ fn main() -> ! {
                     None => break,
                 }
             }
-            // The newest stream frame among those just fed (in pass-through, written now).
+            // The newest stream frame among those just fed, checked (and clamped) a slice per
+            // pass (in pass-through, written once checked).
             controller.apply_stream();
             write_new_pulses(&mut controller, &mut servos);
         }
@@ -238,11 +239,12 @@ fn main() -> ! {
         // waiting for the last bytes to leave is: no interrupt says when the UART goes idle,
         // so the loop stays awake until it has switched (decided after the switch above, so
         // the UART going idle between the two cannot put the loop to sleep with the switch
-        // still to do).
+        // still to do). Neither is a stream target still being checked (a slice per pass).
         let room = serial.has_room_for_step();
         let waiting_for_tx = controller.baud() != serial.baud() && !serial.tx_pending();
         sleep_unless(|| {
             (room && (controller.is_busy() || serial.rx_pending()))
+                || controller.stream_pending()
                 || servos.frame_pending()
                 || waiting_for_tx
         });

@@ -10,10 +10,12 @@ use kinematics_core::ik::IkError;
 use kinematics_core::servo::{
     ServoError, ServoField, MAX_PULSE_US, MAX_RATE_US_PER_RAD, MIN_PULSE_US, MIN_RATE_US_PER_RAD,
 };
+use kinematics_core::KinematicsError;
 
 use super::format::Fixed;
-use crate::command::{Missing, ParseError, Verb};
-use crate::error::Error;
+use crate::command::{Field, Missing, ParseError, Verb};
+use crate::error::{Error, PoseError};
+use crate::payload::TorqueError;
 use crate::protocol::{Lost, Spoiled, MAX_LINE};
 use crate::safety::{Estop, FREE_GPIOS};
 use crate::settings::{Expected, SettingError};
@@ -77,11 +79,15 @@ pub enum Code {
     Estop,
     /// The settings could not be written to flash.
     SaveFailed,
+    /// The target pose would need more torque of a servo than its rating, with the payload.
+    TorqueLimit,
+    /// The pulses set with `servo` correspond to no pose, so there is no pose to move from.
+    NoPose,
 }
 
 impl Code {
     /// Every code, for documentation checks.
-    pub const ALL: [Code; 27] = [
+    pub const ALL: [Code; 29] = [
         Code::LineTooLong,
         Code::RxOverflow,
         Code::BadCharacter,
@@ -109,6 +115,8 @@ impl Code {
         Code::SettingConflict,
         Code::Estop,
         Code::SaveFailed,
+        Code::TorqueLimit,
+        Code::NoPose,
     ];
 
     /// The code as written after `error:`.
@@ -141,6 +149,8 @@ impl Code {
             Code::SettingConflict => "setting-conflict",
             Code::Estop => "e-stop",
             Code::SaveFailed => "save-failed",
+            Code::TorqueLimit => "torque-limit",
+            Code::NoPose => "no-pose",
         }
     }
 }
@@ -159,6 +169,9 @@ impl Error {
             Error::Parse(e) => e.code(),
             Error::Setting(e) => e.code(),
             Error::Pose(e) => ik_code(e),
+            Error::Torque(_) => Code::TorqueLimit,
+            Error::PulseOutsideLimits { .. } => Code::ServoLimit,
+            Error::NoPose(_) => Code::NoPose,
             Error::PathBlocked { .. } => Code::PathBlocked,
             Error::PoseConflict { .. } => Code::PoseConflict,
             Error::Busy | Error::Pending => Code::Busy,
@@ -200,6 +213,7 @@ impl ParseError {
             ParseError::DuplicateAxis { .. } => Code::DuplicateAxis,
             ParseError::BadAssignment { .. } => Code::BadAssignment,
             ParseError::UnknownSetting { .. } => Code::UnknownSetting,
+            ParseError::BadServo { .. } => Code::BadValue,
             ParseError::Setting(e) => e.code(),
         }
     }
@@ -231,6 +245,7 @@ pub const fn usage(verb: Verb) -> &'static str {
         Verb::Move => "move <axis>=<value> ... (axes x y z roll pitch yaw)",
         Verb::Nudge => "nudge <axis>=<delta> ... (axes x y z roll pitch yaw)",
         Verb::Set => "set <name> <value> (names as listed by config)",
+        Verb::Servo => "servo <1-6> <us>",
         // The others take nothing: their usage is their name.
         other => other.name(),
     }
@@ -245,16 +260,35 @@ impl Display for Error {
             Error::Parse(e) => e.fmt(f),
             Error::Setting(e) => e.fmt(f),
             Error::Pose(e) => IkMessage(e).fmt(f),
+            Error::Torque(e) => TorqueMessage(e).fmt(f),
             Error::PathBlocked { percent, cause } => write!(
                 f,
                 "the straight path from the current pose is blocked {}% of the way: {}; nothing moved",
                 Fixed(*percent, 1),
-                IkMessage(cause)
+                PoseMessage(cause)
             ),
             Error::PoseConflict { cause } => write!(
                 f,
                 "with that setting the current pose could not be held: {}; send home first",
-                IkMessage(cause)
+                PoseMessage(cause)
+            ),
+            Error::PulseOutsideLimits {
+                servo,
+                pulse_us,
+                min_us,
+                max_us,
+            } => write!(
+                f,
+                "servo {servo}: {} us is outside its limits {}..{} us (servo{servo}.min_us, max_us)",
+                Fixed(*pulse_us, 2),
+                Fixed(*min_us, 2),
+                Fixed(*max_us, 2)
+            ),
+            Error::NoPose(e) => write!(
+                f,
+                "the pulses set with servo correspond to no pose of the platform ({}); \
+                 drive the servos back with servo first (servoN.trim_us is home)",
+                KinematicsMessage(e)
             ),
             Error::Busy => f.write_str("the platform is moving; wait for it or send stop first"),
             Error::Pending => f.write_str(
@@ -321,6 +355,8 @@ impl Display for ParseError {
             ParseError::MissingField { what, verb } => {
                 let what = match what {
                     Missing::Axis(axis) => axis.name(),
+                    Missing::ServoNumber => "servo number",
+                    Missing::PulseUs => "pulse_us",
                     Missing::AxisValue => "axis=value",
                     Missing::SettingName => "name",
                     Missing::SettingValue => "value",
@@ -330,14 +366,21 @@ impl Display for ParseError {
             ParseError::ExtraField { word, verb } => {
                 write!(f, "unexpected '{word}'; usage: {}", usage(*verb))
             }
-            ParseError::BadNumber { axis, word } => {
-                write!(f, "{}: '{word}' is not a decimal number", axis.name())
+            ParseError::BadNumber { field, word } => {
+                write!(
+                    f,
+                    "{}: '{word}' is not a decimal number",
+                    field_name(*field)
+                )
             }
-            ParseError::NotFinite { axis, word } => {
-                write!(f, "{}: '{word}' is not a finite number", axis.name())
+            ParseError::NotFinite { field, word } => {
+                write!(f, "{}: '{word}' is not a finite number", field_name(*field))
             }
-            ParseError::NumberTooLarge { axis, word } => {
-                write!(f, "{}: '{word}' is too large", axis.name())
+            ParseError::NumberTooLarge { field, word } => {
+                write!(f, "{}: '{word}' is too large", field_name(*field))
+            }
+            ParseError::BadServo { word } => {
+                write!(f, "'{word}' is not a servo number; servos are 1 to 6")
             }
             ParseError::UnknownAxis { word } => {
                 write!(f, "'{word}' is not an axis; axes are x y z roll pitch yaw")
@@ -430,6 +473,84 @@ impl Display for SettingError {
                 f,
                 "estop_pin and power_pin cannot both be GPIO {pin}; nothing changed"
             ),
+        }
+    }
+}
+
+/// The name of a number a command takes, as errors show it.
+fn field_name(field: Field) -> &'static str {
+    match field {
+        Field::Axis(axis) => axis.name(),
+        Field::PulseUs => "pulse_us",
+    }
+}
+
+/// The message for a pose's refusal, whatever refused it (paths, conflicts, faults, `limits`).
+pub(super) struct PoseMessage<'a>(pub &'a PoseError);
+
+impl Display for PoseMessage<'_> {
+    fn fmt(&self, f: &mut Formatter<'_>) -> fmt::Result {
+        match self.0 {
+            PoseError::Ik(e) => IkMessage(e).fmt(f),
+            PoseError::Torque(e) => TorqueMessage(e).fmt(f),
+        }
+    }
+}
+
+/// The message for a pose that would overload a servo.
+pub(super) struct TorqueMessage<'a>(pub &'a TorqueError);
+
+impl Display for TorqueMessage<'_> {
+    fn fmt(&self, f: &mut Formatter<'_>) -> fmt::Result {
+        match *self.0 {
+            TorqueError::Over {
+                servo,
+                needed_kgcm,
+                rated_kgcm,
+            } => write!(
+                f,
+                "servo {servo} would need {} kgf cm to hold the payload, over its rating {} kgf cm",
+                Fixed(needed_kgcm.abs(), 3),
+                Fixed(rated_kgcm, 2)
+            ),
+            TorqueError::Unknown(ref e) => write!(
+                f,
+                "the servos' holding torques are unbounded there ({})",
+                KinematicsMessage(e)
+            ),
+        }
+    }
+}
+
+/// The message for what the kinematics beyond the IK (the forward kinematics, the statics)
+/// cannot compute.
+pub(super) struct KinematicsMessage<'a>(pub &'a KinematicsError);
+
+impl Display for KinematicsMessage<'_> {
+    fn fmt(&self, f: &mut Formatter<'_>) -> fmt::Result {
+        match *self.0 {
+            KinematicsError::Ik(ref e) => IkMessage(e).fmt(f),
+            KinematicsError::Stroke { leg, .. } => {
+                write!(f, "leg {leg} would leave its stroke")
+            }
+            KinematicsError::ZeroLength { leg } => {
+                write!(f, "leg {leg}'s rod would have no length")
+            }
+            KinematicsError::DeadCentre { leg } => {
+                write!(f, "leg {leg}'s arm is at dead centre, square to its rod")
+            }
+            KinematicsError::ElbowFlipped { leg } => {
+                write!(f, "leg {leg}'s arm would have to fold through its rod")
+            }
+            KinematicsError::Singular { .. } => f.write_str("the platform is at a singular pose"),
+            KinematicsError::GimbalLock { .. } => {
+                f.write_str("pitch at +-90 deg, where roll and yaw are not defined")
+            }
+            KinematicsError::NotConverged { iterations, .. } => write!(
+                f,
+                "the rods cannot all reach their joints: no pose found in {iterations} iterations"
+            ),
+            KinematicsError::NonFinite { .. } => f.write_str("a value is not a finite number"),
         }
     }
 }

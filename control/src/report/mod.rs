@@ -46,9 +46,12 @@ mod tests {
     use kinematics_core::pose::Axis;
     use kinematics_core::servo::{ServoError, ServoField};
 
+    use kinematics_core::KinematicsError;
+
     use super::*;
-    use crate::command::{Missing, ParseError, Verb};
-    use crate::error::Error;
+    use crate::command::{Field, Missing, ParseError, Verb};
+    use crate::error::{Error, PoseError};
+    use crate::payload::TorqueError;
     use crate::protocol::{Lost, Spoiled};
     use crate::safety::Estop;
     use crate::settings::{
@@ -76,17 +79,18 @@ mod tests {
                 verb: Verb::Home,
             }),
             Error::Parse(ParseError::BadNumber {
-                axis: Axis::X,
+                field: Field::Axis(Axis::X),
                 word: word("abc"),
             }),
             Error::Parse(ParseError::NotFinite {
-                axis: Axis::Roll,
+                field: Field::Axis(Axis::Roll),
                 word: word("nan"),
             }),
             Error::Parse(ParseError::NumberTooLarge {
-                axis: Axis::Z,
+                field: Field::PulseUs,
                 word: word("1e39"),
             }),
+            Error::Parse(ParseError::BadServo { word: word("7") }),
             Error::Parse(ParseError::UnknownAxis { word: word("w") }),
             Error::Parse(ParseError::DuplicateAxis { axis: Axis::Z }),
             Error::Parse(ParseError::BadAssignment { word: word("z") }),
@@ -133,16 +137,45 @@ mod tests {
             Error::Pose(IkError::NonFinite { axis: Axis::Y }),
             Error::PathBlocked {
                 percent: 42.0,
-                cause: IkError::Unreachable { leg: 5 },
+                cause: PoseError::Ik(IkError::Unreachable { leg: 5 }),
+            },
+            Error::PathBlocked {
+                percent: 7.5,
+                cause: PoseError::Torque(TorqueError::Over {
+                    servo: 3,
+                    needed_kgcm: -4.25,
+                    rated_kgcm: 4.0,
+                }),
             },
             Error::PoseConflict {
-                cause: IkError::ServoLimit {
+                cause: PoseError::Ik(IkError::ServoLimit {
                     servo: 1,
                     pulse_us: 1000.0,
                     min_us: 1100.0,
                     max_us: 1900.0,
-                },
+                }),
             },
+            Error::PoseConflict {
+                cause: PoseError::Torque(TorqueError::Unknown(KinematicsError::DeadCentre {
+                    leg: 2
+                })),
+            },
+            Error::Torque(TorqueError::Over {
+                servo: 6,
+                needed_kgcm: 12.5,
+                rated_kgcm: 10.0,
+            }),
+            Error::PulseOutsideLimits {
+                servo: 2,
+                pulse_us: 2000.0,
+                min_us: 1100.0,
+                max_us: 1900.0,
+            },
+            Error::NoPose(KinematicsError::NotConverged {
+                iterations: 8,
+                residual: 0.5,
+            }),
+            Error::NoPose(KinematicsError::ElbowFlipped { leg: 4 }),
             Error::Busy,
             Error::Pending,
             Error::Setting(SettingError::StreamAxisTwice {
@@ -281,6 +314,31 @@ mod tests {
         assert_eq!(
             text(Error::Parse(ParseError::NoCommand)),
             "only separators, no command; type help"
+        );
+        assert_eq!(
+            text(Error::Torque(TorqueError::Over {
+                servo: 3,
+                needed_kgcm: -4.2512,
+                rated_kgcm: 4.0,
+            })),
+            "servo 3 would need 4.251 kgf cm to hold the payload, over its rating 4.00 kgf cm"
+        );
+        assert_eq!(
+            text(Error::PulseOutsideLimits {
+                servo: 2,
+                pulse_us: 2000.0,
+                min_us: 1100.0,
+                max_us: 1900.0,
+            }),
+            "servo 2: 2000.00 us is outside its limits 1100.00..1900.00 us (servo2.min_us, max_us)"
+        );
+        assert!(
+            text(Error::NoPose(KinematicsError::ElbowFlipped { leg: 4 }))
+                .contains("(leg 4's arm would have to fold through its rod)")
+        );
+        assert_eq!(
+            text(Error::Parse(ParseError::BadServo { word: word("7") })),
+            "'7' is not a servo number; servos are 1 to 6"
         );
     }
 }

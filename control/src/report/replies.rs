@@ -4,11 +4,13 @@
 use core::fmt::{self, Display, Formatter, Write};
 
 use kinematics_core::ik::{IkError, Solver};
-use kinematics_core::{Pose, LEGS};
+use kinematics_core::workspace::{Limit, Reach, Sense};
+use kinematics_core::{KinematicsError, Pose, LEGS};
 
-use super::errors::{Bytes, IkMessage};
+use super::errors::{Bytes, IkMessage, KinematicsMessage, PoseMessage};
 use super::format::{degrees, Fixed, PoseText, Six, ValueText, Vector};
-use crate::error::Error;
+use crate::error::{Error, PoseError};
+use crate::payload::TorqueError;
 use crate::protocol::Feed;
 use crate::record::{DecodeError, FORMAT_VERSION};
 use crate::safety::{Estop, EstopAction};
@@ -85,8 +87,10 @@ pub const HELP: &[&str] = &[
     "  move <axis>=<value> ...                move the named axes to these values (absolute)",
     "  nudge <axis>=<delta> ...               move the named axes by these amounts (relative)",
     "  check <x> <y> <z> <roll> <pitch> <yaw> would pose accept this? pulses and duration; nothing moves",
+    "  limits                                 how far each axis reaches from here, both ways, and why",
     "  home                                   move back to the home pose",
     "  stop                                   freeze where it is now (also ends a stream)",
+    "  servo <1-6> <us>                       drive one servo to a pulse (the others hold), e.g. to calibrate",
     "  reset                                  clear the emergency stop once its input is closed",
     "  status (or ?)                          pose, target, motion, arm angles, pulse widths",
     "  geometry                               the active geometry",
@@ -99,7 +103,8 @@ pub const HELP: &[&str] = &[
     "moves run in a straight line at speed_mm_s / speed_deg_s (0 or off: jump), accel_* ramps",
     "stream frames (binary A5 5A ... 0D 0A, or text 127,127,127,127,127,127X) set the target;",
     "  each axis follows at speed_* / accel_*; unreachable targets are clamped (see stream.*)",
-    "servo settings: servo<1-6>.<trim_us|rate_us_rad|dir|min_us|max_us>, servos.<...> sets all six",
+    "servo settings: servo<1-6>.<trim_us|rate_us_rad|dir|min_us|max_us|torque_kgcm>, servos.<...> sets all six",
+    "payload_g and payload_com_*_mm: check and status show the holding torques (kgf cm)",
     "editing: backspace erases, ctrl-u erases the line, ctrl-c or ctrl-x abandons it; set echo off for programs",
 ];
 
@@ -134,6 +139,8 @@ pub enum MotionReport {
         /// Each axis follows within the speed and acceleration limits (not pass-through).
         tracking: bool,
     },
+    /// Holding pulses set one servo at a time (`servo`).
+    Direct,
 }
 
 /// Stream frames counted since start-up, for `status`.
@@ -162,10 +169,17 @@ pub enum Fault {
         /// Where it stopped.
         held: Pose,
     },
-    /// The link timed out but the way home is blocked: the platform holds its pose.
+    /// The link timed out (or the e-stop opened, to go home) but the way home is blocked: the
+    /// platform holds its pose.
     HomeBlocked {
         /// Why.
-        cause: IkError,
+        cause: PoseError,
+    },
+    /// The way home could not even be planned: the pulses set with `servo` correspond to no
+    /// pose. The platform holds them.
+    NoPose {
+        /// Why there is no pose (the forward kinematics' error).
+        cause: KinematicsError,
     },
 }
 
@@ -181,7 +195,12 @@ impl Display for Fault {
             Fault::HomeBlocked { cause } => write!(
                 f,
                 "link lost but the way home is blocked: {}; holding",
-                IkMessage(cause)
+                PoseMessage(cause)
+            ),
+            Fault::NoPose { cause } => write!(
+                f,
+                "cannot go home: the pulses set with servo correspond to no pose ({}); holding",
+                KinematicsMessage(cause)
             ),
         }
     }
@@ -361,6 +380,12 @@ pub struct StatusReport {
     pub estop: Estop,
     /// The servo-power output is on.
     pub servo_power: bool,
+    /// With pulses set by `servo`: the pose they correspond to (the forward kinematics), or
+    /// why there is none. `None` otherwise (the pulses are the IK's for `pose`).
+    pub pulse_pose: Option<Result<Pose, KinematicsError>>,
+    /// With a payload: each servo's holding torque at the pose (kgf cm), or why it cannot be
+    /// computed. `None` without a payload.
+    pub torque_kgcm: Option<Result<[f32; LEGS], KinematicsError>>,
 }
 
 /// A reply of several data lines. It may be written a line at a time (the controller writes
@@ -384,8 +409,17 @@ pub enum Listing {
         arm_rad: [f32; LEGS],
         /// Pulse widths, us.
         pulse_us: [f32; LEGS],
+        /// With a payload, the holding torques there, kgf cm.
+        torque_kgcm: Option<Result<[f32; LEGS], KinematicsError>>,
         /// How long the move would take, s.
         duration_s: f32,
+    },
+    /// `limits`: the reach along each axis-direction from `start`.
+    Limits {
+        /// Where the search started.
+        start: Pose,
+        /// The twelve reaches, x- first (see [`kinematics_core::workspace::axis_directions`]).
+        reaches: [Reach<PoseError>; 12],
     },
 }
 
@@ -410,16 +444,31 @@ impl Listing {
             Listing::Check {
                 arm_rad,
                 pulse_us,
+                torque_kgcm,
                 duration_s,
             } => {
-                match index {
-                    0 => line(out, format_args!("arm_deg: {}", Six(&degrees(arm_rad), 3))),
-                    1 => line(out, format_args!("pulse_us: {}", Six(pulse_us, 2))),
-                    2 => line(out, format_args!("duration_s: {}", Fixed(*duration_s, 3))),
+                // The torque line is there only with a payload.
+                let index = if torque_kgcm.is_none() && index >= 2 {
+                    index + 1
+                } else {
+                    index
+                };
+                match (index, torque_kgcm) {
+                    (0, _) => line(out, format_args!("arm_deg: {}", Six(&degrees(arm_rad), 3))),
+                    (1, _) => line(out, format_args!("pulse_us: {}", Six(pulse_us, 2))),
+                    (2, Some(torques)) => torque_line(out, torques),
+                    (3, _) => line(out, format_args!("duration_s: {}", Fixed(*duration_s, 3))),
                     _ => return false,
                 }
                 true
             }
+            Listing::Limits { start, reaches } => match reaches.get(index) {
+                Some(reach) => {
+                    line(out, format_args!("{}", ReachText(start, reach)));
+                    true
+                }
+                None => false,
+            },
         }
     }
 
@@ -432,9 +481,135 @@ impl Listing {
     }
 }
 
+/// `torque_kgcm: ...` (six signed holding torques, kgf cm, 3 decimals) or why there are none.
+fn torque_line(out: &mut impl Write, torques: &Result<[f32; LEGS], KinematicsError>) {
+    match torques {
+        Ok(t) => line(out, format_args!("torque_kgcm: {}", Six(t, 3))),
+        Err(e) => line(
+            out,
+            format_args!("torque_kgcm: none ({})", KinematicsMessage(e)),
+        ),
+    }
+}
+
+/// One line of `limits`: `x-: 23.456 mm to x=-23.456 (servo 2 at max_us 1900.00 us)`.
+struct ReachText<'a>(&'a Pose, &'a Reach<PoseError>);
+
+impl Display for ReachText<'_> {
+    fn fmt(&self, f: &mut Formatter<'_>) -> fmt::Result {
+        let ReachText(start, reach) = *self;
+        let (scale, unit) = if reach.axis.is_angle() {
+            (1.0f32.to_degrees(), "deg")
+        } else {
+            (1.0, "mm")
+        };
+        let sign = match reach.sense {
+            Sense::Minus => '-',
+            Sense::Plus => '+',
+        };
+        write!(
+            f,
+            "{}{sign}: {} {unit} to {}={} (",
+            reach.axis.name(),
+            Fixed(reach.distance * scale, 3),
+            reach.axis.name(),
+            Fixed(reach.extreme(start) * scale, 3),
+        )?;
+        match &reach.limit {
+            Limit::Blocked(cause) => StopText(cause).fmt(f)?,
+            Limit::Range => write!(
+                f,
+                "nothing stops it within {} {unit}",
+                Fixed(reach.distance * scale, 0)
+            )?,
+            Limit::Start(cause) => write!(f, "the pose itself: {}", PoseMessage(cause))?,
+        }
+        f.write_str(")")
+    }
+}
+
+/// What stops an excursion, in a few words.
+struct StopText<'a>(&'a PoseError);
+
+impl Display for StopText<'_> {
+    fn fmt(&self, f: &mut Formatter<'_>) -> fmt::Result {
+        match *self.0 {
+            PoseError::Ik(IkError::Unreachable { leg }) => {
+                write!(f, "leg {leg} out of reach")
+            }
+            PoseError::Ik(IkError::ServoLimit {
+                servo,
+                pulse_us,
+                min_us,
+                max_us,
+            }) => {
+                let (name, limit) = if pulse_us > max_us {
+                    ("max_us", max_us)
+                } else {
+                    ("min_us", min_us)
+                };
+                write!(f, "servo {servo} at {name} {} us", Fixed(limit, 2))
+            }
+            PoseError::Ik(IkError::AngleTooLarge { axis, .. }) => {
+                write!(f, "{} at +-180 deg", axis.name())
+            }
+            PoseError::Ik(e @ IkError::NonFinite { .. }) => IkMessage(&e).fmt(f),
+            PoseError::Torque(TorqueError::Over {
+                servo, rated_kgcm, ..
+            }) => write!(
+                f,
+                "servo {servo} at its torque rating {} kgf cm",
+                Fixed(rated_kgcm, 2)
+            ),
+            PoseError::Torque(TorqueError::Unknown(ref e)) => {
+                write!(f, "unbounded holding torques: {}", KinematicsMessage(e))
+            }
+        }
+    }
+}
+
+/// The lines of `status`, in order; some only sometimes.
+#[derive(Clone, Copy)]
+enum StatusLine {
+    State,
+    Pose,
+    Target,
+    ArmDeg,
+    PulseUs,
+    PulsePose,
+    Torque,
+    Stream,
+    Estop,
+    ServoPower,
+    Fault,
+}
+
 fn status_line(out: &mut impl Write, s: &StatusReport, index: usize) -> bool {
-    match index {
-        0 => match s.motion {
+    use StatusLine as L;
+    let lines = [
+        L::State,
+        L::Pose,
+        L::Target,
+        L::ArmDeg,
+        L::PulseUs,
+        L::PulsePose,
+        L::Torque,
+        L::Stream,
+        L::Estop,
+        L::ServoPower,
+        L::Fault,
+    ];
+    let shown = |l: &&StatusLine| match l {
+        L::PulsePose => s.pulse_pose.is_some(),
+        L::Torque => s.torque_kgcm.is_some(),
+        L::Fault => s.fault.is_some(),
+        _ => true,
+    };
+    let Some(&which) = lines.iter().filter(shown).nth(index) else {
+        return false;
+    };
+    match which {
+        L::State => match s.motion {
             MotionReport::Idle => line(out, format_args!("state: idle")),
             MotionReport::Moving {
                 elapsed_s,
@@ -475,15 +650,31 @@ fn status_line(out: &mut impl Write, s: &StatusReport, index: usize) -> bool {
             MotionReport::Streaming { tracking: false } => {
                 line(out, format_args!("state: streaming (pass-through)"))
             }
+            MotionReport::Direct => {
+                line(out, format_args!("state: direct (pulses set with servo)"))
+            }
         },
-        1 => line(out, format_args!("pose: {}", PoseText(&s.pose))),
-        2 => line(out, format_args!("target: {}", PoseText(&s.target))),
-        3 => line(
+        L::Pose => line(out, format_args!("pose: {}", PoseText(&s.pose))),
+        L::Target => line(out, format_args!("target: {}", PoseText(&s.target))),
+        L::ArmDeg => line(
             out,
             format_args!("arm_deg: {}", Six(&degrees(&s.arm_rad), 3)),
         ),
-        4 => line(out, format_args!("pulse_us: {}", Six(&s.pulse_us, 2))),
-        5 => {
+        L::PulseUs => line(out, format_args!("pulse_us: {}", Six(&s.pulse_us, 2))),
+        L::PulsePose => match &s.pulse_pose {
+            Some(Ok(pose)) => line(out, format_args!("pulse_pose: {}", PoseText(pose))),
+            Some(Err(e)) => line(
+                out,
+                format_args!("pulse_pose: none ({})", KinematicsMessage(e)),
+            ),
+            None => {}
+        },
+        L::Torque => {
+            if let Some(torques) = &s.torque_kgcm {
+                torque_line(out, torques);
+            }
+        }
+        L::Stream => {
             let c = &s.stream;
             line(
                 out,
@@ -493,7 +684,7 @@ fn status_line(out: &mut impl Write, s: &StatusReport, index: usize) -> bool {
                 ),
             )
         }
-        6 => line(
+        L::Estop => line(
             out,
             format_args!(
                 "e-stop: {}",
@@ -504,15 +695,15 @@ fn status_line(out: &mut impl Write, s: &StatusReport, index: usize) -> bool {
                 }
             ),
         ),
-        7 => line(
+        L::ServoPower => line(
             out,
             format_args!("servo_power: {}", if s.servo_power { "on" } else { "off" }),
         ),
-        8 => match &s.fault {
-            Some(fault) => line(out, format_args!("fault: {fault}")),
-            None => return false,
-        },
-        _ => return false,
+        L::Fault => {
+            if let Some(fault) = &s.fault {
+                line(out, format_args!("fault: {fault}"));
+            }
+        }
     }
     true
 }

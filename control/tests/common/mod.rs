@@ -141,6 +141,20 @@ impl Host {
             .collect()
     }
 
+    /// Applies the newest stream frame as the board does: a slice of its check per main-loop
+    /// pass, until it is applied; returns how many passes (calls) that took.
+    pub fn apply_stream(&mut self) -> u32 {
+        let mut calls = 0;
+        loop {
+            self.ctl.apply_stream();
+            calls += 1;
+            if !self.ctl.stream_pending() {
+                return calls;
+            }
+            assert!(calls < 1000, "a stream target's check never ends");
+        }
+    }
+
     /// Runs frames until the move ends; returns how many it took.
     pub fn run_until_idle(&mut self) -> usize {
         let mut n = 0;
