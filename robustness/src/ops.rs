@@ -140,6 +140,11 @@ pub const SETTING_NAMES: &[&str] = &[
     "servos.dir",
     "servos.min_us",
     "servos.max_us",
+    "payload_g",
+    "payload_com_x_mm",
+    "payload_com_z_mm",
+    "servo2.torque_kgcm",
+    "servos.torque_kgcm",
     "servo0.trim_us",
     "servo7.min_us",
     "servo1.colour",
@@ -182,6 +187,10 @@ pub enum Cmd {
     Move(Vec<(u8, Num)>),
     /// `nudge axis=value ...`.
     Nudge(Vec<(u8, Num)>),
+    /// `servo n us` (n as typed: mostly 1..=6, sometimes not a servo).
+    Servo(u8, Num),
+    /// `limits`
+    Limits,
     /// `home`
     Home,
     /// `stop`
@@ -252,6 +261,22 @@ impl Cmd {
             Cmd::Check(v) => join("check", v.iter().map(Num::text).collect()),
             Cmd::Move(v) => join("move", assignments(v)),
             Cmd::Nudge(v) => join("nudge", assignments(v)),
+            Cmd::Servo(n, us) => {
+                // Mostly a servo, and pulses near the servo range (which Int and Fixed rarely
+                // reach on their own).
+                let servo = match n % 8 {
+                    0 => "0".to_owned(),
+                    7 => "7".to_owned(),
+                    k => k.to_string(),
+                };
+                let pulse = match us {
+                    Num::Int(v) => format!("{}", 1500 + i32::from(*v) * 4),
+                    Num::Fixed(v) => format!("{:.2}", 1500.0 + f32::from(*v) / 40.0),
+                    other => other.text(),
+                };
+                join("servo", vec![servo, pulse])
+            }
+            Cmd::Limits => "limits".into(),
             Cmd::Home => "home".into(),
             Cmd::Stop => "stop".into(),
             Cmd::Status => "status".into(),

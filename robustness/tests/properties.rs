@@ -62,6 +62,8 @@ fn cmd() -> impl Strategy<Value = Cmd> {
         1 => Just(Cmd::Help),
         1 => Just(Cmd::Defaults),
         1 => Just(Cmd::Save),
+        3 => (any::<u8>(), num()).prop_map(|(n, us)| Cmd::Servo(n, us)),
+        1 => Just(Cmd::Limits),
         5 => (
             0..SETTING_NAMES.len() as u8,
             prop_oneof![
