@@ -58,14 +58,17 @@ export function defaultSettings() {
       arm_mm: 20,
       rod_mm: 120,
     },
-    // Even servos normal, odd reversed; 1600/pi us/rad; 1100..1900 us.
+    // Even servos normal, odd reversed; 1600/pi us/rad; 1100..1900 us; not rated.
     servos: SERVOS.map((n) => ({
       trim_us: 1500,
       rate_us_rad: 1600 / Math.PI,
       dir: n % 2 === 0 ? 'normal' : 'reversed',
       min_us: 1100,
       max_us: 1900,
+      torque_kgcm: 'off',
     })),
+    // No payload.
+    payload: { payload_g: 0, payload_com_x_mm: 0, payload_com_y_mm: 0, payload_com_z_mm: 0 },
   };
 }
 

@@ -41,15 +41,26 @@ export function buildHostReference() {
   return cachedBinary;
 }
 
+/** A setting's number as the reference takes it: `off` (or absent) is 0. */
+function orZero(value) {
+  const number = Number(value ?? 0);
+  return Number.isFinite(number) ? number : 0;
+}
+
 /**
- * Settings as the reference takes them: the paired layout and six servos, in the units and
- * names `set` uses. `servos[i]` is servo i + 1: `{ trim_us, rate_us_rad, dir, min_us, max_us }`.
+ * Settings as the reference takes them: the paired layout, six servos and the payload, in the
+ * units and names `set` uses. `servos[i]` is servo i + 1:
+ * `{ trim_us, rate_us_rad, dir, min_us, max_us, torque_kgcm }`; `payload` (optional) is
+ * `{ payload_g, payload_com_x_mm, payload_com_y_mm, payload_com_z_mm }`.
  */
-export function configLines({ layout, servos }) {
+export function configLines({ layout, servos, payload = {} }) {
   const l = layout;
+  const p = payload;
   return [
     `layout ${l.base_radius_mm} ${l.base_half_angle_deg} ${l.platform_radius_mm} ${l.platform_half_angle_deg} ${l.arm_mm} ${l.rod_mm}`,
     ...servos.map((s, i) => `servo ${i + 1} ${s.trim_us} ${s.rate_us_rad} ${s.dir} ${s.min_us} ${s.max_us}`),
+    `payload ${orZero(p.payload_g)} ${orZero(p.payload_com_x_mm)} ${orZero(p.payload_com_y_mm)} ${orZero(p.payload_com_z_mm)}`,
+    `ratings ${servos.map((s) => orZero(s.torque_kgcm)).join(' ')}`,
   ];
 }
 
@@ -101,5 +112,37 @@ export class HostReference {
   /** The core's geometry for these settings: `{ arm_mm, rod_mm, h0_mm, legs: [...] }`. */
   geometry(settings) {
     return this.runWith(settings, ['geometry'])[0];
+  }
+
+  /**
+   * The holding torques (kgf cm, signed) of the settings' payload at each pose:
+   * `{ ok: true, torque_kgcm }` or `{ ok: false, code, ... }`.
+   */
+  torques(settings, poses) {
+    return this.runWith(
+      settings,
+      poses.map((pose) => `torque ${pose.join(' ')}`),
+    );
+  }
+
+  /**
+   * The pose six pulses correspond to (the core's forward kinematics from `start`, checked
+   * with the IK): `{ ok: true, pose }` (mm, degrees) or `{ ok: false, code: 'no-pose', error }`.
+   */
+  forwardKinematics(settings, pulses, start = [0, 0, 0, 0, 0, 0]) {
+    return this.runWith(settings, [`fk ${pulses.join(' ')} ${start.join(' ')}`])[0];
+  }
+
+  /**
+   * The reach along each axis-direction from `pose` (x- first), within the servo limits and,
+   * with a payload and ratings, the ratings: `[{ axis, sense, distance, extreme, limit }]`
+   * (mm or degrees; `limit: { kind: 'blocked' | 'range' | 'start', code, ... }`).
+   */
+  limits(settings, pose) {
+    const [answer] = this.runWith(settings, [`limits ${pose.join(' ')}`]);
+    if (!answer.ok) {
+      throw new Error(`reference limits: ${JSON.stringify(answer)}`);
+    }
+    return answer.reaches;
   }
 }

@@ -43,9 +43,11 @@ before(() => {
 /**
  * Sends `line` and expects `error:<code> <message>` with the message matching `message`;
  * nothing may change: pins constant for 5 frames, status (pose, target, pulses) and config
- * identical; then a good line works.
+ * identical; then a good line works (`next`, with that many data lines: `check` by default,
+ * which has a fourth line, the holding torques, with a payload; `status` where there is no
+ * pose to check from).
  */
-function expectRefusal(board, line, code, message) {
+function expectRefusal(board, line, code, message, { next = ['check 1 1 1 1 1 1', 3] } = {}) {
   const before = { status: status(board), config: ok(board, 'config'), widths: widthsNanos(board) };
   let reply;
   const pulses = capture(board, () => {
@@ -59,7 +61,11 @@ function expectRefusal(board, line, code, message) {
   assert.deepEqual(after.target, before.status.target, 'target unchanged');
   assert.deepEqual(after.pulse_us, before.status.pulse_us, 'pulses unchanged');
   assert.deepEqual(ok(board, 'config'), before.config, 'settings unchanged');
-  assert.equal(ok(board, 'check 1 1 1 1 1 1').length, 3, 'the next good line works');
+  const [good, lines] = next;
+  const data = ok(board, good);
+  if (lines !== null) {
+    assert.equal(data.length, lines, 'the next good line works');
+  }
   return reply;
 }
 
@@ -123,6 +129,16 @@ const PARSE_CASES = [
   ['setting-conflict', 'set stream.axis2 x', /^stream\.axis1 and stream\.axis2 would both be x; .*; nothing changed$/],
   ['angle-too-large', 'pose 0 0 0 181 0 0', /^roll 181\.000 deg is beyond \+-180 deg$/],
   ['angle-too-large', 'check 0 0 0 0 -200 0', /^pitch -200\.000 deg is beyond \+-180 deg$/],
+  ['servo-limit', 'servo 2 2000', /^servo 2: 2000\.00 us is outside its limits 1100\.00\.\.1900\.00 us \(servo2\.min_us, max_us\)$/],
+  ['servo-limit', 'servo 5 1099.9', /^servo 5: 1099\.90 us is outside its limits 1100\.00\.\.1900\.00 us/],
+  ['bad-value', 'servo 7 1500', /^'7' is not a servo number; servos are 1 to 6$/],
+  ['bad-value', 'servo x 1500', /^'x' is not a servo number; servos are 1 to 6$/],
+  ['missing-field', 'servo 3', /^missing pulse_us; usage: servo <1-6> <us>$/],
+  ['bad-number', 'servo 3 wide', /^pulse_us: 'wide' is not a decimal number$/],
+  ['not-finite', 'servo 3 inf', /^pulse_us: 'inf' is not a finite number$/],
+  ['extra-field', 'limits now', /^unexpected 'now'; usage: limits$/],
+  ['out-of-range', 'set servo2.torque_kgcm 700', /^servo2\.torque_kgcm 700 is outside 0\.01\.\.600 kgf cm \(or 0\/off\)$/],
+  ['out-of-range', 'set payload_g -5', /^payload_g -5 is outside 0\.\.100000 g$/],
 ];
 
 // One board for these: each refusal must leave it exactly as it was (which each checks), so
@@ -202,7 +218,8 @@ test('busy while moving: frame rate, geometry, servos, defaults, save; the move 
   const config = ok(board, 'config');
   ok(board, `pose ${poseText(target)}`);
   const refusedWhileMoving = ['set frame_hz 100', 'set rod_mm 121', 'set servo3.trim_us 1510'];
-  for (const line of [...refusedWhileMoving, 'set servos.dir normal', 'defaults', 'save']) {
+  const alsoRefused = ['set servos.dir normal', 'defaults', 'save', 'servo 3 1600', 'set payload_g 500', 'set servo2.torque_kgcm 5'];
+  for (const line of [...refusedWhileMoving, ...alsoRefused]) {
     const reply = refused(board, line, 'busy');
     observed.add('busy');
     assert.equal(reply, 'error:busy the platform is moving; wait for it or send stop first');
@@ -268,6 +285,7 @@ test('e-stop: with the input open, moves are refused until it is closed and rese
   runFrames(board, 2);
   assert.equal(status(board)['e-stop'], 'open');
   expectRefusal(board, 'home', 'e-stop', /^emergency stop: the e-stop input is open; close it, then send reset$/);
+  expectRefusal(board, 'servo 1 1600', 'e-stop', /^emergency stop: the e-stop input is open/);
   board.drivePin(15, false);
   runFrames(board, 2);
   expectRefusal(board, 'pose 0 0 1 0 0 0', 'e-stop', /^emergency stop: the e-stop input is closed again; send reset to move again$/);
@@ -301,6 +319,109 @@ test('save-failed: the flash did not keep what was written; the last save stays 
   assert.equal(board.request('set echo off').reply, 'ok');
   const servo1 = ok(board, 'config').find((l) => l.startsWith('servo1: '));
   assert.match(servo1, /^servo1: trim_us=1510\.00 /);
+});
+
+/** A payload of 2 kg, 30 mm above the platform's centre (README, "Payload and servo torque"). */
+function withPayload(settings, ratingKgcm) {
+  const s = structuredClone(settings);
+  s.payload = { payload_g: 2000, payload_com_x_mm: 0, payload_com_y_mm: 0, payload_com_z_mm: 30 };
+  for (const servo of s.servos) {
+    servo.torque_kgcm = ratingKgcm;
+  }
+  return s;
+}
+
+function setPayload(board, ratingKgcm) {
+  ok(board, 'set payload_g 2000');
+  ok(board, 'set payload_com_z_mm 30');
+  if (ratingKgcm !== 'off') {
+    ok(board, `set servos.torque_kgcm ${ratingKgcm}`);
+  }
+}
+
+/** The most any servo needs at a pose (the host core), kgf cm. */
+function mostTorque(settings, pose) {
+  const [answer] = reference.torques(settings, [pose]);
+  assert.ok(answer.ok, `${pose}: ${JSON.stringify(answer)}`);
+  return Math.max(...answer.torque_kgcm.map(Math.abs));
+}
+
+test('torque-limit: names the servo, the torque it would need (as the host core computes it) and its rating', () => {
+  const settings = withPayload(defaultSettings(), 1);
+  const board = quietBoardAt(null);
+  setPayload(board, 1);
+  const check = { next: ['check 0 0 -1 0 0 0', 4] }; // with the torque line
+  for (const pose of [[10, 0, 0, 0, 0, 0], [0, -8, 0, 0, 0, 0], [0, 0, 0, 0, 0, 9]]) {
+    assert.ok(reference.solve(settings, [pose])[0].ok, `${pose} is reachable`);
+    const [core] = reference.torques(settings, [pose]);
+    const servo = core.torque_kgcm.findIndex((t) => Math.abs(t) > 1) + 1;
+    assert.ok(servo > 0, `${pose}: ${core.torque_kgcm}`);
+    for (const line of [`pose ${poseText(pose)}`, `check ${poseText(pose)}`]) {
+      const reply = expectRefusal(
+        board,
+        line,
+        'torque-limit',
+        new RegExp(`^servo ${servo} would need \\d+\\.\\d{3} kgf cm to hold the payload, over its rating 1\\.00 kgf cm$`),
+        check,
+      );
+      const needed = Number(reply.match(/need (\d+\.\d{3}) kgf/)[1]);
+      assert.ok(Math.abs(needed - Math.abs(core.torque_kgcm[servo - 1])) <= 0.002, `${needed} vs host core ${core.torque_kgcm}`);
+    }
+  }
+});
+
+test('path-blocked by torque: both ends within the ratings, the middle of the way not', () => {
+  const settings = withPayload(defaultSettings(), 2.5);
+  const from = [-1, 5.5, 6, -0.5, -4.5, 13];
+  const to = [-9, 10.5, -4.5, -5, 7.5, 8];
+  assert.ok(mostTorque(settings, from) < 2.5 && mostTorque(settings, to) < 2.5);
+  assert.ok(mostTorque(settings, lerpPose(from, to, 0.5)) > 2.5);
+  const board = quietBoardAt(from);
+  setPayload(board, 2.5);
+  expectRefusal(
+    board,
+    `pose ${poseText(to)}`,
+    'path-blocked',
+    /^the straight path from the current pose is blocked \d+\.\d% of the way: servo \d would need \d+\.\d{3} kgf cm to hold the payload, over its rating 2\.50 kgf cm; nothing moved$/,
+    { next: ['check 0 0 -1 0 0 0', 4] },
+  );
+});
+
+test('pose-conflict: a rating or payload the held pose would exceed is refused', () => {
+  const board = quietBoardAt([0, 0, -8, 0, 0, 0]);
+  ok(board, 'set payload_g 2000');
+  // At z = -8 each servo needs about 0.6 kgf cm (a sixth of 2 kgf on a 2 cm arm, less the rods' lean).
+  const need = mostTorque(withPayload(defaultSettings(), 'off'), [0, 0, -8, 0, 0, 0]);
+  assert.ok(need > 0.5 && need < 0.7, `${need}`);
+  expectRefusal(
+    board,
+    'set servos.torque_kgcm 0.5',
+    'pose-conflict',
+    /^with that setting the current pose could not be held: servo 1 would need \d\.\d{3} kgf cm to hold the payload, over its rating 0\.50 kgf cm; send home first$/,
+    { next: ['check 0 0 -1 0 0 0', 4] },
+  );
+});
+
+test('no-pose: pulses set with servo that correspond to no pose refuse moves until driven back', () => {
+  const settings = defaultSettings();
+  const board = quietBoardAt(null);
+  ok(board, 'servo 1 1900');
+  ok(board, 'servo 2 1900');
+  const pulses = [1900, 1900, 1500, 1500, 1500, 1500];
+  assert.equal(reference.forwardKinematics(settings, pulses, status(board).pose).ok, false, 'the host core finds none either');
+  assert.match(ok(board, 'status').find((l) => l.startsWith('pulse_pose: ')), /^pulse_pose: none \(the rods cannot all reach their joints/);
+  for (const line of ['home', 'pose 0 0 1 0 0 0', 'check 0 0 1 0 0 0', 'limits']) {
+    expectRefusal(
+      board,
+      line,
+      'no-pose',
+      /^the pulses set with servo correspond to no pose of the platform \(.*\); drive the servos back with servo first \(servoN\.trim_us is home\)$/,
+      { next: ['status', null] },
+    );
+  }
+  ok(board, 'servo 2 1500');
+  ok(board, 'servo 1 1500');
+  ok(board, 'home');
 });
 
 test('every documented error code exists in the firmware and was produced above through the wire', () => {

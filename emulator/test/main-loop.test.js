@@ -16,6 +16,7 @@ import { before, test } from 'node:test';
 
 import { EmulatedBoard, FINAL_REPLY } from '../src/board.js';
 import { bootQuiet, firmwareBootrom, FRAME_MS, ok } from '../src/e2e-support.js';
+import { binaryFrame } from '../src/firmware-bench.js';
 
 /** The documented bound on a main-loop pass: 1 ms at 125 MHz. */
 const PASS_BOUND_CYCLES = 125_000;
@@ -140,6 +141,60 @@ test('every long command class back to back at 333 Hz, echo on: no stall, replie
   });
   board.runMs(100);
   assertNoStall(board, 'every class');
+});
+
+test('servo (its pose found), limits, holding torques and torque-checked paths and clamps: no stall', () => {
+  const board = new EmulatedBoard({ bootrom });
+  board.boot();
+  typed(board, 'set frame_hz 333');
+  typed(board, 'set speed_mm_s 1');
+  board.runMs(2 * FRAME_MS);
+  measure(board);
+  const lines = [
+    ['servo 3 1620', 'ok'], // the forward kinematics, a Newton iteration per pass
+    ['status', 'ok'],
+    ['servo 1 1900', 'ok'],
+    ['servo 2 1900', 'ok'], // no pose: the continuation fails part way
+    ['servo 2 1500', 'ok'],
+    ['servo 1 1500', 'ok'],
+    ['servo 3 1500', 'ok'],
+    ['limits', 'ok'], // about 160 IK solutions, three per pass
+    ['set payload_g 2000', 'ok'],
+    ['set payload_com_z_mm 30', 'ok'],
+    ['status', 'ok'], // the holding torques, a pass of their own
+    ['set servos.torque_kgcm 2', 'ok'], // the held pose's torques
+    ['check 0 0 -12 0 0 0', 'ok'], // 600 checkpoints, each with its torques, one per pass
+    ['limits', 'ok'], // every pose with its torques, one per pass
+    ['servo 4 1520', 'ok'], // the pose found, then its torques
+    ['set rod_mm 121', 'ok'], // with pulses set by servo: their pose found again
+    ['defaults', 'ok'],
+  ];
+  const replies = pipeline(board, lines.map(([l]) => l), { timeoutMs: 20_000 });
+  replies.forEach((reply, i) => {
+    assert.ok(reply.startsWith(lines[i][1]), `${lines[i][0]}: ${reply}`);
+  });
+  board.runMs(100);
+  assertNoStall(board, 'servo, limits, torques');
+});
+
+test('stream targets clamped to the torque ratings, a pose per pass: no stall', () => {
+  const board = quietBoard();
+  for (const line of ['set speed_mm_s off', 'set speed_deg_s off', 'set payload_g 2000', 'set payload_com_z_mm 30', 'set servos.torque_kgcm 1']) {
+    ok(board, line);
+  }
+  ok(board, 'set baud 921600');
+  board.runMs(5);
+  measure(board);
+  // Every frame beyond the ratings (x from 5 to 25 mm): each clamped by bisection, one pose
+  // with its torques per pass; frames come faster than that, the newest wins.
+  for (let i = 0; i < 40; i++) {
+    board.sendBytes(binaryFrame([32768 + Math.round((0.2 + i * 0.02) * 32768), 32768, 32768, 32768, 32768, 32768]));
+    board.runMs(2);
+  }
+  board.runMs(50);
+  const s = ok(board, 'status').find((l) => l.startsWith('stream: '));
+  assert.match(s, /clamped=[1-9]/);
+  assertNoStall(board, 'clamped stream');
 });
 
 test('the return home after link loss is checked in slices too', () => {
