@@ -375,6 +375,20 @@ fn limits_name_the_reach_of_every_axis_direction_and_what_stops_it() {
 }
 
 #[test]
+fn the_readme_shows_limits_from_home_as_they_are() {
+    let readme = include_str!("../../README.md");
+    let start = readme
+        .find("```text\nlimits\n")
+        .expect("README shows limits")
+        + 8;
+    let block = &readme[start..];
+    let block = &block[..block.find("```").unwrap()];
+    let mut s = Host::quiet();
+    let out = s.feed(b"limits\n");
+    assert_eq!(block.replace('\n', "\r\n"), format!("limits\r\n{out}"));
+}
+
+#[test]
 fn limits_are_searched_a_few_poses_per_slice_and_change_nothing() {
     let mut s = Host::quiet();
     let before = s.ok("status");

@@ -12,6 +12,8 @@ import { parseArgs } from 'node:util';
 import { DEFAULT_ELF } from './board.js';
 import { sectionSizes, symbolSizes, symbolValues } from './elf.js';
 import {
+  measureClampedStream,
+  measureKinematicsCommands,
   measureLatency,
   measureLockStep,
   measureSave,
@@ -119,6 +121,13 @@ log('worst-case command ...');
 const worst = measureWorstCommand();
 log('longest main-loop pass ...');
 const passes = measureLongestPass();
+log('servo, limits, torque-checked paths ...');
+const kinCommands = measureKinematicsCommands();
+for (const c of kinCommands) {
+  log(`  ${c.line}: ${fmt(c.micros / 1000, 2)} ms, longest pass ${fmt(c.longestPassCycles)} cycles`);
+}
+const clampedStream = measureClampedStream();
+const kinLongest = Math.max(...kinCommands.map((c) => c.longestPassCycles), clampedStream.longestPassCycles);
 log('save ...');
 const saves = ['typical', 'max'].map((timing) => ({ timing, ...measureSave({ timing }) }));
 
@@ -284,7 +293,30 @@ written well before the next period starts; the ${WATCHDOG_MS} ms watchdog is 50
 | the longest command: a move whose path check solves the IK at every one of ${worst.checks} frames (the budget, \`control::motion::MAX_PATH_CHECKS\`), 20.48 mm at 1 mm/s, 50 Hz; its line end to its reply's last byte at the host: ${fmt(worst.micros / 1000, 1)} ms (${fmt(worst.cycles)} cycles) | ${fmt(worst.longestPassCycles)} cycles = ${fmt(worst.longestPassCycles / 125, 0)} us | ${worst.frames} | ${worst.missed} |
 | ${passes.lines} lines: every long command class back to back at 333 Hz with echo on (checks of 1,000 poses, config, help, geometry, status, geometry changes, defaults, a move checked while moving, refusals), then 20 moves of 1,000 checks each in flight at 921,600 baud | **${fmt(passes.longestPassCycles)} cycles = ${fmt(passes.longestPassCycles / 125, 0)} us** | ${passes.frames} | ${passes.missed} |
 
-The longest interrupt handler over the same session: ${fmt(passes.longestHandlerCycles)} cycles. A pass is
+The longest interrupt handler over the same session: ${fmt(passes.longestHandlerCycles)} cycles.
+
+### \`servo\`, \`limits\` and torque-checked paths
+
+The real firmware, echo off, 921,600 baud, 333 Hz (the path checks at 50 Hz): each
+command's line end to its reply at the host, the CPU cycles the firmware spent meanwhile, and the longest main-loop pass. \`servo\`
+finds the pose of the six pulses (forward kinematics along a continuation, arm angles in steps
+of at most 5 degrees from the pose the platform was at, \`control::controller::FK_STEP_RAD\`;
+a Newton iteration per pass, then the IK's check); \`status\` shows that pose (found by
+\`servo\`) and, with a payload, the holding torques (a pass of their own). \`limits\` and
+path checks solve \`CHECKS_PER_SLICE\` IKs per pass, or, with a payload and torque ratings,
+one pose and its holding torques per pass. Payload: 2 kg, 30 mm above the platform's centre.
+
+| command | line end to reply | CPU cycles | longest pass | frames missed |
+|---|---:|---:|---:|---:|
+${kinCommands
+  .map(
+    (c) =>
+      `| ${c.what} | ${fmt(c.micros / 1000, 2)} ms | ${fmt(c.cycles)} | ${fmt(c.longestPassCycles)} cycles = ${fmt(c.longestPassCycles / 125, 0)} us | ${c.missed} of ${c.frames} |`,
+  )
+  .join('\n')}
+| ${clampedStream.sent} pass-through stream frames at 921,600 baud beyond the ratings (rated 1 kgf cm): ${clampedStream.applied} applied, ${clampedStream.clamped} clamped, a pose with its torques per pass | - | - | ${fmt(clampedStream.longestPassCycles)} cycles = ${fmt(clampedStream.longestPassCycles / 125, 0)} us | ${clampedStream.missed} of ${clampedStream.frames} |
+
+Longest pass of these: **${fmt(kinLongest)} cycles = ${fmt(kinLongest / 125, 0)} us** (bound: 125,000 cycles). A pass is
 measured from one watchdog feed to the next (the loop feeds it at its top), in CPU cycles, which
 the emulator does not count while the core sleeps; interrupt handlers inside a pass count in it.
 A missed frame is a frame period in which the firmware wrote no new compare values
@@ -362,4 +394,5 @@ log(
   `FK ${fmt(kin.fk.mean)} cycles (${fmt(kin.fk.iterations.mean, 2)} iterations), ` +
     `Jacobian ${fmt(kin.jacobian.mean)}, torque ${fmt(kin.torque.mean)}, limits ${fmt(kin.limits.mean)}`,
 );
+log(`servo/limits/torque: longest pass ${fmt(kinLongest)} cycles`);
 log(`IK ${fmt(ik.rom.mean)} cycles (libm ${fmt(ik.libm.mean)}), max error ${ik.worst.romVsRef.toExponential(2)} us; latency ${fmt(small.mean)} us; sustained ${best ? fmt(best.linesPerSecond) : 'none'} lines/s; worst command ${fmt(worst.micros / 1000, 1)} ms`);

@@ -237,6 +237,106 @@ export function measureWorstCommand() {
 }
 
 /**
+ * One command through the wire on a board that ran `setup` first: from its line end to its
+ * reply at the host, the CPU cycles meanwhile (the emulator does not count sleep), the longest
+ * main-loop pass and the frames missed. Returns { line, reply, micros, cycles,
+ * longestPassCycles, frames, missed }.
+ */
+function measureCommand(setup, line, { frameHz = 50 } = {}) {
+  const { board, lineEnds } = streamingBoard({ baud: 921600 });
+  if (frameHz !== 50) {
+    expectOk(board, `set frame_hz ${frameHz}`);
+  }
+  for (const l of setup) {
+    expectOk(board, l, { timeoutMs: 5000 });
+  }
+  board.runMs(50);
+  board.loop.reset();
+  board.frames.reset();
+  const cyclesBefore = board.cycles;
+  const { reply } = board.request(line, { timeoutMs: 5000 });
+  if (!reply.startsWith('ok')) {
+    throw new Error(`${line}: ${reply}`);
+  }
+  const micros = (board.nanos - lineEnds[lineEnds.length - 1]) / 1000;
+  const cycles = board.cycles - cyclesBefore;
+  board.runMs(20);
+  return {
+    line,
+    reply,
+    micros,
+    cycles,
+    longestPassCycles: board.loop.longestPassCycles,
+    frames: board.frames.frames,
+    missed: board.frames.missed,
+  };
+}
+
+/** A 2 kg payload 30 mm above the platform's centre, every servo rated `rating` kgf cm. */
+const PAYLOAD = ['set payload_g 2000', 'set payload_com_z_mm 30'];
+
+/**
+ * `servo` (the pose of the pulses found: forward kinematics along a continuation, a Newton
+ * iteration per pass), `status` after it, `limits` (a few IK solutions per pass, or one pose
+ * with its holding torques), and path checks with torque ratings (one pose with its torques
+ * per pass), each through the wire at 333 Hz. Returns a list of
+ * { what, ...measureCommand }.
+ */
+export function measureKinematicsCommands() {
+  const rated = (r) => [...PAYLOAD, `set servos.torque_kgcm ${r}`];
+  // From z = -10 mm, 20.48 mm at 1 mm/s at 50 Hz: 1,024 frames, each checked (the budget).
+  const longest = ['pose 0 0 -10 0 0 0', 'set speed_mm_s 1'];
+  const cases = [
+    ['`servo 3 1520` from home (2.2 degrees of arm: one continuation step)', [], 'servo 3 1520', 333],
+    ['`servo 1 1900` from home (45 degrees: nine steps of 5 degrees)', [], 'servo 1 1900', 333],
+    ['`status` after `servo 1 1900`, with a payload (the pose is known since `servo`; the holding torques take a pass of their own)', ['servo 1 1900', ...PAYLOAD], 'status', 333],
+    ['`limits` from home, within the servo limits', [], 'limits', 333],
+    ['`limits` from home with a payload and ratings of 1 kgf cm (each pose with its holding torques)', rated(1), 'limits', 333],
+    ['`check 0 0 10.48 0 0 0` from z = -10 at 1 mm/s, 50 Hz: 1,024 checkpoints by the IK', longest, 'check 0 0 10.48 0 0 0', 50],
+    ['the same with a payload and ratings of 2 kgf cm: each checkpoint with its holding torques (the longest command)', [...longest, ...rated(2)], 'check 0 0 10.48 0 0 0', 50],
+  ];
+  return cases.map(([what, setup, line, frameHz]) => ({ what, ...measureCommand(setup, line, { frameHz }) }));
+}
+
+/**
+ * Pass-through stream frames beyond the torque ratings at 921,600 baud, every one clamped (a
+ * pose with its holding torques per pass): the longest main-loop pass meanwhile. Returns {
+ * frames, clamped, longestPassCycles, missed, frameCount }.
+ */
+export function measureClampedStream() {
+  const { board } = streamingBoard({ baud: 921600 });
+  for (const l of [...PAYLOAD, 'set servos.torque_kgcm 1']) {
+    expectOk(board, l);
+  }
+  board.runMs(20);
+  board.loop.reset();
+  board.frames.reset();
+  const sent = 100;
+  for (let i = 0; i < sent; i++) {
+    // x from 5 to 25 mm: beyond what a 1 kgf cm rating holds with 2 kg (about 3 mm).
+    board.sendBytes(binaryFrame([32768 + Math.round((0.2 + i * 0.008) * 32768), 32768, 32768, 32768, 32768, 32768]));
+    board.runMs(2);
+  }
+  board.runMs(50);
+  const { lines } = board.request('status');
+  const counts = Object.fromEntries(
+    lines
+      .find((l) => l.startsWith('# stream: '))
+      .slice('# stream: '.length)
+      .split(' ')
+      .map((kv) => kv.split('=').map((v, i) => (i ? Number(v) : v))),
+  );
+  return {
+    sent,
+    applied: counts.applied,
+    clamped: counts.clamped,
+    longestPassCycles: board.loop.longestPassCycles,
+    frames: board.frames.frames,
+    missed: board.frames.missed,
+  };
+}
+
+/**
  * The longest main-loop pass and interrupt handler over a hostile session: every long command
  * class back to back at 333 Hz with echo on, then moves pipelined at 921,600 baud, each checked
  * at 1,000 poses, and a long reply draining at 9,600 baud. Returns { longestPassCycles,
