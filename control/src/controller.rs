@@ -1460,13 +1460,7 @@ impl<M: Math> Controller<M> {
         {
             // The e-stop opened while the path was checked: nothing moves (but home, if that
             // is the e-stop's action).
-            if self.settings.safety.estop_action == EstopAction::Home && !self.motion.is_moving() {
-                let limits = self.own_move_limits();
-                if let Err(e) = self.start_path(Pose::HOME, limits, Purpose::EstopHome) {
-                    self.home_blocked(e);
-                    self.servo_power = false;
-                }
-            }
+            self.estop_home_after_job();
             return match purpose {
                 Purpose::ReturnHome => Done::Quiet,
                 _ => Done::Refused(Error::Estop(self.estop)),
@@ -1532,6 +1526,18 @@ impl<M: Math> Controller<M> {
                 Done::Quiet
             }
             (_, Err(e)) => Done::Refused(e),
+        }
+    }
+
+    /// The e-stop opened while a command's job ran (its motion refused): with `estop_action
+    /// home`, the way home starts now (its check is the next job).
+    fn estop_home_after_job(&mut self) {
+        if self.settings.safety.estop_action == EstopAction::Home && !self.motion.is_moving() {
+            let limits = self.own_move_limits();
+            if let Err(e) = self.start_path(Pose::HOME, limits, Purpose::EstopHome) {
+                self.home_blocked(e);
+                self.servo_power = false;
+            }
         }
     }
 
@@ -1764,6 +1770,11 @@ impl<M: Math> Controller<M> {
         solution: Solution,
         stage: LocateStage,
     ) -> Option<Result<(), Error>> {
+        if why == Relocate::Servo && self.estop.stops_motion() {
+            // The e-stop opened while the pose was being found: the servo is not driven.
+            self.estop_home_after_job();
+            return Some(Err(Error::Estop(self.estop)));
+        }
         let next = match stage {
             LocateStage::Newton(mut c) => match c.newton.step::<M>() {
                 None => LocateStage::Newton(c),

@@ -209,6 +209,25 @@ fn servo_refusals_change_nothing() {
 }
 
 #[test]
+fn an_estop_that_opens_while_the_pose_is_found_refuses_the_servo() {
+    let mut s = Host::quiet();
+    let mut out = String::new();
+    for &b in b"servo 2 1700\n" {
+        s.ctl.on_byte(&mut s.link, b, &mut out);
+    }
+    assert!(s.ctl.is_busy());
+    s.ctl.work(&mut s.link, &mut out);
+    s.ctl.set_estop_input(true);
+    while s.ctl.is_busy() {
+        s.work(&mut out);
+    }
+    let reply = out.lines().last().unwrap();
+    assert!(reply.starts_with("error:e-stop "), "{out}");
+    assert_eq!(s.frames(1)[0], [1500.0; 6]);
+    assert!(s.ctl.direct().is_none());
+}
+
+#[test]
 fn servo_ends_a_stream_like_stop() {
     let mut s = Host::quiet();
     s.ok("set speed_mm_s off");
