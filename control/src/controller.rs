@@ -63,6 +63,23 @@
 //! checked the stream holds, as a move in progress does; a refused one lets it go on); the
 //! next frame starts it again from wherever the platform is.
 //!
+//! Driving servos one by one (`servo n us`): the pulse goes to that servo (within its limits;
+//! refused while a move is in progress or the e-stop is on; a stream ends), and the job finds
+//! the pose the six pulses correspond to by forward kinematics ([`forward::Newton`], one
+//! iteration per slice) along a continuation from the pose the platform was at
+//! ([`FK_STEP_RAD`]), then checks it with the IK (and, with torque ratings, its holding
+//! torques); the pulse is given when that is done. FK runs there, once per change of the
+//! pulses, not in `status`: `status` shows the pose found (or that there is none), and moves,
+//! `check` and `limits` start from it, so that a move after `servo` does not jump (with no pose
+//! they are refused). A settings change while the pulses are set this way keeps them and finds
+//! their pose again. An accepted move or stream frame ends it.
+//!
+//! Payload and torque ratings ([`crate::payload`]): with a payload, `check` and `status` show
+//! the holding torques (a slice of their own: about three IK solutions' worth); with ratings as
+//! well, every pose checked (a target, each checkpoint of a path, each pose `limits` tries, a
+//! stream target and its clamp, the pose held when the settings change) must be within them,
+//! and a slice then checks one pose with its torques instead of [`CHECKS_PER_SLICE`] by the IK.
+//!
 //! Emergency stop ([`crate::safety`]): the board reports the input with
 //! [`Controller::set_estop_input`]; while it is open or latched, moves and stream frames are
 //! refused. [`Controller::servo_power`] says whether the servo-power output should be on.
@@ -98,7 +115,7 @@ pub const LINK_LOSS_SPEED_DEG_S: f32 = 15.0;
 /// Most IK solutions of a path check in one slice of work ([`Controller::work`]): on the
 /// RP2040 one takes about 0.15 ms, so a slice stays under half a millisecond. With a payload
 /// and torque ratings, each pose checked also needs its holding torques (about three IK
-/// solutions' worth): then a slice checks one pose ([`Controller::poses_per_slice`]).
+/// solutions' worth): then a slice checks one pose.
 pub const CHECKS_PER_SLICE: u32 = 3;
 
 /// IK solutions of a clamp's bisection: the clamped pose is within 1/64 of the way from the
