@@ -186,8 +186,8 @@ function describe(frame) {
   const note = waiting ? ` (asking the board for ${waiting})` : '';
   switch (frame.status) {
     case 'solved':
-      return `solved in ${frame.iterations} Newton iterations; rods close within ` +
-        `${frame.rodErrorMm.toFixed(4)} mm${note}`;
+      return `solved in ${frame.iterations} Newton iteration${frame.iterations === 1 ? '' : 's'}` +
+        `; rods close within ${frame.rodErrorMm.toFixed(4)} mm${note}`;
     case 'no solution':
       return `no solution: no pose closes all six rods at these arm angles ` +
         `(drawn red at the last pose found)${note}`;

@@ -173,13 +173,8 @@ export class PlatformScene {
       tipJoints.push(this.ball(group, 3, jointMaterial));
       platformJoints.push(this.ball(group, 3, jointMaterial));
 
-      const label = document.createElement('div');
-      label.className = 'leg-label';
-      label.textContent = String(i + 1);
       const outward = new Vector3(x, y, 0).normalize().multiplyScalar(22);
-      const tag = new CSS2DObject(label);
-      tag.position.set(x + outward.x, y + outward.y, z + 6);
-      group.add(tag);
+      group.add(this.text(String(i + 1), 'leg-label', [x + outward.x, y + outward.y, z + 6]));
     });
 
     // The plate: a hexagon through the six platform joints (sorted by angle), a little larger,
@@ -206,6 +201,7 @@ export class PlatformScene {
     );
     pointer.position.set(radius * 0.25, 0, PLATE_THICKNESS_MM + 0.6);
     platformFrame.add(pointer);
+    platformFrame.add(this.text('+x', 'axis-label', [radius * 0.5, 0, PLATE_THICKNESS_MM + 2]));
     group.add(platformFrame);
 
     this.model = {
@@ -222,6 +218,16 @@ export class PlatformScene {
     };
     this.scene.add(group);
     this.requestRender();
+  }
+
+  /** A text label (HTML, always facing the camera) at `position` (mm). */
+  text(content, className, position) {
+    const element = document.createElement('div');
+    element.className = className;
+    element.textContent = content;
+    const label = new CSS2DObject(element);
+    label.position.set(...position);
+    return label;
   }
 
   /** A cylinder of `radius` to be stretched between two points by `place`. */
