@@ -48,6 +48,8 @@ pub enum Verb {
     Home,
     /// `stop`.
     Stop,
+    /// `reset`.
+    Reset,
     /// `status` (or `?`).
     Status,
     /// `geometry`.
@@ -64,13 +66,14 @@ pub enum Verb {
 
 impl Verb {
     /// Every command word.
-    pub const ALL: [Verb; 12] = [
+    pub const ALL: [Verb; 13] = [
         Verb::Pose,
         Verb::Move,
         Verb::Nudge,
         Verb::Check,
         Verb::Home,
         Verb::Stop,
+        Verb::Reset,
         Verb::Status,
         Verb::Geometry,
         Verb::Config,
@@ -88,6 +91,7 @@ impl Verb {
             Verb::Check => "check",
             Verb::Home => "home",
             Verb::Stop => "stop",
+            Verb::Reset => "reset",
             Verb::Status => "status",
             Verb::Geometry => "geometry",
             Verb::Config => "config",
@@ -211,6 +215,8 @@ pub enum Command {
     Home,
     /// `stop`.
     Stop,
+    /// `reset`: clear the emergency stop (once its input is closed) and any fault.
+    Reset,
     /// `status` or `?`.
     Status,
     /// `geometry`.
@@ -350,6 +356,7 @@ pub fn parse(line: &str) -> Result<Command, ParseError> {
         Verb::Nudge => axis_values(&mut words, verb).map(Command::Nudge),
         Verb::Home => simple(Command::Home, &mut words),
         Verb::Stop => simple(Command::Stop, &mut words),
+        Verb::Reset => simple(Command::Reset, &mut words),
         Verb::Status => simple(Command::Status, &mut words),
         Verb::Geometry => simple(Command::Geometry, &mut words),
         Verb::Config => simple(Command::Config, &mut words),
@@ -518,6 +525,7 @@ mod tests {
         for (text, cmd) in [
             ("home", Command::Home),
             ("Stop", Command::Stop),
+            ("reset", Command::Reset),
             ("status", Command::Status),
             ("?", Command::Status),
             ("geometry", Command::Geometry),

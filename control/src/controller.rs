@@ -42,7 +42,24 @@
 //! carried out), the platform returns home at the configured speeds (a group whose speed is
 //! off uses [`LINK_LOSS_SPEED_MM_S`] / [`LINK_LOSS_SPEED_DEG_S`] so it never jumps). It fires
 //! once per silence, never before the timeout: silence is counted in whole frames from the
-//! first frame that starts after the line's end (so up to one frame late).
+//! first frame that starts after the line's end (so up to one frame late). A stream frame is
+//! a sign of life too, so a stream that stops eases the platform home the same way.
+//!
+//! Streaming ([`crate::stream`]): a stream frame's pose becomes the stream's target; the newest
+//! frame wins (the board feeds every waiting byte, then calls [`Controller::apply_stream`],
+//! which applies only the newest frame). An unreachable target is clamped: the last reachable
+//! pose on the straight line from the current pose to it, found by bisection
+//! ([`CLAMP_STEPS`] IK solutions), and counted. With every speed and acceleration limit off
+//! the pose is applied at once (pass-through, like a jump: [`Controller::take_new_pulses`]);
+//! otherwise each axis follows it at the servo frame rate within the limits
+//! ([`crate::tracker`]), and a step that would leave the workspace is clamped too. An accepted
+//! move (`pose`, `move`, `nudge`, `home`) or `stop` ends the stream (while a move's path is
+//! checked the stream holds, as a move in progress does; a refused one lets it go on); the
+//! next frame starts it again from wherever the platform is.
+//!
+//! Emergency stop ([`crate::safety`]): the board reports the input with
+//! [`Controller::set_estop_input`]; while it is open or latched, moves and stream frames are
+//! refused. [`Controller::servo_power`] says whether the servo-power output should be on.
 
 use core::fmt::Write;
 use core::marker::PhantomData;
@@ -52,13 +69,15 @@ use kinematics_core::{Geometry, Libm, Math, Pose, LEGS};
 
 use crate::command::{self, Command};
 use crate::error::Error;
-use crate::motion::{Checkpoints, Motion, Segment, SpeedLimits};
-use crate::protocol::{Feed, Lost};
-use crate::report::{self, Fault, Listing, MotionReport, Notice, StatusReport, EOL};
+use crate::motion::{lerp, Checkpoints, Motion, Segment, SpeedLimits};
+use crate::protocol::{Feed, Frame, Lost};
+use crate::report::{self, Fault, Listing, MotionReport, Notice, StatusReport, StreamCounts, EOL};
+use crate::safety::{Estop, EstopAction};
 use crate::session::Session;
 use crate::settings::{
     LinkSettings, SettingError, SettingId, SettingValue, Settings, DEFAULT_BAUD,
 };
+use crate::tracker::{TrackLimits, Tracker};
 
 /// Linear speed for returning home after link loss when `speed_mm_s` is off, mm/s.
 pub const LINK_LOSS_SPEED_MM_S: f32 = 10.0;
@@ -67,6 +86,10 @@ pub const LINK_LOSS_SPEED_DEG_S: f32 = 15.0;
 /// Most IK solutions of a path check in one slice of work ([`Controller::work`]): on the
 /// RP2040 one takes about 0.15 ms, so a slice stays under half a millisecond.
 pub const CHECKS_PER_SLICE: u32 = 3;
+
+/// IK solutions of a clamp's bisection: the clamped pose is within 1/64 of the way from the
+/// last reachable pose to the target (on the RP2040 a clamp costs up to 7 IK solutions).
+pub const CLAMP_STEPS: u32 = 6;
 
 /// Notices kept for links that have not shown them yet (the latest ones).
 const NOTICE_QUEUE: usize = 4;
@@ -80,6 +103,33 @@ enum Purpose {
     Check,
     /// Link loss: return home.
     ReturnHome,
+    /// The e-stop opened with `estop_action home`: go home.
+    EstopHome,
+}
+
+/// What [`Controller::on_byte`] did with a byte, for the board's input loop.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Fed {
+    /// Part of a line or a frame.
+    Byte,
+    /// It ended a line (a command ran or started, or a refusal was written): the board ends
+    /// the pass's input here, so at most one command runs per pass.
+    LineEnded,
+    /// It ended a stream frame (stored; [`Controller::apply_stream`] applies the newest).
+    Frame,
+}
+
+/// The stream being followed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Streaming {
+    /// The newest frame's pose, as sent.
+    target: Pose,
+    /// A frame arrived since the last [`Controller::apply_stream`].
+    fresh: bool,
+    /// What the tracker follows: the target, clamped to the workspace.
+    goal: Pose,
+    /// Where the tracker is and how fast it goes.
+    tracker: Tracker,
 }
 
 /// A command's work left for later slices ([`Controller::work`]).
@@ -164,6 +214,16 @@ pub struct Controller<M: Math = Libm> {
     fault: Option<Fault>,
     /// The commanded pulses changed outside a frame (see [`Controller::take_new_pulses`]).
     new_pulses: bool,
+    /// The stream being followed, if the last motion input was a stream frame.
+    stream: Option<Streaming>,
+    /// Stream frames counted since start-up.
+    stream_counts: StreamCounts,
+    /// The emergency stop.
+    estop: Estop,
+    /// The servo-power output should be on.
+    servo_power: bool,
+    /// Servo frames so far (wrapping): the links' clock for frames cut short.
+    frame_ticks: u32,
     /// The latest notices, each with its sequence number.
     notices: heapless::Deque<(u32, Notice), NOTICE_QUEUE>,
     /// Sequence number of the next notice.
@@ -212,6 +272,11 @@ impl<M: Math> Controller<M> {
             link_loss_handled: false,
             fault: None,
             new_pulses: false,
+            stream: None,
+            stream_counts: StreamCounts::default(),
+            estop: Estop::Clear,
+            servo_power: false,
+            frame_ticks: 0,
             notices: heapless::Deque::new(),
             next_notice: 0,
             _math: PhantomData,
@@ -257,9 +322,35 @@ impl<M: Math> Controller<M> {
         self.motion.target()
     }
 
-    /// True while a move is in progress.
+    /// True while a move is in progress, or a stream's tracker has not settled on its goal.
     pub fn is_moving(&self) -> bool {
         self.motion.is_moving()
+            || self
+                .stream
+                .as_ref()
+                .is_some_and(|s| s.fresh || !s.tracker.at_rest() || s.tracker.pose() != s.goal)
+    }
+
+    /// True while stream frames drive the platform.
+    pub fn is_streaming(&self) -> bool {
+        self.stream.is_some()
+    }
+
+    /// Stream frames counted since start-up.
+    pub fn stream_counts(&self) -> StreamCounts {
+        self.stream_counts
+    }
+
+    /// The emergency stop's state.
+    pub fn estop(&self) -> Estop {
+        self.estop
+    }
+
+    /// Whether the servo-power output (`power_pin`) should be on: off at start-up until the
+    /// first accepted move or stream frame, off on an emergency stop (after reaching home with
+    /// `estop_action home`).
+    pub fn servo_power(&self) -> bool {
+        self.servo_power
     }
 
     /// True while a command's (or the controller's own) work is in progress: feed no bytes
@@ -304,22 +395,78 @@ impl<M: Math> Controller<M> {
     /// line, runs it and writes exactly one final reply to that link (blank lines get none),
     /// at once or, if the command has long work, when [`Controller::work`] completes it. Feed
     /// no byte while [`Controller::is_busy`]: a line ended then is refused (`error:busy`).
-    pub fn on_byte(&mut self, session: &mut Session, byte: u8, out: &mut impl Write) {
-        match session.feed(byte, out) {
+    /// A stream frame is stored for [`Controller::apply_stream`].
+    pub fn on_byte(&mut self, session: &mut Session, byte: u8, out: &mut impl Write) -> Fed {
+        let feed = session.feed(byte, self.frame_ticks, out);
+        if session.take_abandoned_frame() {
+            self.stream_counts.damaged = self.stream_counts.damaged.wrapping_add(1);
+        }
+        match feed {
             Feed::Line => {
                 // Copied out so the link can take the next line while the command runs.
                 let line = session.take_line();
                 if self.begin_line(session, &line, out) == Begun::Answered {
                     session.prompt(out);
                 }
+                Fed::LineEnded
             }
             Feed::Spoiled(why) => {
                 self.heard_from_host();
                 self.flush_notices(session, out);
                 report::write_error(out, &Error::from(why));
                 session.prompt(out);
+                Fed::LineEnded
             }
-            Feed::Empty | Feed::Cancelled => session.prompt(out),
+            Feed::Empty | Feed::Cancelled => {
+                session.prompt(out);
+                Fed::LineEnded
+            }
+            Feed::Frame(frame) => {
+                self.on_stream_frame(frame);
+                Fed::Frame
+            }
+            Feed::DamagedFrame => {
+                self.stream_counts.damaged = self.stream_counts.damaged.wrapping_add(1);
+                Fed::Frame
+            }
+            _ => Fed::Byte,
+        }
+    }
+
+    /// Applies the newest stream frame if one arrived since the last call: its pose, clamped
+    /// to the workspace, becomes the pose now (pass-through: the new pulses are ready from
+    /// [`Controller::take_new_pulses`]) or the tracker's goal. Up to 1 + [`CLAMP_STEPS`] IK
+    /// solutions. The board calls it after feeding the bytes waiting.
+    pub fn apply_stream(&mut self) {
+        let Some(mut stream) = self.stream.filter(|s| s.fresh) else {
+            return;
+        };
+        stream.fresh = false;
+        self.stream_counts.applied = self.stream_counts.applied.wrapping_add(1);
+        let from = *self.motion.pose();
+        let (pose, solution) = self.clamp(&from, &stream.target);
+        if self.track_limits() == TrackLimits::OFF {
+            if let Some(solution) = solution {
+                self.motion = Motion::new(pose);
+                self.solution = solution;
+                self.new_pulses = true;
+            }
+            stream.tracker.hold_at(&pose);
+        }
+        stream.goal = pose;
+        self.stream = Some(stream);
+        self.servo_power = true;
+        self.fault = None;
+    }
+
+    /// The emergency-stop input, as the board reads it (`open`: the pin is high; call it every
+    /// pass when `estop_pin` is set). Opening it stops the platform (see [`crate::safety`]).
+    pub fn set_estop_input(&mut self, open: bool) {
+        let before = self.estop;
+        self.estop = before.with_input(open);
+        match (before, self.estop) {
+            (Estop::Clear, Estop::Open) => self.on_estop(),
+            (Estop::Open, Estop::Latched) => self.notify(Notice::EstopClosed),
             _ => {}
         }
     }
@@ -345,7 +492,7 @@ impl<M: Math> Controller<M> {
         let commanded = !matches!(
             self.job,
             Some(Job::Path {
-                purpose: Purpose::ReturnHome,
+                purpose: Purpose::ReturnHome | Purpose::EstopHome,
                 ..
             })
         );
@@ -441,11 +588,16 @@ impl<M: Math> Controller<M> {
     /// Advances by one frame (`1 / frame_hz` s): link-loss timer, motion, IK. Returns the six
     /// pulse widths (us, servo 1 first), always finite and within each servo's limits.
     pub fn on_frame(&mut self) -> [f32; LEGS] {
+        self.frame_ticks = self.frame_ticks.wrapping_add(1);
         let frame_us = 1_000_000 / u32::from(self.settings.frame_hz.max(1));
         // The frame in which the last line ended counts nothing (part of it was not silent).
         self.silence_us = Some(self.silence_us.map_or(0, |s| s.saturating_add(frame_us)));
         self.check_link();
 
+        if self.stream.is_some() && !self.holding {
+            self.track_frame();
+            return self.safe_pulses();
+        }
         if !self.motion.is_moving() || self.holding {
             // Standing still (or holding while a new path is checked): the held pose's pulses
             // are solved already (when it was reached or the settings changed), and the IK is
@@ -460,6 +612,10 @@ impl<M: Math> Controller<M> {
                 self.solution = solution;
                 if !self.motion.is_moving() {
                     self.returning_home = false;
+                    if self.estop.stops_motion() {
+                        // Home after an e-stop (`estop_action home`): now the power goes off.
+                        self.servo_power = false;
+                    }
                 }
             }
             Err(cause) => {
@@ -527,6 +683,13 @@ impl<M: Math> Controller<M> {
     }
 
     fn run(&mut self, session: &mut Session, cmd: Command) -> Result<Begun, Error> {
+        let moves = matches!(
+            cmd,
+            Command::Pose(_) | Command::Move(_) | Command::Nudge(_) | Command::Home
+        );
+        if moves && self.estop.stops_motion() {
+            return Err(Error::Estop(self.estop));
+        }
         match cmd {
             Command::Pose(target) => self.move_to(target),
             Command::Move(values) => self.move_to(values.apply(self.motion.target(), false)),
@@ -534,10 +697,19 @@ impl<M: Math> Controller<M> {
             Command::Home => self.move_to(Pose::HOME),
             Command::Check(target) => self.start_path(target, self.speed_limits(), Purpose::Check),
             Command::Stop => {
+                self.end_stream();
                 self.motion.stop();
                 self.returning_home = false;
                 Ok(Begun::Answered)
             }
+            Command::Reset => match self.estop {
+                Estop::Open => Err(Error::Estop(Estop::Open)),
+                Estop::Latched | Estop::Clear => {
+                    self.estop = Estop::Clear;
+                    self.fault = None;
+                    Ok(Begun::Answered)
+                }
+            },
             Command::Status => Ok(self.list(Listing::Status(self.status()))),
             Command::Geometry => Ok(self.list(Listing::Geometry)),
             Command::Config => Ok(self.list(Listing::Config(LinkSettings {
@@ -587,9 +759,33 @@ impl<M: Math> Controller<M> {
     }
 
     fn speed_limits(&self) -> SpeedLimits {
+        let s = &self.settings;
         SpeedLimits {
-            mm_per_s: self.settings.speed_mm_s,
-            deg_per_s: self.settings.speed_deg_s,
+            mm_per_s2: s.accel_mm_s2,
+            deg_per_s2: s.accel_deg_s2,
+            ..SpeedLimits::speeds(s.speed_mm_s, s.speed_deg_s)
+        }
+    }
+
+    /// The stream tracker's limits (the same settings as commanded moves, per axis).
+    fn track_limits(&self) -> TrackLimits {
+        let s = &self.settings;
+        TrackLimits {
+            mm_per_s: s.speed_mm_s,
+            mm_per_s2: s.accel_mm_s2,
+            rad_per_s: s.speed_deg_s.to_radians(),
+            rad_per_s2: s.accel_deg_s2.to_radians(),
+        }
+    }
+
+    /// Speeds for going home on its own (link loss, e-stop): the configured ones, or where a
+    /// group's is off, a slow default (it never jumps).
+    fn own_move_limits(&self) -> SpeedLimits {
+        let or = |v: f32, fallback: f32| if v > 0.0 { v } else { fallback };
+        SpeedLimits {
+            mm_per_s: or(self.settings.speed_mm_s, LINK_LOSS_SPEED_MM_S),
+            deg_per_s: or(self.settings.speed_deg_s, LINK_LOSS_SPEED_DEG_S),
+            ..self.speed_limits()
         }
     }
 
@@ -597,6 +793,141 @@ impl<M: Math> Controller<M> {
         let limits = self.speed_limits();
         let jump = !(limits.mm_per_s > 0.0 || limits.deg_per_s > 0.0);
         self.start_path(target, limits, Purpose::Move { jump })
+    }
+
+    // ----- streaming -----
+
+    /// A whole stream frame arrived: its pose becomes the stream's target (applied by
+    /// [`Controller::apply_stream`]).
+    fn on_stream_frame(&mut self, frame: Frame) {
+        let counts = &mut self.stream_counts;
+        let Ok(target) = self.settings.stream.to_pose(frame) else {
+            counts.damaged = counts.damaged.wrapping_add(1);
+            return;
+        };
+        counts.frames = counts.frames.wrapping_add(1);
+        if self.estop.stops_motion() || self.job.is_some() {
+            // (The board feeds no bytes while a job runs; refused all the same if it did.)
+            counts.refused = counts.refused.wrapping_add(1);
+            return;
+        }
+        self.heard_from_host();
+        let here = *self.motion.pose();
+        match self.stream.as_mut() {
+            Some(stream) => {
+                stream.target = target;
+                stream.fresh = true;
+            }
+            None => {
+                // The stream starts (again) from where the platform is; a move in progress ends.
+                self.motion = Motion::new(here);
+                self.returning_home = false;
+                self.stream = Some(Streaming {
+                    target,
+                    fresh: true,
+                    goal: here,
+                    tracker: Tracker::new(&here),
+                });
+            }
+        }
+    }
+
+    /// One servo frame of a stream: the tracker steps towards its goal; a step that cannot be
+    /// driven is clamped and the tracker stops there.
+    fn track_frame(&mut self) {
+        let Some(mut stream) = self.stream else {
+            return;
+        };
+        let limits = self.track_limits();
+        if limits == TrackLimits::OFF {
+            return; // pass-through: applied as frames come
+        }
+        let dt_s = 1.0 / f32::from(self.settings.frame_hz.max(1));
+        let next = stream.tracker.step::<M>(&stream.goal, &limits, dt_s);
+        if next.pose() == *self.motion.pose() && next == stream.tracker {
+            return; // settled: the pulses are solved already
+        }
+        match self.solver.solve::<M>(&self.settings.servos, &next.pose()) {
+            Ok(solution) => {
+                self.motion = Motion::new(next.pose());
+                self.solution = solution;
+                stream.tracker = next;
+            }
+            Err(_) => {
+                let from = *self.motion.pose();
+                let (pose, solution) = self.clamp(&from, &next.pose());
+                if let Some(solution) = solution {
+                    self.motion = Motion::new(pose);
+                    self.solution = solution;
+                }
+                stream.tracker.hold_at(&pose);
+                stream.goal = pose;
+            }
+        }
+        self.stream = Some(stream);
+    }
+
+    /// The last pose on the straight line from `from` (which can be driven) to `to` that can
+    /// be driven, within 1/2^[`CLAMP_STEPS`] of the way, and its solution (`None` when that is
+    /// `from` itself, whose solution is the current one). Counts a clamp if `to` cannot be
+    /// driven.
+    fn clamp(&mut self, from: &Pose, to: &Pose) -> (Pose, Option<Solution>) {
+        let servos = &self.settings.servos;
+        if let Ok(solution) = self.solver.solve::<M>(servos, to) {
+            return (*to, Some(solution));
+        }
+        self.stream_counts.clamped = self.stream_counts.clamped.wrapping_add(1);
+        let (mut reachable, mut unreachable) = (0.0f32, 1.0f32);
+        let mut best = (*from, None);
+        for _ in 0..CLAMP_STEPS {
+            let t = 0.5 * (reachable + unreachable);
+            let pose = lerp(from, to, t);
+            match self.solver.solve::<M>(servos, &pose) {
+                Ok(solution) => {
+                    reachable = t;
+                    best = (pose, Some(solution));
+                }
+                Err(_) => unreachable = t,
+            }
+        }
+        best
+    }
+
+    /// Ends the stream (the platform holds where it is).
+    fn end_stream(&mut self) {
+        if self.stream.take().is_some() {
+            self.motion = Motion::new(*self.motion.pose());
+        }
+    }
+
+    // ----- emergency stop -----
+
+    /// The e-stop input opened: stop (or go home), end the stream, power off.
+    fn on_estop(&mut self) {
+        self.end_stream();
+        self.motion.stop();
+        self.returning_home = false;
+        let safety = self.settings.safety;
+        self.notify(Notice::EstopOpened {
+            action: safety.estop_action,
+            power_pin: safety.power_pin.is_some(),
+        });
+        match safety.estop_action {
+            EstopAction::Freeze => self.servo_power = false,
+            EstopAction::Home => {
+                if *self.motion.pose() == Pose::HOME {
+                    self.servo_power = false;
+                } else if self.job.is_none() {
+                    let limits = self.own_move_limits();
+                    if let Err(e) = self.start_path(Pose::HOME, limits, Purpose::EstopHome) {
+                        self.home_blocked(e);
+                        self.servo_power = false;
+                    }
+                }
+                // (With a command's job running, the way home starts when it ends: see
+                // finish_path.)
+            }
+        }
     }
 
     /// Checks the target now (its error is the most useful one), then starts the check of the
@@ -614,8 +945,10 @@ impl<M: Math> Controller<M> {
             limits,
             f32::from(self.settings.frame_hz),
         );
-        // A move checked while moving: the platform holds here until the check ends.
-        self.holding = purpose != Purpose::Check && self.motion.is_moving();
+        // A move checked while moving (or streaming): the platform holds here until the check
+        // ends.
+        self.holding =
+            purpose != Purpose::Check && (self.motion.is_moving() || self.is_streaming());
         self.job = Some(Job::Path {
             purpose,
             solution,
@@ -659,19 +992,51 @@ impl<M: Math> Controller<M> {
         segment: Segment,
         result: Result<(), Error>,
     ) -> Done {
+        if self.estop.stops_motion()
+            && matches!(purpose, Purpose::Move { .. } | Purpose::ReturnHome)
+        {
+            // The e-stop opened while the path was checked: nothing moves (but home, if that
+            // is the e-stop's action).
+            if self.settings.safety.estop_action == EstopAction::Home && !self.motion.is_moving() {
+                let limits = self.own_move_limits();
+                if let Err(e) = self.start_path(Pose::HOME, limits, Purpose::EstopHome) {
+                    self.home_blocked(e);
+                    self.servo_power = false;
+                }
+            }
+            return match purpose {
+                Purpose::ReturnHome => Done::Quiet,
+                _ => Done::Refused(Error::Estop(self.estop)),
+            };
+        }
         match (purpose, result) {
             (Purpose::Move { jump: false }, Ok(())) => {
+                // An accepted move ends the stream.
+                self.end_stream();
                 self.start(segment);
+                self.servo_power = true;
                 Done::Ok
             }
             (Purpose::Move { jump: true }, Ok(())) => {
                 // No speed limit: a jump, made now (see the module docs on latency).
+                self.end_stream();
                 self.motion = Motion::new(*segment.target());
                 self.solution = solution;
                 self.new_pulses = true;
                 self.returning_home = false;
                 self.fault = None;
+                self.servo_power = true;
                 Done::Ok
+            }
+            (Purpose::EstopHome, Ok(())) => {
+                self.end_stream();
+                self.start(segment);
+                Done::Quiet
+            }
+            (Purpose::EstopHome, Err(e)) => {
+                self.home_blocked(e);
+                self.servo_power = false;
+                Done::Quiet
             }
             (Purpose::Check, Ok(())) => {
                 let duration_s = if segment.start() == segment.target() {
@@ -686,6 +1051,7 @@ impl<M: Math> Controller<M> {
                 })
             }
             (Purpose::ReturnHome, Ok(())) => {
+                self.end_stream();
                 self.start(segment);
                 self.returning_home = true;
                 self.notify(Notice::LinkLost {
@@ -761,10 +1127,18 @@ impl<M: Math> Controller<M> {
     fn status(&self) -> StatusReport {
         let hz = f32::from(self.settings.frame_hz);
         let motion = match self.motion.progress() {
+            None if self.stream.is_some() => MotionReport::Streaming {
+                tracking: self.track_limits() != TrackLimits::OFF,
+            },
             None => MotionReport::Idle,
             Some((done, total)) => {
                 let (elapsed_s, duration_s) = (done as f32 / hz, total as f32 / hz);
-                if self.returning_home {
+                if self.estop.stops_motion() {
+                    MotionReport::EstopHome {
+                        elapsed_s,
+                        duration_s,
+                    }
+                } else if self.returning_home {
                     MotionReport::ReturningHome {
                         elapsed_s,
                         duration_s,
@@ -784,6 +1158,9 @@ impl<M: Math> Controller<M> {
             arm_rad: self.solution.arm_rad,
             pulse_us: self.solution.pulse_us,
             fault: self.fault,
+            stream: self.stream_counts,
+            estop: self.estop,
+            servo_power: self.servo_power,
         }
     }
 
@@ -812,11 +1189,8 @@ impl<M: Math> Controller<M> {
         if *self.motion.pose() == Pose::HOME && !self.motion.is_moving() {
             return;
         }
-        let or = |v: f32, fallback: f32| if v > 0.0 { v } else { fallback };
-        let limits = SpeedLimits {
-            mm_per_s: or(self.settings.speed_mm_s, LINK_LOSS_SPEED_MM_S),
-            deg_per_s: or(self.settings.speed_deg_s, LINK_LOSS_SPEED_DEG_S),
-        };
+        self.end_stream();
+        let limits = self.own_move_limits();
         if let Err(e) = self.start_path(Pose::HOME, limits, Purpose::ReturnHome) {
             self.home_blocked(e);
         }
@@ -1207,8 +1581,10 @@ mod tests {
         );
         finish(&mut c, &mut link, &mut out);
         assert!(
-            out.ends_with("# pulse_us: 1500.00 1500.00 1500.00 1500.00 1500.00 1500.00\r\nok\r\n")
+            out.contains("# pulse_us: 1500.00 1500.00 1500.00 1500.00 1500.00 1500.00\r\n"),
+            "{out}"
         );
+        assert!(out.ends_with("# servo_power: off\r\nok\r\n"), "{out}");
     }
 
     #[test]
@@ -1224,8 +1600,8 @@ mod tests {
             c.work(&mut link, &mut out);
             lines.push(out[before..].matches("\r\n").count());
         }
-        // 12 settings, 6 servos, then the reply.
-        assert_eq!(lines.len(), 19);
+        // The global settings, 6 servos, then the reply.
+        assert_eq!(lines.len(), SettingId::GLOBAL.len() + 6 + 1);
         assert!(lines.iter().all(|&n| n == 1), "{lines:?}");
         assert!(out.ends_with("ok\r\n"));
     }

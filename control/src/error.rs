@@ -8,6 +8,7 @@ use kinematics_core::ik::IkError;
 
 use crate::command::ParseError;
 use crate::protocol::Spoiled;
+use crate::safety::Estop;
 use crate::settings::SettingError;
 
 /// Why a line is refused. Nothing changed; the platform holds its pose.
@@ -36,6 +37,8 @@ pub enum Error {
     },
     /// Not possible while the platform moves.
     Busy,
+    /// The emergency stop is on: no motion until its input is closed and `reset` is sent.
+    Estop(Estop),
     /// A line came before the reply to the one before (only where the board feeds bytes while
     /// the controller is busy, which the firmware never does).
     Pending,

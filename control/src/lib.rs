@@ -61,8 +61,11 @@ pub mod number;
 pub mod protocol;
 pub mod record;
 pub mod report;
+pub mod safety;
 pub mod session;
 pub mod settings;
+pub mod stream;
+pub mod tracker;
 pub mod word;
 
 pub use controller::Controller;

@@ -12,6 +12,14 @@
 //! speeds are never exceeded (beyond f32 rounding, at most 0.001 %); frame `k` of `N` commands
 //! `P(k / N)` and the last frame commands `P1` exactly.
 //!
+//! With acceleration limits (linear mm/s^2, angular deg/s^2, again the slower group sets the
+//! pace) the move follows the same straight line with a trapezoidal speed profile: it speeds
+//! up at the limit, cruises at the speed limit, and slows down at the limit to stop on the
+//! target (a triangle when the move is too short to reach the speed limit; without a speed
+//! limit it is always a triangle). Frame `k` commands `P(u(k / N))`, where `u` is the profile's
+//! distance fraction; the duration is rounded up to whole frames by slowing the whole profile
+//! down a little, so neither limit is exceeded.
+//!
 //! Before a move starts, [`Segment::check_path`] runs a caller-supplied check (the IK) along
 //! the path. Checked poses, with `S` = path length / (0.5 mm or 0.25 deg, whichever needs more
 //! samples) and at most [`MAX_PATH_CHECKS`] checks in total:
@@ -39,13 +47,29 @@ pub const MAX_FRAMES: u32 = 1 << 24;
 /// Relative allowance when rounding a duration up to whole frames.
 const FRAME_ROUNDING_ALLOWANCE: f32 = 1e-5;
 
-/// Speed limits; 0 (or anything not positive) means no limit on that group.
+/// Speed and acceleration limits; 0 (or anything not positive) means no limit.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SpeedLimits {
     /// Linear speed of the platform centre, mm/s.
     pub mm_per_s: f32,
     /// Angular speed (Euclidean norm of the Euler angle rates), deg/s.
     pub deg_per_s: f32,
+    /// Linear acceleration along the path, mm/s^2.
+    pub mm_per_s2: f32,
+    /// Angular acceleration along the path, deg/s^2.
+    pub deg_per_s2: f32,
+}
+
+impl SpeedLimits {
+    /// Speed limits only, no acceleration limit.
+    pub const fn speeds(mm_per_s: f32, deg_per_s: f32) -> SpeedLimits {
+        SpeedLimits {
+            mm_per_s,
+            deg_per_s,
+            mm_per_s2: 0.0,
+            deg_per_s2: 0.0,
+        }
+    }
 }
 
 /// Euclidean distance between the positions of two poses, mm.
@@ -87,18 +111,41 @@ pub struct Segment {
     start: Pose,
     target: Pose,
     frames: u32,
+    /// The fraction of the move's time spent speeding up (and as much slowing down): 0 for
+    /// constant speed, up to 1/2 (a triangle).
+    ramp: f32,
 }
+
+/// The smallest ramp fraction treated as one (below, the profile is constant speed).
+const MIN_RAMP: f32 = 1e-6;
 
 impl Segment {
     /// Plans a move at the given limits for a frame rate (Hz, > 0).
     pub fn plan(start: Pose, target: Pose, limits: SpeedLimits, frame_hz: f32) -> Segment {
-        let mut duration_s: f32 = 0.0;
-        if limits.mm_per_s > 0.0 {
-            duration_s = duration_s.max(linear_distance_mm(&start, &target) / limits.mm_per_s);
-        }
-        if limits.deg_per_s > 0.0 {
-            duration_s = duration_s.max(angular_distance_deg(&start, &target) / limits.deg_per_s);
-        }
+        let linear_mm = linear_distance_mm(&start, &target);
+        let angular_deg = angular_distance_deg(&start, &target);
+        // In path fraction u (0..=1) per second: the tighter group's speed and acceleration
+        // (infinite where no limit applies).
+        let fraction_per = |limit: f32, distance: f32| {
+            if limit > 0.0 && distance > 0.0 {
+                limit / distance
+            } else {
+                f32::INFINITY
+            }
+        };
+        let speed = fraction_per(limits.mm_per_s, linear_mm)
+            .min(fraction_per(limits.deg_per_s, angular_deg));
+        let accel = fraction_per(limits.mm_per_s2, linear_mm)
+            .min(fraction_per(limits.deg_per_s2, angular_deg));
+        // Duration and ramp time: constant speed, a trapezoid, or a triangle.
+        let (duration_s, ramp_s) = if accel.is_infinite() {
+            (if speed.is_finite() { 1.0 / speed } else { 0.0 }, 0.0)
+        } else if speed.is_finite() && speed * speed / accel < 1.0 {
+            (1.0 / speed + speed / accel, speed / accel)
+        } else {
+            let half = libm::sqrtf(1.0 / accel);
+            (2.0 * half, half)
+        };
         // Rounding up to whole frames keeps both speeds within their limits. The small
         // relative allowance absorbs f32 rounding (6 deg -> rad -> deg is 6.0000005 deg), so
         // a move that needs exactly N frames does not take N + 1; it can exceed a limit by
@@ -112,10 +159,16 @@ impl Segment {
         } else {
             1
         };
+        let ramp = if duration_s > 0.0 {
+            (ramp_s / duration_s).clamp(0.0, 0.5)
+        } else {
+            0.0
+        };
         Segment {
             start,
             target,
             frames,
+            ramp: if ramp < MIN_RAMP { 0.0 } else { ramp },
         }
     }
 
@@ -139,7 +192,13 @@ impl Segment {
         if k >= self.frames {
             self.target
         } else {
-            lerp(&self.start, &self.target, k as f32 / self.frames as f32)
+            let time = k as f32 / self.frames as f32;
+            let fraction = if self.ramp == 0.0 {
+                time
+            } else {
+                trapezoid(time, self.ramp)
+            };
+            lerp(&self.start, &self.target, fraction)
         }
     }
 
@@ -201,6 +260,22 @@ impl Segment {
             })?;
         }
         Ok(())
+    }
+}
+
+/// The distance fraction at time fraction `t` (0..=1) of a trapezoidal speed profile that
+/// spends the fraction `ramp` (0 < ramp <= 1/2) of its time speeding up and as much slowing
+/// down: peak speed `1 / (1 - ramp)`, acceleration `peak / ramp`, both per unit time.
+fn trapezoid(t: f32, ramp: f32) -> f32 {
+    let peak = 1.0 / (1.0 - ramp);
+    let accel = peak / ramp;
+    if t < ramp {
+        0.5 * accel * t * t
+    } else if t <= 1.0 - ramp {
+        0.5 * peak * ramp + peak * (t - ramp)
+    } else {
+        let left = 1.0 - t;
+        1.0 - 0.5 * accel * left * left
     }
 }
 
@@ -348,16 +423,98 @@ impl Motion {
 mod tests {
     use super::*;
 
-    const OFF: SpeedLimits = SpeedLimits {
-        mm_per_s: 0.0,
-        deg_per_s: 0.0,
-    };
+    const OFF: SpeedLimits = SpeedLimits::speeds(0.0, 0.0);
 
     fn limits(mm_per_s: f32, deg_per_s: f32) -> SpeedLimits {
-        SpeedLimits {
-            mm_per_s,
-            deg_per_s,
+        SpeedLimits::speeds(mm_per_s, deg_per_s)
+    }
+
+    #[test]
+    fn with_acceleration_limits_the_speed_ramps_up_and_down_within_them() {
+        let a = Pose::from_degrees(1.0, -2.0, 3.0, 0.5, 1.0, -1.5);
+        for (b, l) in [
+            // A trapezoid: 40 mm at 50 mm/s, 200 mm/s^2 (0.25 s ramps, 0.55 s cruise).
+            (
+                Pose::from_degrees(41.0, -2.0, 3.0, 0.5, 1.0, -1.5),
+                SpeedLimits {
+                    mm_per_s: 50.0,
+                    deg_per_s: 0.0,
+                    mm_per_s2: 200.0,
+                    deg_per_s2: 0.0,
+                },
+            ),
+            // A triangle: 2 mm never reaches 50 mm/s at 200 mm/s^2.
+            (
+                Pose::from_degrees(3.0, -2.0, 3.0, 0.5, 1.0, -1.5),
+                SpeedLimits {
+                    mm_per_s: 50.0,
+                    deg_per_s: 0.0,
+                    mm_per_s2: 200.0,
+                    deg_per_s2: 0.0,
+                },
+            ),
+            // Both groups limited, the angular one slower.
+            (
+                Pose::from_degrees(-7.3, 4.1, -9.9, 13.3, -12.2, 17.7),
+                SpeedLimits {
+                    mm_per_s: 100.0,
+                    deg_per_s: 30.0,
+                    mm_per_s2: 500.0,
+                    deg_per_s2: 60.0,
+                },
+            ),
+        ] {
+            for hz in [50.0, 333.0] {
+                let s = Segment::plan(a, b, l, hz);
+                let dt = 1.0 / hz;
+                let poses: std::vec::Vec<Pose> =
+                    (0..=s.frames() + 1).map(|k| s.pose_at(k)).collect();
+                let (mut v_lin, mut v_ang) = (0.0f32, 0.0f32);
+                for w in poses.windows(2) {
+                    let nl = linear_distance_mm(&w[0], &w[1]) / dt;
+                    let na = angular_distance_deg(&w[0], &w[1]) / dt;
+                    assert!(nl <= l.mm_per_s * 1.0001 || l.mm_per_s == 0.0, "{nl} mm/s");
+                    assert!(
+                        na <= l.deg_per_s * 1.0001 || l.deg_per_s == 0.0,
+                        "{na} deg/s"
+                    );
+                    // Speed changes by at most the limit each frame (a frame's speed is the
+                    // average over it, so allow one frame of the ramp's curvature).
+                    assert!(
+                        (nl - v_lin).abs() <= l.mm_per_s2 * dt * 1.01 + 1e-3,
+                        "{nl} after {v_lin}"
+                    );
+                    if l.deg_per_s2 > 0.0 {
+                        assert!((na - v_ang).abs() <= l.deg_per_s2 * dt * 1.01 + 1e-3);
+                    }
+                    v_lin = nl;
+                    v_ang = na;
+                }
+                assert_eq!(v_lin, 0.0, "at rest after the last frame");
+                assert_eq!(s.pose_at(s.frames()), b);
+                // Along the straight line, and every commanded pose among the checkpoints.
+                let checked: std::vec::Vec<Pose> = s.checkpoints().map(|(p, _)| p).collect();
+                for k in 1..=s.frames() {
+                    assert!(checked.contains(&s.pose_at(k)), "frame {k}");
+                }
+            }
         }
+    }
+
+    #[test]
+    fn an_acceleration_limit_sets_the_duration_as_documented() {
+        let b = Pose::from_degrees(0.0, 0.0, 40.0, 0.0, 0.0, 0.0);
+        let l = SpeedLimits {
+            mm_per_s: 50.0,
+            deg_per_s: 0.0,
+            mm_per_s2: 200.0,
+            deg_per_s2: 0.0,
+        };
+        // 40 / 50 + 50 / 200 = 1.05 s: 53 frames at 50 Hz (52.5 rounded up).
+        assert_eq!(Segment::plan(Pose::HOME, b, l, 50.0).frames(), 53);
+        // Without a speed limit: a triangle, 2 sqrt(40 / 200) = 0.894 s: 45 frames.
+        let tri = SpeedLimits { mm_per_s: 0.0, ..l };
+        assert_eq!(Segment::plan(Pose::HOME, b, tri, 50.0).frames(), 45);
     }
 
     #[test]

@@ -15,10 +15,21 @@
 //! - At most [`MAX_LINE`] characters are kept. A longer line is discarded up to its end and
 //!   then reported once as too long. A byte outside printable ASCII, or bytes lost by the UART
 //!   queue, spoil the line the same way.
+//! - Stream frames share the link ([`crate::stream`]): at a line start, `A5` begins a binary
+//!   frame (if `5A` does not follow, the `A5` was a stray byte and spoils the line like any
+//!   byte outside ASCII); in a line already spoiled by such bytes (garbage), `A5 5A` begins a
+//!   frame too and the garbage is dropped without a reply, so a binary stream recovers from
+//!   anything; digits and commas, starting with a digit, then `X`, are a text frame. Frames are
+//!   not lines: no echo, no reply; garbage and damaged frames are reported as such, to count.
+//!   A binary frame whose bytes stop coming for more than a whole servo frame (a stream cut
+//!   mid-frame) is dropped as damaged, so what comes next (a command typed after a stream
+//!   software crashed) is read as it was meant ([`LineBuffer::feed_at`]).
 //!
 //! This module only classifies bytes; the controller decides what to echo and reply.
 
 use heapless::Vec;
+
+use crate::stream::{self, BinaryFeed, BinaryFrame, Counts};
 
 /// Longest line kept, in characters (excluding the line end).
 pub const MAX_LINE: usize = 128;
@@ -73,6 +84,20 @@ pub enum Feed {
     Line,
     /// A spoiled line ended.
     Spoiled(Spoiled),
+    /// A whole stream frame arrived.
+    Frame(Frame),
+    /// Bytes that began a stream frame turned out not to be one (dropped, to be counted).
+    DamagedFrame,
+}
+
+/// A stream frame's counts, by the format it came in (their meaning differs: see the
+/// settings).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Frame {
+    /// A binary frame: 16-bit counts, axes in the order x y z roll pitch yaw.
+    Binary(Counts),
+    /// A text frame: counts of the configured bit depth, axes in the configured order.
+    Text(Counts),
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -93,6 +118,12 @@ pub struct LineBuffer {
     spoiled: Option<Spoiled>,
     after_cr: bool,
     escape: Escape,
+    /// A binary stream frame in progress.
+    frame: BinaryFrame,
+    /// The servo-frame count when the frame in progress last got a byte.
+    frame_tick: u32,
+    /// A frame in progress was dropped because its bytes stopped coming.
+    abandoned: bool,
 }
 
 impl Default for LineBuffer {
@@ -109,6 +140,9 @@ impl LineBuffer {
             spoiled: None,
             after_cr: false,
             escape: Escape::None,
+            frame: BinaryFrame::new(),
+            frame_tick: 0,
+            abandoned: false,
         }
     }
 
@@ -145,8 +179,63 @@ impl LineBuffer {
         }));
     }
 
-    /// Feeds one received byte.
+    /// Feeds one received byte, `tick` being the number of servo frames so far: a binary frame
+    /// in progress whose last byte came two or more ticks ago (more than a whole servo frame,
+    /// while a frame's 16 bytes take at most 17 ms, at 9600 baud) is dropped first
+    /// ([`LineBuffer::take_abandoned`] says so) and this byte read afresh.
+    pub fn feed_at(&mut self, byte: u8, tick: u32) -> Feed {
+        if !self.frame.is_empty() && tick.wrapping_sub(self.frame_tick) >= 2 {
+            self.frame = BinaryFrame::new();
+            self.abandoned = true;
+        }
+        self.frame_tick = tick;
+        self.feed(byte)
+    }
+
+    /// True (once) if [`LineBuffer::feed_at`] dropped a frame whose bytes stopped coming.
+    pub fn take_abandoned(&mut self) -> bool {
+        core::mem::take(&mut self.abandoned)
+    }
+
+    /// Feeds one received byte (no time passes: see [`LineBuffer::feed_at`]).
     pub fn feed(&mut self, byte: u8) -> Feed {
+        let frame_starts = byte == stream::BINARY_HEADER[0]
+            && (self.at_line_start() || matches!(self.spoiled, Some(Spoiled::BadByte(_))));
+        if !self.frame.is_empty() || frame_starts {
+            return self.feed_frame(byte);
+        }
+        self.feed_line(byte)
+    }
+
+    /// A byte of a binary frame (or of what may begin one).
+    fn feed_frame(&mut self, byte: u8) -> Feed {
+        self.after_cr = false;
+        match self.frame.feed(byte) {
+            BinaryFeed::Pending if self.frame.len() == stream::BINARY_HEADER.len() => {
+                // The header is whole: a frame. A line spoiled by garbage before it is dropped
+                // (it never ended, so it gets no reply).
+                if self.spoiled.is_some() {
+                    self.clear();
+                    return Feed::DamagedFrame;
+                }
+                Feed::Nothing
+            }
+            BinaryFeed::Pending => Feed::Nothing,
+            BinaryFeed::Frame(counts) => Feed::Frame(Frame::Binary(counts)),
+            BinaryFeed::Damaged => Feed::DamagedFrame,
+            // `A5` then not `5A`: a stray byte, not a frame: it spoils the line (if nothing
+            // did already). This byte is read afresh (another `A5` may begin a frame).
+            BinaryFeed::NotAFrame => {
+                if self.spoiled.is_none() {
+                    self.spoiled = Some(Spoiled::BadByte(stream::BINARY_HEADER[0]));
+                }
+                self.feed(byte)
+            }
+        }
+    }
+
+    /// A byte of a line.
+    fn feed_line(&mut self, byte: u8) -> Feed {
         let after_cr = core::mem::replace(&mut self.after_cr, byte == b'\r');
         match self.escape {
             Escape::Started => match byte {
@@ -221,9 +310,24 @@ impl LineBuffer {
         }
     }
 
+    /// Nothing of a line has arrived yet (a stream frame may begin).
+    fn at_line_start(&self) -> bool {
+        self.buf.is_empty() && self.spoiled.is_none() && self.escape == Escape::None
+    }
+
     fn add(&mut self, byte: u8) -> Feed {
         if self.spoiled.is_some() {
             return Feed::Nothing;
+        }
+        if byte == stream::TEXT_FRAME_END && stream::is_text_frame_so_far(&self.buf) {
+            // A line that began with a digit and ends with `X`: a text frame, whole or damaged.
+            let frame = core::str::from_utf8(&self.buf)
+                .ok()
+                .and_then(stream::parse_text_frame);
+            self.buf.clear();
+            return frame.map_or(Feed::DamagedFrame, |counts| {
+                Feed::Frame(Frame::Text(counts))
+            });
         }
         match self.buf.push(byte) {
             Ok(()) => Feed::Added(byte),
@@ -433,5 +537,124 @@ mod tests {
         lb.feed(b'?');
         assert_eq!(lb.feed(b'\n'), Feed::Line);
         assert_eq!(lb.line(), "?");
+    }
+
+    /// Feeds bytes; returns the frames, damaged frames and lines in order.
+    fn inputs(input: &[u8]) -> std::vec::Vec<std::string::String> {
+        let mut lb = LineBuffer::new();
+        let mut out = std::vec::Vec::new();
+        for &b in input {
+            match lb.feed(b) {
+                Feed::Line => {
+                    out.push(std::format!("line {}", lb.line()));
+                    lb.clear();
+                }
+                Feed::Frame(Frame::Binary(c)) => out.push(std::format!("binary {c:?}")),
+                Feed::Frame(Frame::Text(c)) => out.push(std::format!("text {c:?}")),
+                Feed::DamagedFrame => out.push("damaged".into()),
+                Feed::Spoiled(why) => out.push(std::format!("spoiled {why:?}")),
+                Feed::Empty => out.push("empty".into()),
+                _ => {}
+            }
+        }
+        out
+    }
+
+    fn binary(counts: [u16; 6]) -> std::vec::Vec<u8> {
+        let mut bytes = std::vec![0xA5, 0x5A];
+        for c in counts {
+            bytes.extend_from_slice(&c.to_be_bytes());
+        }
+        bytes.extend_from_slice(b"\r\n");
+        bytes
+    }
+
+    #[test]
+    fn stream_frames_share_the_link_with_lines() {
+        let mut input = b"status\n".to_vec();
+        input.extend(binary([1, 2, 3, 4, 5, 6]));
+        input.extend(binary([0x0D0A, 0x0A0D, 0xA5A5, 0x5A5A, 0, 65535]));
+        input.extend_from_slice(b"home\n127,128,129,130,131,132X");
+        input.extend_from_slice(b"1,2,3,4,5,6X?\n");
+        assert_eq!(
+            inputs(&input),
+            [
+                "line status",
+                "binary [1, 2, 3, 4, 5, 6]",
+                "binary [3338, 2573, 42405, 23130, 0, 65535]",
+                "line home",
+                "text [127, 128, 129, 130, 131, 132]",
+                "text [1, 2, 3, 4, 5, 6]",
+                "line ?",
+            ]
+        );
+    }
+
+    #[test]
+    fn a_stray_a5_is_a_bad_byte_in_its_line() {
+        // Not followed by 5A: the line it starts (or is in) is refused as before.
+        assert_eq!(
+            inputs(b"\xA5status\nhome\n"),
+            ["spoiled BadByte(165)", "line home"]
+        );
+        assert_eq!(inputs(b"sta\xA5tus\n"), ["spoiled BadByte(165)"]);
+        // A5 A5 5A: the first is stray, the second begins a frame.
+        let mut input = b"\xA5".to_vec();
+        input.extend(binary([4; 6]));
+        assert_eq!(inputs(&input), ["damaged", "binary [4, 4, 4, 4, 4, 4]"]);
+    }
+
+    #[test]
+    fn garbage_before_a_frame_is_dropped_without_a_reply() {
+        // A binary stream that lost bytes: the rest of a frame (binary garbage, a spoiled line)
+        // is dropped when the next frame's header arrives; nothing asks for a reply.
+        let frame = binary([7; 6]);
+        let mut input = frame[5..].to_vec();
+        input.extend(binary([8; 6]));
+        input.extend(binary([9; 6]));
+        let got = inputs(&input);
+        assert!(
+            !got.iter()
+                .any(|g| g.starts_with("spoiled") || g.starts_with("line")),
+            "{got:?}"
+        );
+        assert_eq!(
+            got.last().map(std::string::String::as_str),
+            Some("binary [9, 9, 9, 9, 9, 9]")
+        );
+        assert!(got.contains(&"binary [8, 8, 8, 8, 8, 8]".into()), "{got:?}");
+    }
+
+    #[test]
+    fn a_frame_whose_bytes_stop_coming_is_dropped_and_what_follows_is_read_afresh() {
+        let mut lb = LineBuffer::new();
+        for &b in &binary([1; 6])[..9] {
+            assert_eq!(lb.feed_at(b, 100), Feed::Nothing);
+        }
+        // One servo frame later the frame is still expected...
+        assert_eq!(lb.feed_at(0, 101), Feed::Nothing);
+        assert!(!lb.take_abandoned());
+        // ...then nothing for two: a typed line is a line.
+        let mut last = Feed::Nothing;
+        for &b in b"status\n" {
+            last = lb.feed_at(b, 103);
+        }
+        assert!(lb.take_abandoned());
+        assert!(!lb.take_abandoned(), "once");
+        assert_eq!(last, Feed::Line);
+        assert_eq!(lb.line(), "status");
+    }
+
+    #[test]
+    fn text_frames_need_six_counts_and_lines_starting_with_digits_stay_lines() {
+        assert_eq!(
+            inputs(b"1,2,3X4,5,6,7,8,9X"),
+            ["damaged", "text [4, 5, 6, 7, 8, 9]"]
+        );
+        // A line end instead of X: a command line (the controller refuses it as one).
+        assert_eq!(inputs(b"123,4\n"), ["line 123,4"]);
+        // X elsewhere is just a character, also after a digit when other characters came.
+        assert_eq!(inputs(b"move x=1\n"), ["line move x=1"]);
+        assert_eq!(inputs(b"0a0 X1\n"), ["line 0a0 X1"]);
     }
 }

@@ -13,20 +13,36 @@
 //! | 12 | 12 | `speed_mm_s`, `speed_deg_s`, `link_timeout_s` (f32) |
 //! | 24 | 24 | layout (f32): base radius, base half angle, platform radius and half angle, a, s |
 //! | 48 | 6 x 20 | per servo: trim, rate, min, max (f32), dir (0 normal, 1 reversed), 3 x 0 |
-//! | 168 | 4 | CRC-32 (IEEE 802.3) of bytes 0..168 |
+//! | 168 | 8 | `accel_mm_s2`, `accel_deg_s2` (f32) |
+//! | 176 | 24 | stream full scales x, y, z (mm), roll, pitch, yaw (deg) (f32) |
+//! | 200 | 1 | `stream.bits` |
+//! | 201 | 6 | `stream.axis1..6`: 0..=5 x y z roll pitch yaw, 6 none |
+//! | 207 | 1 | `estop_pin`: GPIO, `0xFF` off |
+//! | 208 | 1 | `estop_action`: 0 freeze, 1 home |
+//! | 209 | 1 | `power_pin`: GPIO, `0xFF` off |
+//! | 210 | 2 | reserved, 0 |
+//! | 212 | 4 | CRC-32 (IEEE 802.3) of bytes 0..212 |
 //!
 //! The link settings (`baud`, `echo`) are not in it: they belong to the links, not the platform.
 //! Decoding checks magic, version, length, checksum, every enumerated byte and finally
 //! [`Settings::validate`], so decoded settings are always usable.
 
+use kinematics_core::pose::Axis;
 use kinematics_core::{Direction, ServoSet};
 
+use crate::safety::EstopAction;
 use crate::settings::{LayoutParam, SettingError, Settings};
 
-/// Binary format version (1 also held the link settings; it was never written to a board).
-pub const FORMAT_VERSION: u16 = 2;
+/// A pin byte meaning "off".
+const PIN_OFF: u8 = 0xFF;
+/// A `stream.axisN` byte meaning `none`.
+const AXIS_NONE: u8 = 6;
+
+/// Binary format version (1 also held the link settings, 2 lacked the acceleration, stream
+/// and safety settings; no release wrote either to a board).
+pub const FORMAT_VERSION: u16 = 3;
 /// Bytes between the header and the checksum.
-pub const PAYLOAD_LEN: usize = 160;
+pub const PAYLOAD_LEN: usize = 204;
 /// Bytes of an encoded [`Settings`].
 pub const ENCODED_LEN: usize = HEADER_LEN + PAYLOAD_LEN + 4;
 const HEADER_LEN: usize = 8;
@@ -151,6 +167,27 @@ pub fn encode(settings: &Settings) -> [u8; ENCODED_LEN] {
         };
         w.bytes(&[dir, 0, 0, 0]);
     }
+    w.f32(settings.accel_mm_s2);
+    w.f32(settings.accel_deg_s2);
+    for v in settings.stream.full_scale {
+        w.f32(v);
+    }
+    w.bytes(&[settings.stream.text_bits]);
+    for axis in settings.stream.text_order {
+        w.bytes(&[axis.map_or(AXIS_NONE, |a| a as u8)]);
+    }
+    let safety = &settings.safety;
+    let action = match safety.estop_action {
+        EstopAction::Freeze => 0,
+        EstopAction::Home => 1,
+    };
+    w.bytes(&[
+        safety.estop_pin.unwrap_or(PIN_OFF),
+        action,
+        safety.power_pin.unwrap_or(PIN_OFF),
+        0,
+        0,
+    ]);
     let end = w.at;
     debug_assert_eq!(end, HEADER_LEN + PAYLOAD_LEN);
     let crc = crc32(&buf[..end]);
@@ -213,6 +250,33 @@ pub fn decode(bytes: &[u8]) -> Result<Settings, DecodeError> {
         };
         r.zeros(SERVO_RECORD_LEN - 17)?;
     }
+    settings.accel_mm_s2 = r.f32();
+    settings.accel_deg_s2 = r.f32();
+    for v in settings.stream.full_scale.iter_mut() {
+        *v = r.f32();
+    }
+    settings.stream.text_bits = r.u8();
+    for slot in settings.stream.text_order.iter_mut() {
+        let offset = r.at;
+        *slot = match r.u8() {
+            AXIS_NONE => None,
+            i => Some(
+                *Axis::ALL
+                    .get(usize::from(i))
+                    .ok_or(DecodeError::BadField { offset })?,
+            ),
+        };
+    }
+    let pin = |b: u8| (b != PIN_OFF).then_some(b);
+    settings.safety.estop_pin = pin(r.u8());
+    let offset = r.at;
+    settings.safety.estop_action = match r.u8() {
+        0 => EstopAction::Freeze,
+        1 => EstopAction::Home,
+        _ => return Err(DecodeError::BadField { offset }),
+    };
+    settings.safety.power_pin = pin(r.u8());
+    r.zeros(2)?;
     settings.validate().map_err(DecodeError::Invalid)?;
     Ok(settings)
 }
@@ -234,6 +298,21 @@ mod tests {
         s.servos.0[4].home_us = 1523.25;
         s.servos.0[0].direction = Direction::Normal;
         s.servos.0[5].min_us = 1000.0;
+        s.accel_mm_s2 = 500.0;
+        s.accel_deg_s2 = 0.0;
+        s.stream.full_scale = [10.0, -20.0, 5.5, 0.0, -30.0, 45.0];
+        s.stream.text_bits = 12;
+        s.stream.text_order = [
+            Some(Axis::Roll),
+            None,
+            Some(Axis::Z),
+            Some(Axis::X),
+            Some(Axis::Yaw),
+            Some(Axis::Pitch),
+        ];
+        s.safety.estop_pin = Some(15);
+        s.safety.estop_action = EstopAction::Home;
+        s.safety.power_pin = Some(22);
         s.validate().unwrap();
         let bytes = encode(&s);
         assert_eq!(bytes.len(), ENCODED_LEN);
@@ -274,6 +353,8 @@ mod tests {
         let mut bytes = encode(&Settings::default());
         bytes[4] = 1;
         assert_eq!(decode(&bytes), Err(DecodeError::UnsupportedVersion(1)));
+        bytes[4] = 2;
+        assert_eq!(decode(&bytes), Err(DecodeError::UnsupportedVersion(2)));
         let mut bytes = encode(&Settings::default());
         bytes[6] = 1;
         assert!(matches!(decode(&bytes), Err(DecodeError::BadLength(_))));
@@ -318,6 +399,30 @@ mod tests {
             decode(&reseal(bytes)),
             Err(DecodeError::BadField { offset: 64 })
         );
+        let mut bytes = default;
+        bytes[201] = 7; // stream.axis1
+        assert_eq!(
+            decode(&reseal(bytes)),
+            Err(DecodeError::BadField { offset: 201 })
+        );
+        let mut bytes = default;
+        bytes[208] = 2; // estop_action
+        assert_eq!(
+            decode(&reseal(bytes)),
+            Err(DecodeError::BadField { offset: 208 })
+        );
+        let mut bytes = default;
+        bytes[207] = 3; // estop_pin on a servo's GPIO
+        assert!(matches!(
+            decode(&reseal(bytes)),
+            Err(DecodeError::Invalid(_))
+        ));
+        let mut bytes = default;
+        bytes[202] = 0; // stream.axis2 = x, as axis1 is
+        assert!(matches!(
+            decode(&reseal(bytes)),
+            Err(DecodeError::Invalid(SettingError::StreamAxisTwice { .. }))
+        ));
         let mut bytes = default;
         bytes[24 + 20..24 + 24].copy_from_slice(&5.0f32.to_le_bytes()); // rod 5 mm
         assert!(matches!(

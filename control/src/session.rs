@@ -80,13 +80,19 @@ impl Session {
         self.prompt_deferred = true;
     }
 
-    /// Feeds one received byte to the line, echoing it when echo is on.
-    pub(crate) fn feed(&mut self, byte: u8, out: &mut impl Write) -> Feed {
-        let feed = self.line.feed(byte);
+    /// Feeds one received byte to the line, echoing it when echo is on; `tick` is the number
+    /// of servo frames so far (see [`LineBuffer::feed_at`]).
+    pub(crate) fn feed(&mut self, byte: u8, tick: u32, out: &mut impl Write) -> Feed {
+        let feed = self.line.feed_at(byte, tick);
         if self.echo {
             report::write_echo(out, feed);
         }
         feed
+    }
+
+    /// True (once) if a binary frame was dropped because its bytes stopped coming.
+    pub(crate) fn take_abandoned_frame(&mut self) -> bool {
+        self.line.take_abandoned()
     }
 
     /// The completed line (after [`Feed::Line`]); the buffer is free again.

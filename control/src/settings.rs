@@ -20,6 +20,8 @@
 //! | `echo` | this link: `on` / `off` (echo and prompt, for terminals) | on |
 //! | `speed_mm_s` | linear speed limit 0.1..=1000 mm/s, `0`/`off` = jump | 50 |
 //! | `speed_deg_s` | angular speed limit 0.1..=3600 deg/s, `0`/`off` = jump | 60 |
+//! | `accel_mm_s2` | linear acceleration limit 1..=100000 mm/s^2, `0`/`off` = none | off |
+//! | `accel_deg_s2` | angular acceleration limit 1..=1000000 deg/s^2, `0`/`off` = none | off |
 //! | `link_timeout_s` | home after this long without a command, 0.1..=3600 s, `0`/`off` | off |
 //! | `base_radius_mm`, `platform_radius_mm` | joint circle radii, 1..=1000 mm | 75, 60 |
 //! | `base_half_angle_deg`, `platform_half_angle_deg` | half a pair's angle, 0..=60 deg | 20, 20 |
@@ -28,7 +30,15 @@
 //! | `servoN.rate_us_rad` | servo rate `r`, 100..=5000 us/rad | 1600/pi |
 //! | `servoN.dir` | `normal` (even servos, eq. 13) / `reversed` (odd servos, eq. 14) | by parity |
 //! | `servoN.min_us`, `servoN.max_us` | pulse limits, 400..=2600 us | 1100, 1900 |
+//! | `stream.x_mm`, `stream.y_mm`, `stream.z_mm` | stream full scale, -500..=500 mm | 25, 25, 15 |
+//! | `stream.roll_deg`, `stream.pitch_deg`, `stream.yaw_deg` | stream full scale, -90..=90 deg | 15, 15, 20 |
+//! | `stream.bits` | bits of a text frame's counts, 8..=16 | 8 |
+//! | `stream.axisN` | axis of a text frame's count N (1..=6): `x` `y` `z` `roll` `pitch` `yaw` `none` | x y z roll pitch yaw |
+//! | `estop_pin` | emergency-stop input GPIO (active low, pull-up), or `off` | off |
+//! | `estop_action` | `freeze` or `home` when the e-stop input opens | freeze |
+//! | `power_pin` | servo-power enable output GPIO (high = on), or `off` | off |
 //!
+//! The stream settings are [`crate::stream`]'s, the pins and the e-stop [`crate::safety`]'s.
 //! `servos.<field>` sets that field of all six servos at once. Equation numbers are those of
 //! "The Mathematics of the Stewart Platform". The binary form kept in flash is
 //! [`crate::record`]'s; the words of every refusal ([`SettingError`]) are [`crate::report`]'s.
@@ -42,7 +52,11 @@ use kinematics_core::servo::{
 };
 use kinematics_core::{Direction, Libm, Math, ServoConfig, ServoSet, LEGS};
 
+use kinematics_core::pose::Axis;
+
 use crate::number::{parse_f32, parse_u32, NumberError};
+use crate::safety::{EstopAction, SafetySettings, FREE_GPIOS};
+use crate::stream::{StreamSettings, TEXT_BITS_MAX, TEXT_BITS_MIN};
 use crate::word::{word, Word};
 
 /// Lowest servo frame rate, Hz.
@@ -74,10 +88,18 @@ pub struct Settings {
     pub speed_mm_s: f32,
     /// Angular speed limit, deg/s; 0 = no limit (jump).
     pub speed_deg_s: f32,
+    /// Linear acceleration limit, mm/s^2; 0 = none.
+    pub accel_mm_s2: f32,
+    /// Angular acceleration limit, deg/s^2; 0 = none.
+    pub accel_deg_s2: f32,
     /// Return home after this long without a command, s; 0 = never.
     pub link_timeout_s: f32,
     /// Servo frame rate, Hz.
     pub frame_hz: u16,
+    /// How stream frames' counts become poses.
+    pub stream: StreamSettings,
+    /// The emergency-stop input and the servo-power output.
+    pub safety: SafetySettings,
 }
 
 impl Default for Settings {
@@ -87,8 +109,12 @@ impl Default for Settings {
             servos: ServoSet::default(),
             speed_mm_s: DEFAULT_SPEED_MM_S,
             speed_deg_s: DEFAULT_SPEED_DEG_S,
+            accel_mm_s2: 0.0,
+            accel_deg_s2: 0.0,
             link_timeout_s: 0.0,
             frame_hz: DEFAULT_FRAME_HZ,
+            stream: StreamSettings::default(),
+            safety: SafetySettings::default(),
         }
     }
 }
@@ -265,13 +291,35 @@ pub enum SettingId {
     SpeedMmS,
     /// `speed_deg_s`.
     SpeedDegS,
+    /// `accel_mm_s2`.
+    AccelMmS2,
+    /// `accel_deg_s2`.
+    AccelDegS2,
     /// `link_timeout_s`.
     LinkTimeoutS,
     /// A build number.
     Layout(LayoutParam),
     /// A servo field.
     Servo(ServoSel, ServoParam),
+    /// `stream.x_mm` .. `stream.yaw_deg`: an axis' full scale.
+    StreamScale(Axis),
+    /// `stream.bits`.
+    StreamBits,
+    /// `stream.axisN`: the axis of a text frame's count N (1..=6).
+    StreamAxis(u8),
+    /// `estop_pin`.
+    EstopPin,
+    /// `estop_action`.
+    EstopAction,
+    /// `power_pin`.
+    PowerPin,
 }
+
+/// The words `stream.axisN` takes, [`SettingValue::Choice`] indices: the axes in pose order,
+/// then `none`.
+pub const STREAM_AXIS_WORDS: &[&str] = &["x", "y", "z", "roll", "pitch", "yaw", "none"];
+/// The words `estop_action` takes, in [`EstopAction`] order.
+pub const ESTOP_ACTION_WORDS: &[&str] = &["freeze", "home"];
 
 /// The form and range of a setting's value.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -304,6 +352,10 @@ pub enum Kind {
     Flag,
     /// `normal` / `reversed`.
     Dir,
+    /// One of these words.
+    Choice(&'static [&'static str]),
+    /// A GPIO number from [`FREE_GPIOS`], or `off`.
+    Pin,
 }
 
 /// A parsed setting value.
@@ -317,6 +369,10 @@ pub enum SettingValue {
     Flag(bool),
     /// For [`Kind::Dir`].
     Dir(Direction),
+    /// For [`Kind::Choice`]: the index of the word.
+    Choice(u8),
+    /// For [`Kind::Pin`]: the GPIO, or `None` for off.
+    Pin(Option<u8>),
 }
 
 /// What a refused setting value was expected to be (for [`SettingError::BadValue`]).
@@ -328,6 +384,10 @@ pub enum Expected {
     OnOrOff,
     /// `normal` or `reversed`.
     NormalOrReversed,
+    /// One of these words.
+    OneOf(&'static [&'static str]),
+    /// A free GPIO ([`FREE_GPIOS`]) or `off`.
+    FreePin,
 }
 
 /// Why a setting value, or a set of settings, is refused.
@@ -391,6 +451,20 @@ pub enum SettingError {
     BadServoConfig(ServoError),
     /// The resulting geometry is not a buildable platform.
     BadGeometry(GeometryError),
+    /// Two `stream.axisN` name the same axis.
+    StreamAxisTwice {
+        /// The axis.
+        axis: Axis,
+        /// The first count that has it (1..=6).
+        first: u8,
+        /// The other (1..=6).
+        second: u8,
+    },
+    /// `estop_pin` and `power_pin` are the same GPIO.
+    PinTwice {
+        /// The GPIO.
+        pin: u8,
+    },
 }
 
 const fn number(min: f32, max: f32, unit: &'static str, decimals: u8) -> Kind {
@@ -415,12 +489,14 @@ const fn number_or_off(min: f32, max: f32, unit: &'static str) -> Kind {
 
 impl SettingId {
     /// The settings that are not per servo, in listing order.
-    pub const GLOBAL: [SettingId; 12] = [
+    pub const GLOBAL: [SettingId; 30] = [
         SettingId::FrameHz,
         SettingId::Baud,
         SettingId::Echo,
         SettingId::SpeedMmS,
         SettingId::SpeedDegS,
+        SettingId::AccelMmS2,
+        SettingId::AccelDegS2,
         SettingId::LinkTimeoutS,
         SettingId::Layout(LayoutParam::BaseRadiusMm),
         SettingId::Layout(LayoutParam::BaseHalfAngleDeg),
@@ -428,6 +504,22 @@ impl SettingId {
         SettingId::Layout(LayoutParam::PlatformHalfAngleDeg),
         SettingId::Layout(LayoutParam::ArmMm),
         SettingId::Layout(LayoutParam::RodMm),
+        SettingId::StreamScale(Axis::X),
+        SettingId::StreamScale(Axis::Y),
+        SettingId::StreamScale(Axis::Z),
+        SettingId::StreamScale(Axis::Roll),
+        SettingId::StreamScale(Axis::Pitch),
+        SettingId::StreamScale(Axis::Yaw),
+        SettingId::StreamBits,
+        SettingId::StreamAxis(1),
+        SettingId::StreamAxis(2),
+        SettingId::StreamAxis(3),
+        SettingId::StreamAxis(4),
+        SettingId::StreamAxis(5),
+        SettingId::StreamAxis(6),
+        SettingId::EstopPin,
+        SettingId::EstopAction,
+        SettingId::PowerPin,
     ];
 
     /// Looks a name up (already lowercase).
@@ -460,9 +552,31 @@ impl SettingId {
             SettingId::Echo => "echo",
             SettingId::SpeedMmS => "speed_mm_s",
             SettingId::SpeedDegS => "speed_deg_s",
+            SettingId::AccelMmS2 => "accel_mm_s2",
+            SettingId::AccelDegS2 => "accel_deg_s2",
             SettingId::LinkTimeoutS => "link_timeout_s",
             SettingId::Layout(p) => p.name(),
             SettingId::Servo(..) => return None,
+            SettingId::StreamScale(axis) => match axis {
+                Axis::X => "stream.x_mm",
+                Axis::Y => "stream.y_mm",
+                Axis::Z => "stream.z_mm",
+                Axis::Roll => "stream.roll_deg",
+                Axis::Pitch => "stream.pitch_deg",
+                Axis::Yaw => "stream.yaw_deg",
+            },
+            SettingId::StreamBits => "stream.bits",
+            SettingId::StreamAxis(n) => match n {
+                1 => "stream.axis1",
+                2 => "stream.axis2",
+                3 => "stream.axis3",
+                4 => "stream.axis4",
+                5 => "stream.axis5",
+                _ => "stream.axis6",
+            },
+            SettingId::EstopPin => "estop_pin",
+            SettingId::EstopAction => "estop_action",
+            SettingId::PowerPin => "power_pin",
         })
     }
 
@@ -484,7 +598,25 @@ impl SettingId {
             SettingId::Echo => Kind::Flag,
             SettingId::SpeedMmS => number_or_off(0.1, 1000.0, "mm/s"),
             SettingId::SpeedDegS => number_or_off(0.1, 3600.0, "deg/s"),
+            SettingId::AccelMmS2 => number_or_off(1.0, 100_000.0, "mm/s^2"),
+            SettingId::AccelDegS2 => number_or_off(1.0, 1_000_000.0, "deg/s^2"),
             SettingId::LinkTimeoutS => number_or_off(0.1, 3600.0, "s"),
+            SettingId::StreamScale(axis) => {
+                if axis.is_angle() {
+                    number(-90.0, 90.0, "deg", 3)
+                } else {
+                    number(-500.0, 500.0, "mm", 3)
+                }
+            }
+            SettingId::StreamBits => Kind::Whole {
+                min: TEXT_BITS_MIN as u32,
+                max: TEXT_BITS_MAX as u32,
+                list: &[],
+                unit: "bits",
+            },
+            SettingId::StreamAxis(_) => Kind::Choice(STREAM_AXIS_WORDS),
+            SettingId::EstopAction => Kind::Choice(ESTOP_ACTION_WORDS),
+            SettingId::EstopPin | SettingId::PowerPin => Kind::Pin,
             SettingId::Layout(p) => match p {
                 LayoutParam::BaseRadiusMm | LayoutParam::PlatformRadiusMm => {
                     number(1.0, 1000.0, "mm", 3)
@@ -589,6 +721,19 @@ impl SettingId {
                 "reversed" | "-1" => SettingValue::Dir(Direction::Reversed),
                 _ => return Err(bad_value(Expected::NormalOrReversed)),
             },
+            Kind::Choice(words) => match words.iter().position(|w| *w == text) {
+                // At most a handful of words: the index fits.
+                Some(i) => SettingValue::Choice(i as u8),
+                None => return Err(bad_value(Expected::OneOf(words))),
+            },
+            Kind::Pin => match (text, parse_u32(text)) {
+                ("off", _) => SettingValue::Pin(None),
+                (_, Ok(gpio)) if FREE_GPIOS.contains(&gpio) => {
+                    // FREE_GPIOS are below 30.
+                    SettingValue::Pin(Some(gpio as u8))
+                }
+                _ => return Err(bad_value(Expected::FreePin)),
+            },
         };
         self.check(value)?;
         Ok(value)
@@ -658,6 +803,14 @@ impl SettingId {
                 }
             }
             (Kind::Flag, SettingValue::Flag(_)) | (Kind::Dir, SettingValue::Dir(_)) => Ok(()),
+            (Kind::Choice(words), SettingValue::Choice(i)) if usize::from(i) < words.len() => {
+                Ok(())
+            }
+            (Kind::Pin, SettingValue::Pin(pin))
+                if pin.is_none_or(|p| FREE_GPIOS.contains(&u32::from(p))) =>
+            {
+                Ok(())
+            }
             // A value of another kind: only a caller's mistake (`parse_value` never makes one).
             (kind, _) => Err(SettingError::BadValue {
                 setting,
@@ -665,6 +818,8 @@ impl SettingId {
                 expected: match kind {
                     Kind::Flag => Expected::OnOrOff,
                     Kind::Dir => Expected::NormalOrReversed,
+                    Kind::Choice(words) => Expected::OneOf(words),
+                    Kind::Pin => Expected::FreePin,
                     Kind::Whole { .. } | Kind::Number { .. } => Expected::WholeNumber,
                 },
             }),
@@ -691,8 +846,23 @@ impl Settings {
             SettingId::Baud | SettingId::Echo => return None,
             SettingId::SpeedMmS => SettingValue::Number(self.speed_mm_s),
             SettingId::SpeedDegS => SettingValue::Number(self.speed_deg_s),
+            SettingId::AccelMmS2 => SettingValue::Number(self.accel_mm_s2),
+            SettingId::AccelDegS2 => SettingValue::Number(self.accel_deg_s2),
             SettingId::LinkTimeoutS => SettingValue::Number(self.link_timeout_s),
             SettingId::Layout(p) => SettingValue::Number(p.get(&self.layout)),
+            SettingId::StreamScale(axis) => {
+                SettingValue::Number(self.stream.full_scale[axis as usize])
+            }
+            SettingId::StreamBits => SettingValue::Whole(u32::from(self.stream.text_bits)),
+            SettingId::StreamAxis(n) => {
+                let slot = usize::from(n).clamp(1, 6) - 1;
+                let axis = self.stream.text_order[slot];
+                // `none` is the word after the six axes.
+                SettingValue::Choice(axis.map_or(6, |a| a as u8))
+            }
+            SettingId::EstopPin => SettingValue::Pin(self.safety.estop_pin),
+            SettingId::EstopAction => SettingValue::Choice(self.safety.estop_action as u8),
+            SettingId::PowerPin => SettingValue::Pin(self.safety.power_pin),
             SettingId::Servo(sel, p) => {
                 let index = match sel {
                     ServoSel::One(n) => usize::from(n).saturating_sub(1).min(LEGS - 1),
@@ -713,8 +883,28 @@ impl Settings {
             }
             (SettingId::SpeedMmS, SettingValue::Number(v)) => s.speed_mm_s = v,
             (SettingId::SpeedDegS, SettingValue::Number(v)) => s.speed_deg_s = v,
+            (SettingId::AccelMmS2, SettingValue::Number(v)) => s.accel_mm_s2 = v,
+            (SettingId::AccelDegS2, SettingValue::Number(v)) => s.accel_deg_s2 = v,
             (SettingId::LinkTimeoutS, SettingValue::Number(v)) => s.link_timeout_s = v,
             (SettingId::Layout(p), SettingValue::Number(v)) => *p.slot(&mut s.layout) = v,
+            (SettingId::StreamScale(axis), SettingValue::Number(v)) => {
+                s.stream.full_scale[axis as usize] = v
+            }
+            (SettingId::StreamBits, SettingValue::Whole(v)) => {
+                s.stream.text_bits = u8::try_from(v).unwrap_or(u8::MAX)
+            }
+            (SettingId::StreamAxis(n @ 1..=6), SettingValue::Choice(i)) => {
+                s.stream.text_order[usize::from(n) - 1] = Axis::ALL.get(usize::from(i)).copied()
+            }
+            (SettingId::EstopPin, SettingValue::Pin(pin)) => s.safety.estop_pin = pin,
+            (SettingId::EstopAction, SettingValue::Choice(i)) => {
+                s.safety.estop_action = if i == 1 {
+                    EstopAction::Home
+                } else {
+                    EstopAction::Freeze
+                }
+            }
+            (SettingId::PowerPin, SettingValue::Pin(pin)) => s.safety.power_pin = pin,
             (SettingId::Servo(sel, p), value) => {
                 for (i, servo) in s.servos.0.iter_mut().enumerate() {
                     if sel == ServoSel::All || sel == ServoSel::One(i as u8 + 1) {
@@ -758,7 +948,25 @@ impl Settings {
                 }
             }
         }
-        self.servos.validate().map_err(SettingError::BadServoConfig)
+        self.servos
+            .validate()
+            .map_err(SettingError::BadServoConfig)?;
+        let order = &self.stream.text_order;
+        for (i, a) in order.iter().enumerate() {
+            for (j, b) in order.iter().enumerate().skip(i + 1) {
+                if let (Some(axis), true) = (a, a == b) {
+                    return Err(SettingError::StreamAxisTwice {
+                        axis: *axis,
+                        first: i as u8 + 1,
+                        second: j as u8 + 1,
+                    });
+                }
+            }
+        }
+        match (self.safety.estop_pin, self.safety.power_pin) {
+            (Some(a), Some(b)) if a == b => Err(SettingError::PinTwice { pin: a }),
+            _ => Ok(()),
+        }
     }
 }
 

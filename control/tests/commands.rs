@@ -4,6 +4,7 @@ mod common;
 
 use common::{code_of, is_final, pose_values, six, Host};
 use control::report::Code;
+use control::settings::SettingId;
 use control::Settings;
 use kinematics_core::geometry::PairedLayout;
 use kinematics_core::{ik, Libm, Pose, ServoSet};
@@ -83,7 +84,25 @@ fn status_shows_pose_target_state_angles_and_pulses() {
         .iter()
         .map(|l| l.trim_start_matches("# ").split(':').next().unwrap())
         .collect();
-    assert_eq!(keys, ["state", "pose", "target", "arm_deg", "pulse_us"]);
+    assert_eq!(
+        keys,
+        [
+            "state",
+            "pose",
+            "target",
+            "arm_deg",
+            "pulse_us",
+            "stream",
+            "e-stop",
+            "servo_power"
+        ]
+    );
+    assert_eq!(
+        s.status_field("stream"),
+        "frames=0 applied=0 damaged=0 clamped=0 refused=0"
+    );
+    assert_eq!(s.status_field("e-stop"), "clear");
+    assert_eq!(s.status_field("servo_power"), "off");
     assert_eq!(s.status_field("state"), "idle");
     // Arm angles with 3 decimals, pulses with 2.
     for (key, decimals) in [("arm_deg", 3), ("pulse_us", 2)] {
@@ -257,6 +276,14 @@ fn config_values_can_be_set_back_unchanged() {
     let mut s = Host::quiet();
     s.ok("set servo3.trim_us 1512.5");
     s.ok("set link_timeout_s 4");
+    s.ok("set accel_mm_s2 250");
+    s.ok("set stream.axis1 none");
+    s.ok("set stream.axis4 x");
+    s.ok("set stream.pitch_deg -12.5");
+    s.ok("set stream.bits 10");
+    s.ok("set estop_pin 15");
+    s.ok("set estop_action home");
+    s.ok("set power_pin 16");
     let before = *s.ctl.settings();
     let data = s.ok("config");
     let mut commands = Vec::new();
@@ -272,11 +299,15 @@ fn config_values_can_be_set_back_unchanged() {
             commands.push(format!("set {name} {}", rest.trim()));
         }
     }
-    assert_eq!(commands.len(), 12 + 6 * 5);
+    assert_eq!(commands.len(), SettingId::GLOBAL.len() + 6 * 5);
+    s.ok("defaults");
     for c in &commands {
         s.ok(c);
     }
     let after = *s.ctl.settings();
+    assert_eq!(after.stream, before.stream);
+    assert_eq!(after.safety, before.safety);
+    assert_eq!(after.accel_mm_s2, 250.0);
     // Values shown with 2-3 decimals come back within that rounding.
     assert_eq!(after.servos.0[2].home_us, 1512.5);
     assert_eq!(after.link_timeout_s, 4.0);
@@ -294,8 +325,8 @@ fn help_lists_every_command() {
     let mut s = Host::quiet();
     let help = s.ok("help").join("\n");
     for cmd in [
-        "pose", "move", "nudge", "check", "home", "stop", "status", "?", "geometry", "config",
-        "set", "defaults", "help",
+        "pose", "move", "nudge", "check", "home", "stop", "reset", "status", "?", "geometry",
+        "config", "set", "defaults", "help",
     ] {
         assert!(
             help.contains(&format!("  {cmd} "))
@@ -561,10 +592,8 @@ fn every_error_code_is_documented_in_the_readme() {
             "README does not document error:{code}"
         );
     }
-    for name in [
-        "pose", "move", "nudge", "check", "home", "stop", "status", "geometry", "config", "set",
-        "defaults", "help",
-    ] {
+    for verb in control::command::Verb::ALL {
+        let name = verb.name();
         assert!(
             readme.contains(&format!("`{name}")),
             "README does not document {name}"

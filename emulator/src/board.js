@@ -12,6 +12,7 @@ import { loadSegments } from './elf.js';
 import { attachFrameMeter, attachLoopMeter } from './loop-meter.js';
 import {
   onWatchdogExpiry,
+  PadPulls,
   PacedUartInput,
   patchEmulatorGaps,
   wakeIfInterruptPending,
@@ -125,6 +126,12 @@ export class EmulatedBoard {
     this.loop = attachLoopMeter(mcu);
     /** Servo frames seen and frames the firmware missed (see loop-meter.js). */
     this.frames = attachFrameMeter(mcu);
+
+    /** The world outside the other GPIOs: switches and loads (gap 6); kept across resets. */
+    this.pins = new PadPulls(mcu);
+    for (const [n, level] of this.pinDrives ?? new Map()) {
+      this.pins.drive(n, level);
+    }
 
     this.servoMeter = new ServoPulseMeter(mcu);
     if (this.servoChangeListener) {
@@ -371,6 +378,24 @@ export class EmulatedBoard {
     const listener = (index, pulse) => servos[index].push(pulse);
     this.servoMeter.pulseListeners.add(listener);
     return { servos, stop: () => this.servoMeter.pulseListeners.delete(listener) };
+  }
+
+  // ---- other pins ----
+
+  /**
+   * Drives GPIO `n` from outside: `true` high, `false` low (e.g. a switch to ground), `null`
+   * open (the pin reads its pad's pull: an open e-stop switch on a pulled-up input is high).
+   */
+  drivePin(n, level) {
+    this.pinDrives ??= new Map();
+    this.pinDrives.set(n, level);
+    this.pins.drive(n, level);
+  }
+
+  /** What the firmware drives on GPIO `n`: `null` when it is not an output, else its level. */
+  pinOutput(n) {
+    const pin = this.mcu.gpio[n];
+    return pin.outputEnable ? pin.outputValue : null;
   }
 
   /** The baud rate the firmware latched into UART0, rounded (what the paced input follows). */

@@ -181,6 +181,13 @@ export function status(board) {
     target: poseIn(field('target')),
     arm_deg: six('arm_deg', 3),
     pulse_us: six('pulse_us', 2),
+    /** `{ frames, applied, damaged, clamped, refused }`. */
+    stream: Object.fromEntries(field('stream').split(' ').map((kv) => {
+      const [key, value] = kv.split('=');
+      return [key, Number(value)];
+    })),
+    'e-stop': field('e-stop'),
+    servo_power: field('servo_power'),
   };
 }
 
@@ -346,3 +353,66 @@ function assertMoveOnPinsStretched(pulses, startNanos, framesUs, { periodNanos, 
     assert.ok(extra <= maxStretch, `${label}: ${extra} frames held longer than one period`);
   });
 }
+
+// ---- heave read back from the pins ----
+
+/**
+ * z (mm) from the six widths on the pins, for poses with only z non-zero: the host core's
+ * (`reference`, a HostReference) pulses on a 1 um grid of z, interpolated per servo, averaged
+ * over the six. One PWM count is about 1/40 mm of heave with the default platform.
+ */
+export function heaveReader(reference, fromMm, toMm) {
+  const grid = [];
+  for (let z = fromMm; z <= toMm + 1e-9; z += 0.001) {
+    grid.push(Number(z.toFixed(3)));
+  }
+  const answers = reference.solve(defaultSettings(), grid.map((z) => [0, 0, z, 0, 0, 0]));
+  const table = answers.map((a, i) => {
+    assert.ok(a.ok, `z ${grid[i]}`);
+    return a.pulse_us;
+  });
+  return (widthsUs) => {
+    const zs = widthsUs.map((w, servo) => {
+      const column = table.map((row) => row[servo]);
+      const rising = column[column.length - 1] > column[0];
+      // Binary search in the monotonic column.
+      let lo = 0;
+      let hi = column.length - 1;
+      const below = (k) => (rising ? column[k] <= w : column[k] >= w);
+      if (!below(lo)) return grid[0];
+      if (below(hi)) return grid[hi];
+      while (hi - lo > 1) {
+        const mid = (lo + hi) >> 1;
+        if (below(mid)) lo = mid;
+        else hi = mid;
+      }
+      const t = (w - column[lo]) / (column[hi] - column[lo]);
+      return grid[lo] + t * (grid[hi] - grid[lo]);
+    });
+    return zs.reduce((a, b) => a + b, 0) / zs.length;
+  };
+}
+
+/** Per-frame z from captured pulses (one value per period, in order). */
+export function heaveTrace(pulses, read) {
+  const periods = Math.min(...pulses.map((servo) => servo.length));
+  return Array.from({ length: periods }, (_, k) => read(pulses.map((servo) => servo[k].widthNanos / 1000)));
+}
+
+/** Checks a z trace against the limits: speed, acceleration (with the PWM count's noise), overshoot. */
+export function assertWithinLimits(zs, { hz, speed, accel, top, label }) {
+  const dt = 1 / hz;
+  // One PWM count is about 1/40 mm of heave here; speeds and accelerations from differences of
+  // such readings carry that noise (averaged over six servos).
+  const zNoise = 0.012;
+  const v = zs.slice(1).map((z, k) => (z - zs[k]) / dt);
+  v.forEach((s, k) => {
+    assert.ok(Math.abs(s) <= speed + (2 * zNoise) / dt, `${label}: ${s.toFixed(1)} mm/s at frame ${k + 1} (limit ${speed})`);
+  });
+  v.slice(1).forEach((s, k) => {
+    const a = (s - v[k]) / dt;
+    assert.ok(Math.abs(a) <= accel + (4 * zNoise) / dt / dt, `${label}: ${a.toFixed(0)} mm/s2 at frame ${k + 2} (limit ${accel})`);
+  });
+  zs.forEach((z, k) => assert.ok(z <= top + zNoise, `${label}: overshoot to ${z.toFixed(3)} mm at frame ${k} (top ${top})`));
+}
+

@@ -27,12 +27,15 @@ export function streamingBoard({ baud = 115200, elf } = {}) {
     writeRegister(offset, value);
   };
   const lineEnds = [];
+  /** When each byte reached the UART (emulated ns), in order. */
+  const byteTimes = [];
   const uart = board.mcu.uart[0];
   const feedByte = uart.feedByte.bind(uart);
   uart.feedByte = (byte) => {
     if (byte === LF) {
       lineEnds.push(board.nanos);
     }
+    byteTimes.push(board.nanos);
     feedByte(byte);
   };
   board.boot();
@@ -43,7 +46,7 @@ export function streamingBoard({ baud = 115200, elf } = {}) {
     expectOk(board, `set baud ${baud}`);
     board.runMs(5); // the reply goes out at the old rate, then the UART switches
   }
-  return { board, ccWrites, lineEnds };
+  return { board, ccWrites, lineEnds, byteTimes };
 }
 
 function expectOk(board, line, options) {
@@ -65,8 +68,8 @@ function ccState(board) {
  * compare registers all hold the new pose's values (they latch at the next PWM period).
  * Starts at pose `from` (mm, degrees as typed; default home). Returns microseconds per pose.
  */
-export function measureLatency(poses, { baud = 115200, from } = {}) {
-  const { board, ccWrites, lineEnds } = streamingBoard({ baud });
+export function measureLatency(poses, { baud = 115200, from, elf } = {}) {
+  const { board, ccWrites, lineEnds } = streamingBoard({ baud, elf });
   if (from) {
     expectOk(board, `pose ${from}`); // where the measured lines start from (not measured)
   }
@@ -97,6 +100,57 @@ export function measureLatency(poses, { baud = 115200, from } = {}) {
       throw new Error(`pose ${pose}: new compare values not seen`);
     }
     latenciesUs.push((doneNanos - lineEnd) / 1000);
+  }
+  return latenciesUs;
+}
+
+/** A binary stream frame (`A5 5A`, six big-endian 16-bit counts, `0D 0A`). */
+export function binaryFrame(counts) {
+  const bytes = [0xa5, 0x5a];
+  for (const c of counts) {
+    bytes.push((c >> 8) & 0xff, c & 0xff);
+  }
+  bytes.push(0x0d, 0x0a);
+  return Buffer.from(bytes);
+}
+
+/**
+ * Latency of binary stream frames in pass-through (every limit off): from the frame's last
+ * byte reaching the UART to the moment the compare registers all hold the new pose's values.
+ * `counts` is a list of frames (six counts each), sent one at a time at spread-out phases of
+ * the servo frame. Returns microseconds per frame.
+ */
+export function measureFrameLatency(frames, { baud = 921600 } = {}) {
+  const { board, ccWrites, byteTimes } = streamingBoard({ baud });
+  const latenciesUs = [];
+  for (const [i, counts] of frames.entries()) {
+    board.runMs((i * 7.3) % 20);
+    const before = ccState(board);
+    const writesBefore = ccWrites.length;
+    const frame = binaryFrame(counts);
+    // The frame's last byte (counts may hold 0x0A bytes too: count bytes, not line ends).
+    const last = byteTimes.length + frame.length - 1;
+    board.sendBytes(frame);
+    board.runUntil(() => byteTimes.length > last, { timeoutMs: 100 });
+    const frameEnd = byteTimes[last];
+    board.runMs(2);
+    const final = ccState(board);
+    if (SERVO_SLICES.every((s) => final[s] === before[s])) {
+      throw new Error(`frame ${counts} did not change the compare registers`);
+    }
+    const state = { ...before };
+    let doneNanos = null;
+    for (const write of ccWrites.slice(writesBefore)) {
+      state[write.slice] = write.value;
+      if (write.nanos >= frameEnd && SERVO_SLICES.every((s) => state[s] === final[s])) {
+        doneNanos = write.nanos;
+        break;
+      }
+    }
+    if (doneNanos === null) {
+      throw new Error(`frame ${counts}: new compare values not seen`);
+    }
+    latenciesUs.push((doneNanos - frameEnd) / 1000);
   }
   return latenciesUs;
 }

@@ -117,6 +117,10 @@ const PARSE_CASES = [
   ['bad-servo-config', 'set servo1.trim_us 1950', /^servo1\.trim_us 1950\.00 us must lie within servo1\.min_us\.\.max_us = 1100\.00\.\.1900\.00 us; nothing changed$/],
   ['bad-servo-config', 'set servo4.max_us 1400', /^servo4\.trim_us 1500\.00 us must lie within servo4\.min_us\.\.max_us = 1100\.00\.\.1400\.00 us; nothing changed$/],
   ['bad-geometry', 'set rod_mm 15', /^leg \d: .*rod_mm too short.*; nothing changed$/],
+  ['bad-value', 'set stream.axis3 heave', /^stream\.axis3: 'heave' is not one of x y z roll pitch yaw none$/],
+  ['bad-value', 'set estop_pin 3', /^estop_pin: '3' is not off or a free GPIO: 8 9 10 .* 22 26 27 28$/],
+  ['out-of-range', 'set stream.bits 7', /^stream\.bits 7 is outside 8\.\.16 bits$/],
+  ['setting-conflict', 'set stream.axis2 x', /^stream\.axis1 and stream\.axis2 would both be x; .*; nothing changed$/],
   ['angle-too-large', 'pose 0 0 0 181 0 0', /^roll 181\.000 deg is beyond \+-180 deg$/],
   ['angle-too-large', 'check 0 0 0 0 -200 0', /^pitch -200\.000 deg is beyond \+-180 deg$/],
 ];
@@ -252,6 +256,22 @@ test('rx-overflow: bytes lost while the firmware was busy refuse the line they f
   assertConstant(pulses, widths, 'nothing moved');
   assert.equal(ok(board, 'check 1 1 1 1 1 1').length, 3, 'the next good line works');
   assert.equal(board.rxFifoDroppedBytes, 0, 'the loss was in the firmware queue, not the UART FIFO');
+});
+
+test('e-stop: with the input open, moves are refused until it is closed and reset is sent', () => {
+  const board = quietBoardAt([3, -2, 1, 2, -1, 4]);
+  ok(board, 'set estop_pin 15');
+  board.drivePin(15, false); // the switch closed: the pin held low
+  runFrames(board, 2);
+  board.drivePin(15, null); // the switch opens: the pull-up takes the pin high
+  runFrames(board, 2);
+  assert.equal(status(board)['e-stop'], 'open');
+  expectRefusal(board, 'home', 'e-stop', /^emergency stop: the e-stop input is open; close it, then send reset$/);
+  board.drivePin(15, false);
+  runFrames(board, 2);
+  expectRefusal(board, 'pose 0 0 1 0 0 0', 'e-stop', /^emergency stop: the e-stop input is closed again; send reset to move again$/);
+  ok(board, 'reset');
+  ok(board, 'home');
 });
 
 test('every documented error code exists in the firmware and was produced above through the wire', () => {

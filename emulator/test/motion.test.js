@@ -10,12 +10,15 @@ import {
   assertConstant,
   assertMoveOnPins,
   assertPins,
+  assertWithinLimits,
   bootQuiet,
   capture,
   defaultSettings,
   firmwareBootrom,
   framePeriodNanos,
   framePoses,
+  heaveReader,
+  heaveTrace,
   HOME,
   lerpPose,
   ok,
@@ -195,4 +198,21 @@ test('a new target while moving starts a new straight line from where the platfo
   runFrames(board, plannedFrames(s.pose, redirect, settings) + 3);
   assert.deepEqual(status(board).pose, redirect);
   assertPins(board, reference.solve(settings, [redirect])[0].pulse_us);
+});
+
+test('with accel_mm_s2 a move ramps its speed up and down along the line, within both limits', () => {
+  const board = bootQuiet(bootrom);
+  ok(board, 'set speed_mm_s 40');
+  ok(board, 'set accel_mm_s2 200');
+  const read = heaveReader(reference, -0.5, 8.5);
+  const pulses = capture(board, () => ok(board, 'pose 0 0 8 0 0 0'), 45);
+  const zs = heaveTrace(pulses, read);
+  assertWithinLimits(zs, { hz: 50, speed: 40, accel: 200, top: 8, label: 'ramped move' });
+  // README: 8 mm at 40 mm/s with 200 mm/s2 ramps takes 8/40 + 40/200 = 0.4 s (20 frames);
+  // the first steps are small (speeding up), and it lands on the target.
+  const started = zs.findIndex((z) => z > 0.01);
+  const arrived = zs.findIndex((z) => Math.abs(z - 8) < 0.02);
+  assert.ok(arrived - started >= 19 && arrived - started <= 21, `${arrived - started} frames`);
+  assert.ok(zs[started] < 0.2, `first step ${zs[started]} mm: no ramp`);
+  assertPins(board, reference.solve(defaultSettings(), [[0, 0, 8, 0, 0, 0]])[0].pulse_us);
 });

@@ -66,6 +66,7 @@ function config(board) {
 
 test('set changes exactly the named setting, as config lists it (units and decimals as documented)', () => {
   const board = bootQuiet(bootrom);
+  board.drivePin(15, false); // an e-stop switch, closed, for `estop_pin 15` below
   const changes = [
     ['speed_mm_s 42.5', 'speed_mm_s', '42.500'],
     ['speed_mm_s off', 'speed_mm_s', 'off'],
@@ -87,6 +88,17 @@ test('set changes exactly the named setting, as config lists it (units and decim
     ['platform_radius_mm 61', 'platform_radius_mm', '61.000'],
     ['base_half_angle_deg 19', 'base_half_angle_deg', '19.000'],
     ['platform_half_angle_deg 21', 'platform_half_angle_deg', '21.000'],
+    ['accel_mm_s2 250', 'accel_mm_s2', '250.000'],
+    ['accel_deg_s2 off', 'accel_deg_s2', 'off'],
+    ['stream.z_mm -12.5', 'stream.z_mm', '-12.500'],
+    ['stream.bits 12', 'stream.bits', '12'],
+    ['stream.axis1 none', 'stream.axis1', 'none'],
+    ['stream.axis4 x', 'stream.axis4', 'x'],
+    ['stream.axis1 roll', 'stream.axis1', 'roll'],
+    ['estop_pin 15', 'estop_pin', '15'],
+    ['estop_action home', 'estop_action', 'home'],
+    ['power_pin 16', 'power_pin', '16'],
+    ['estop_pin off', 'estop_pin', 'off'],
   ];
   let expected = config(board);
   for (const [args, name, shown] of changes) {
@@ -212,7 +224,7 @@ test('set baud: the board listens at the new rate once the ok has left; config s
     const start = board.nanos;
     const outputBefore = board.outputBytes.length;
     const line = `${' '.repeat(100)}status`; // 107 bytes with the LF; status is quick
-    assert.equal(ok(board, line, { timeoutMs: 1000 }).length, 5);
+    assert.equal(ok(board, line, { timeoutMs: 1000 }).length, 8);
     const bytes = line.length + 1 + board.outputBytes.length - outputBefore;
     const byteNanos = (10 * 1e9) / board.baud;
     const rxTimeoutNanos = (32 * 1e9) / board.baud;

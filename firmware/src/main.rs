@@ -1,15 +1,17 @@
 //! hexapod-fw: the RP2040 board layer.
 //!
-//! Data flows one way: UART0 bytes -> controller (lines, commands, motion) -> six pulse
-//! widths per servo frame (and right after a command that jumps) -> PWM registers. This file
-//! only wires the pieces together: clocks and watchdog, UART0 ([`serial`]) with its link
-//! [`control::Session`], the six servo outputs ([`servo_pwm`]) and the hardware-independent
-//! [`control::Controller`], which runs on the boot ROM's float routines
+//! Data flows one way: UART0 bytes -> controller (lines, commands, stream frames, motion) ->
+//! six pulse widths per servo frame (and right after a command that jumps or a stream frame in
+//! pass-through) -> PWM registers. This file only wires the pieces together: clocks and
+//! watchdog, UART0 ([`serial`]) with its link [`control::Session`], the six servo outputs
+//! ([`servo_pwm`]), the e-stop input and servo-power output ([`safety_pins`]) and the
+//! hardware-independent [`control::Controller`], which runs on the boot ROM's float routines
 //! ([`firmware::rom_math`]).
 
 #![no_std]
 #![no_main]
 
+mod safety_pins;
 mod serial;
 mod servo_pwm;
 
@@ -17,8 +19,10 @@ use defmt_rtt as _;
 use panic_probe as _;
 use rp2040_hal::{self as hal, clocks::Clock, fugit::ExtU32, pac, Sio, Watchdog};
 
+use control::controller::Fed;
 use control::{Session, Settings};
 use firmware::rom_math::RomMath;
+use safety_pins::{FreePin, SafetyPins};
 use serial::{Received, Serial};
 use servo_pwm::{PulseWindowUs, ServoPwm, SERVO_COUNT};
 
@@ -33,8 +37,10 @@ pub static BOOT2: [u8; 256] = rp2040_boot2::BOOT_LOADER_W25Q080;
 /// (see [`main`]), so only a hang can starve the watchdog.
 const WATCHDOG_TIMEOUT_MS: u32 = 500;
 /// Most received bytes handed to the controller in one pass (a line end ends the pass's input
-/// early, so at most one command runs per pass).
-const RX_BYTES_PER_PASS: usize = 64;
+/// early, so at most one command runs per pass; stream frames do not end it, so the newest of
+/// the frames waiting is the one applied). 128 bytes are 8 binary frames, 1.4 ms of a stream
+/// at 921,600 baud: more than a pass takes, so a stream never falls behind.
+const RX_BYTES_PER_PASS: usize = 128;
 
 #[hal::entry]
 fn main() -> ! {
@@ -52,6 +58,8 @@ fn main() -> ! {
     let pins = hal::gpio::Pins::new(p.IO_BANK0, p.PADS_BANK0, sio.gpio_bank0, &mut p.RESETS);
 
     let mut controller = Controller::with_math(Settings::default());
+    let mut timer = hal::Timer::new(p.TIMER, &mut p.RESETS, &clocks);
+    let rx_poll = timer.alarm_0().expect("alarm 0 is taken once, here");
     let mut serial = Serial::new(
         p.UART0,
         pins.gpio0,
@@ -59,6 +67,7 @@ fn main() -> ! {
         &mut p.RESETS,
         clocks.peripheral_clock.freq(),
         controller.baud(),
+        rx_poll,
     )
     .expect("the default baud rate is in range");
     let mut servos = ServoPwm::new(
@@ -72,6 +81,30 @@ fn main() -> ! {
         &pulse_windows_us(&controller),
     )
     .expect("the default frame rate is in range");
+    // The GPIOs left free for the e-stop input and the servo-power output
+    // (control::safety::FREE_GPIOS, in that order).
+    let free = |pin: FreePin| pin;
+    let mut safety = SafetyPins::new([
+        free(pins.gpio8.reconfigure().into_dyn_pin()),
+        free(pins.gpio9.reconfigure().into_dyn_pin()),
+        free(pins.gpio10.reconfigure().into_dyn_pin()),
+        free(pins.gpio11.reconfigure().into_dyn_pin()),
+        free(pins.gpio12.reconfigure().into_dyn_pin()),
+        free(pins.gpio13.reconfigure().into_dyn_pin()),
+        free(pins.gpio14.reconfigure().into_dyn_pin()),
+        free(pins.gpio15.reconfigure().into_dyn_pin()),
+        free(pins.gpio16.reconfigure().into_dyn_pin()),
+        free(pins.gpio17.reconfigure().into_dyn_pin()),
+        free(pins.gpio18.reconfigure().into_dyn_pin()),
+        free(pins.gpio19.reconfigure().into_dyn_pin()),
+        free(pins.gpio20.reconfigure().into_dyn_pin()),
+        free(pins.gpio21.reconfigure().into_dyn_pin()),
+        free(pins.gpio22.reconfigure().into_dyn_pin()),
+        free(pins.gpio26.reconfigure().into_dyn_pin()),
+        free(pins.gpio27.reconfigure().into_dyn_pin()),
+        free(pins.gpio28.reconfigure().into_dyn_pin()),
+    ]);
+    safety.apply(&controller.settings().safety);
     watchdog.start(WATCHDOG_TIMEOUT_MS.millis());
 
     // UART0's line assembly, echo and prompt (the platform's state is the controller's).
@@ -113,11 +146,11 @@ fn main() -> ! {
                 }
                 match serial.read() {
                     Some(Received::Byte(byte)) => {
-                        controller.on_byte(&mut uart, byte, &mut serial);
+                        let fed = controller.on_byte(&mut uart, byte, &mut serial);
                         // A jump (speed limits off) is written now, not at the next frame; the
                         // compare registers latch it at the next period start.
                         write_new_pulses(&mut controller, &mut servos);
-                        if byte == b'\r' || byte == b'\n' || controller.is_busy() {
+                        if fed == Fed::LineEnded || controller.is_busy() {
                             break;
                         }
                     }
@@ -126,7 +159,18 @@ fn main() -> ! {
                     None => break,
                 }
             }
+            // The newest stream frame among those just fed (in pass-through, written now).
+            controller.apply_stream();
+            write_new_pulses(&mut controller, &mut servos);
         }
+
+        // The e-stop input (read every pass: within a servo frame of it opening) and the
+        // servo-power output.
+        safety.apply(&controller.settings().safety);
+        if let Some(open) = safety.estop_open() {
+            controller.set_estop_input(open);
+        }
+        safety.set_power(controller.servo_power());
 
         // Once per servo frame: the controller's next six pulse widths.
         let frames = servos.frames_since_last_poll();
@@ -143,8 +187,7 @@ fn main() -> ! {
         // A baud change waits for the reply announcing it to have left the UART at the old
         // rate; then the prompt held back for it goes out at the new one.
         let baud = controller.baud();
-        let baud_change_pending = baud != serial.baud();
-        if baud_change_pending && serial.tx_idle() {
+        if baud != serial.baud() && serial.tx_idle() {
             match serial.set_baud(baud) {
                 Ok(()) => uart.write_deferred_prompt(&mut serial),
                 Err(_) => defmt::error!("baud rate {} out of range", baud),
@@ -160,9 +203,13 @@ fn main() -> ! {
 
         // Sleep until an interrupt (bytes received, TX FIFO half empty, a frame) unless there
         // is something to do now. Output waiting for room in the TX FIFO is no reason to stay
-        // awake: the TX interrupt wakes the loop when the FIFO has drained.
+        // awake: the TX interrupt wakes the loop when the FIFO has drained. A baud change
+        // waiting for the last bytes to leave is: no interrupt says when the UART goes idle,
+        // so the loop stays awake until it has switched (decided after the switch above, so
+        // the UART going idle between the two cannot put the loop to sleep with the switch
+        // still to do).
         let room = serial.has_room_for_step();
-        let waiting_for_tx = baud_change_pending && !serial.tx_pending() && !serial.tx_idle();
+        let waiting_for_tx = controller.baud() != serial.baud() && !serial.tx_pending();
         sleep_unless(|| {
             (room && (controller.is_busy() || serial.rx_pending()))
                 || servos.frame_pending()

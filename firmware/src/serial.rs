@@ -1,7 +1,12 @@
 //! UART0 on GP0 (TX) / GP1 (RX), 8N1, baud rate changeable at run time.
 //!
 //! Receive: the `UART0_IRQ` handler (RX FIFO level and RX timeout interrupts) moves bytes from
-//! the 32-byte hardware FIFO into a lock-free queue that the main loop reads. It never waits:
+//! the 32-byte hardware FIFO into a lock-free queue that the main loop reads. While bytes keep
+//! coming, a timer alarm (`TIMER_IRQ_0`) also empties the FIFO every [`rx_poll_period_us`]
+//! (at most 100 us): the PL011 raises its interrupt only at the FIFO level (8 bytes) or after
+//! 32 bit times of silence (278 us at 115,200 baud), so without the poll the end of a line
+//! could wait that long in the FIFO. The poll stops at the first alarm that finds the FIFO
+//! empty (the level and timeout interrupts take over again). Neither handler waits:
 //! when the queue is full it drops the byte and counts it, and the main loop is told where in
 //! the byte stream the loss happened ([`Received::Lost`]), so exactly the damaged line can be
 //! refused, and, at once, that a loss happened ([`Serial::take_new_loss`]), so the host hears
@@ -37,9 +42,10 @@ use heapless::{
     Deque,
 };
 use rp2040_hal::{
-    fugit::{HertzU32, RateExtU32},
+    fugit::{HertzU32, MicrosDurationU32, RateExtU32},
     gpio::{bank0, DefaultTypeState, FunctionUart, Pin, PullNone, PullUp},
     pac::{self, interrupt},
+    timer::{Alarm, Alarm0},
     uart::{DataBits, Enabled, FifoWatermark, ReadErrorType, StopBits, UartConfig, UartPeripheral},
 };
 
@@ -64,11 +70,22 @@ type Uart = UartPeripheral<Enabled, pac::UART0, (TxPin, RxPin)>;
 type DefaultPin<Id> =
     Pin<Id, <Id as DefaultTypeState>::Function, <Id as DefaultTypeState>::PullType>;
 
-/// State shared by `UART0_IRQ` and the main loop, only ever touched inside a critical section.
+/// State shared by `UART0_IRQ`, `TIMER_IRQ_0` and the main loop, only ever touched inside a
+/// critical section.
 struct Shared {
     /// `None` only during a baud-rate change, which happens inside one critical section.
     uart: Option<Uart>,
     rx: Receiver,
+    /// The alarm that polls the RX FIFO while bytes keep coming.
+    poll: Alarm0,
+    /// Its period at the current baud rate.
+    poll_period_us: u32,
+}
+
+/// How often the RX FIFO is polled while bytes keep coming, us: 4 character times (8N1),
+/// within 20..=100 us (100 us at 115,200 baud and below, 43 us at 921,600).
+pub fn rx_poll_period_us(baud: u32) -> u32 {
+    (4 * 10 * 1_000_000 / baud.max(1)).clamp(20, 100)
 }
 
 /// The interrupt's side of the receive queue.
@@ -133,6 +150,7 @@ impl Serial {
         resets: &mut pac::RESETS,
         peripheral_clock: HertzU32,
         baud: u32,
+        mut poll: Alarm0,
     ) -> Result<Self, BaudOutOfRange> {
         check_baud(baud)?;
         let queue = cortex_m::singleton!(: Queue<u8, RX_QUEUE_BYTES> = Queue::new())
@@ -147,6 +165,7 @@ impl Serial {
         // after 32 bit times of silence with anything left in it.
         uart.set_rx_watermark(FifoWatermark::Bytes8);
         uart.enable_rx_interrupt();
+        poll.enable_interrupt();
 
         critical_section::with(|cs| {
             SHARED.borrow(cs).replace(Some(Shared {
@@ -158,10 +177,15 @@ impl Serial {
                     overrun_counted: false,
                     line_errors: 0,
                 },
+                poll,
+                poll_period_us: rx_poll_period_us(baud),
             }));
         });
-        // SAFETY: the handler only uses `SHARED`, which is initialised above.
-        unsafe { pac::NVIC::unmask(pac::Interrupt::UART0_IRQ) };
+        // SAFETY: the handlers only use `SHARED`, which is initialised above.
+        unsafe {
+            pac::NVIC::unmask(pac::Interrupt::UART0_IRQ);
+            pac::NVIC::unmask(pac::Interrupt::TIMER_IRQ_0);
+        }
 
         Ok(Serial {
             rx_queue: consumer,
@@ -328,6 +352,7 @@ impl Serial {
             };
             // The interrupt mask and FIFO watermark survive disable/enable.
             shared.uart = Some(uart);
+            shared.poll_period_us = rx_poll_period_us(baud);
         });
         self.baud = baud;
         Ok(())
@@ -372,22 +397,39 @@ impl Shared {
         if tx_fired {
             uart.disable_tx_interrupt();
         }
-        self.receive();
+        self.receive_and_poll();
+    }
+
+    /// Empties the RX FIFO; if it held anything, more may be on the way: polls again after
+    /// [`rx_poll_period_us`].
+    fn receive_and_poll(&mut self) {
+        if self.receive() > 0 {
+            // Cannot fail: the period is far below the alarm's range.
+            let _ = self
+                .poll
+                .schedule(MicrosDurationU32::micros(self.poll_period_us));
+        }
     }
 
     /// Empties the RX FIFO into the queue; this also clears the level and timeout interrupts.
-    fn receive(&mut self) {
+    /// Returns how many bytes (or errors) it took.
+    fn receive(&mut self) -> usize {
         let Some(uart) = self.uart.as_ref() else {
-            return;
+            return 0;
         };
+        let mut taken = 0;
         let mut chunk = [0u8; 32];
         // Bounded: a FIFO holds 32 bytes, so a few rounds empty it; should a (broken) UART keep
         // reporting errors, the interrupt returns and fires again instead of hanging here.
         for _ in 0..8 {
             match uart.read_raw(&mut chunk) {
-                Ok(count) => self.rx.enqueue(&chunk[..count]),
+                Ok(count) => {
+                    taken += count;
+                    self.rx.enqueue(&chunk[..count]);
+                }
                 Err(nb::Error::WouldBlock) => break,
                 Err(nb::Error::Other(error)) => {
+                    taken += error.discarded.len() + 1;
                     // `discarded` holds the good bytes read before the error. A framing,
                     // parity or break error loses the byte after them. An overrun flags a good
                     // byte (the last one in `discarded`): the bytes the full hardware FIFO
@@ -418,6 +460,7 @@ impl Shared {
                 }
             }
         }
+        taken
     }
 }
 
@@ -472,6 +515,17 @@ fn UART0_IRQ() {
     critical_section::with(|cs| {
         if let Some(shared) = SHARED.borrow_ref_mut(cs).as_mut() {
             shared.service();
+        }
+    });
+}
+
+/// The RX poll (see the module documentation).
+#[interrupt]
+fn TIMER_IRQ_0() {
+    critical_section::with(|cs| {
+        if let Some(shared) = SHARED.borrow_ref_mut(cs).as_mut() {
+            shared.poll.clear_interrupt();
+            shared.receive_and_poll();
         }
     });
 }

@@ -13,18 +13,28 @@ import os
 import struct
 import zlib
 
-FORMAT_VERSION = 2
-PAYLOAD_LEN = 160
+FORMAT_VERSION = 3
+PAYLOAD_LEN = 204
+PIN_OFF = 0xFF
+AXES = ['x', 'y', 'z', 'roll', 'pitch', 'yaw']
 RATE = 1600 / math.pi  # the default servo rate, us/rad
 
 
-def record(frame_hz, speeds, layout, servos):
+def record(frame_hz, speeds, layout, servos, accels=(0.0, 0.0),
+           stream_scale=(25.0, 25.0, 15.0, 15.0, 15.0, 20.0), stream_bits=8,
+           stream_order=('x', 'y', 'z', 'roll', 'pitch', 'yaw'), estop_pin=None,
+           estop_home=False, power_pin=None):
     """speeds: (mm/s, deg/s, link timeout s); layout: base radius, base half angle, platform
-    radius, platform half angle, arm, rod; servos: six (trim, rate, min, max, reversed)."""
+    radius, platform half angle, arm, rod; servos: six (trim, rate, min, max, reversed);
+    accels: (mm/s^2, deg/s^2); stream_order: six axis names or None; pins: GPIO or None."""
     payload = struct.pack('<HH', frame_hz, 0) + struct.pack('<3f', *speeds)
     payload += struct.pack('<6f', *layout)
     for trim, rate, lo, hi, reversed_ in servos:
         payload += struct.pack('<4fB3x', trim, rate, lo, hi, 1 if reversed_ else 0)
+    payload += struct.pack('<2f', *accels) + struct.pack('<6f', *stream_scale)
+    payload += bytes([stream_bits] + [6 if a is None else AXES.index(a) for a in stream_order])
+    pin = lambda p: PIN_OFF if p is None else p
+    payload += bytes([pin(estop_pin), 1 if estop_home else 0, pin(power_pin), 0, 0])
     assert len(payload) == PAYLOAD_LEN
     body = b'HXPS' + struct.pack('<HH', FORMAT_VERSION, PAYLOAD_LEN) + payload
     return body + struct.pack('<I', zlib.crc32(body))
@@ -41,7 +51,10 @@ SEEDS = {
     'record-custom': record(
         100, (20.0, 0.0, 2.5), (90.0, 15.0, 50.0, 25.0, 25.0, 110.0),
         [(trim, RATE, 1000.0, 2000.0, n % 2 == 1)
-         for n, trim in zip(range(1, 7), (1450.0, 1500.0, 1520.0, 1490.0, 1510.0, 1500.0))]),
+         for n, trim in zip(range(1, 7), (1450.0, 1500.0, 1520.0, 1490.0, 1510.0, 1500.0))],
+        accels=(400.0, 0.0), stream_scale=(30.0, -30.0, 10.0, 0.0, 12.5, 45.0), stream_bits=12,
+        stream_order=('roll', None, 'z', 'x', 'yaw', 'pitch'), estop_pin=15, estop_home=True,
+        power_pin=22),
 }
 
 if __name__ == '__main__':

@@ -183,6 +183,11 @@ impl Checked {
             slices += 1;
             assert!(slices < 100_000, "a command's work never ends: {out:?}");
         }
+        // As the board does after feeding: the newest stream frame, if one came.
+        self.ctl.apply_stream();
+        if let Some(pulses) = self.ctl.take_new_pulses() {
+            check_pulses(self.ctl.settings(), &pulses, "stream frame");
+        }
         self.record(&out);
         check_output_bytes(&out);
         let finals = Self::finals(&out, echo_before);
@@ -227,7 +232,10 @@ impl Checked {
                 last_line.ends_with(reply),
                 "the final reply is not last: {out:?}"
             );
-        } else if !matches!(expected, LineEnd::Line(_) | LineEnd::Refused(_)) {
+        } else if !matches!(
+            expected,
+            LineEnd::Line(_) | LineEnd::Refused(_) | LineEnd::Frame
+        ) {
             // No line completed: nothing a host could see as a command may have changed.
             let after = self.state();
             assert_eq!(
@@ -289,6 +297,7 @@ impl Checked {
     /// Runs `n` frames; every frame's pulses must be finite and within the limits.
     pub fn frames(&mut self, n: u32) {
         for _ in 0..n {
+            self.model.tick();
             let pulses = self.ctl.on_frame();
             self.frames += 1;
             check_pulses(self.ctl.settings(), &pulses, "frame");
@@ -313,6 +322,28 @@ impl Checked {
             );
             self.after_step("frame");
         }
+    }
+
+    /// The e-stop input opens or closes: no reply; the pulses stay valid, and while it is on
+    /// nothing is streaming.
+    pub fn estop(&mut self, open: bool) {
+        self.ctl.set_estop_input(open);
+        let mut out = String::new();
+        while self.ctl.is_busy() && !self.link.awaits_reply() {
+            self.ctl.work(&mut self.link, &mut out);
+        }
+        self.ctl.write_notices(&mut self.link, &mut out);
+        self.record(&out);
+        check_output_bytes(&out);
+        assert_eq!(
+            Self::finals(&out, true).len(),
+            0,
+            "e-stop gave a reply: {out:?}"
+        );
+        if self.ctl.estop().stops_motion() {
+            assert!(!self.ctl.is_streaming(), "streaming through an e-stop");
+        }
+        self.after_step("e-stop");
     }
 
     /// Runs frames until the motion ends (at most `limit`); returns whether it ended.

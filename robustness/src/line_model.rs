@@ -17,7 +17,13 @@
 //! - a byte outside printable ASCII refuses the line (`bad-character`);
 //! - bytes lost by the receive queue refuse the line (`rx-overflow`, which wins over the
 //!   other reasons, since the lost bytes may have been anything);
-//! - a line of nothing but spaces is blank: no reply.
+//! - a line of nothing but spaces is blank: no reply;
+//! - stream frames (`control::stream` docs) are not lines and get no reply: `A5 5A` at a line
+//!   start, or in a line refused for a byte outside ASCII (which is then dropped without a
+//!   reply), begins a 16-byte binary frame, whole if it ends `0D 0A`, else damaged, and then
+//!   decoding goes on from the next `A5 5A` (or a last lone `A5`) among its bytes; an `A5` not
+//!   followed by `5A` is a byte outside ASCII; a binary frame whose bytes stop for two servo
+//!   frames is dropped; a digit, then digits and commas, then `X` is a text frame.
 
 /// The longest line kept, in characters (documented: 128).
 pub const MAX_LINE: usize = 128;
@@ -55,6 +61,8 @@ pub enum LineEnd {
     Line(String),
     /// A refused line ended; it gets exactly one `error:` reply with this reason.
     Refused(Refusal),
+    /// A stream frame ended (whole or damaged): no reply.
+    Frame,
 }
 
 impl LineEnd {
@@ -84,6 +92,11 @@ pub struct LineModel {
     lost: bool,
     previous_was_cr: bool,
     esc: Esc,
+    /// The binary frame in progress (from its `A5`), if any.
+    frame: Option<Vec<u8>>,
+    /// Servo frames so far, and when the frame in progress last got a byte.
+    ticks: u64,
+    frame_byte_tick: u64,
 }
 
 impl Default for LineModel {
@@ -102,7 +115,15 @@ impl LineModel {
             lost: false,
             previous_was_cr: false,
             esc: Esc::Off,
+            frame: None,
+            ticks: 0,
+            frame_byte_tick: 0,
         }
+    }
+
+    /// A servo frame passed.
+    pub fn tick(&mut self) {
+        self.ticks += 1;
     }
 
     /// The characters kept so far on the current line.
@@ -117,6 +138,51 @@ impl LineModel {
 
     /// One received byte.
     pub fn byte(&mut self, b: u8) -> LineEnd {
+        if self.frame.is_some() && self.ticks - self.frame_byte_tick >= 2 {
+            self.frame = None; // its bytes stopped coming: dropped
+        }
+        self.frame_byte_tick = self.ticks;
+        let at_line_start = self.text.is_empty() && !self.refused() && self.esc == Esc::Off;
+        let in_garbage = self.bad_character && !self.too_long && !self.lost;
+        if self.frame.is_some() || (b == 0xA5 && (at_line_start || in_garbage)) {
+            return self.frame_byte(b);
+        }
+        self.line_byte(b)
+    }
+
+    fn frame_byte(&mut self, b: u8) -> LineEnd {
+        self.previous_was_cr = false;
+        let mut bytes = self.frame.take().unwrap_or_default();
+        if bytes.len() == 1 && b != 0x5A {
+            // A stray A5: a byte outside ASCII in the line; this byte is read afresh.
+            if !self.refused() {
+                self.bad_character = true;
+            }
+            return self.byte(b);
+        }
+        bytes.push(b);
+        if bytes.len() == 2 && self.refused() {
+            // A header after garbage: the garbage line is dropped without a reply (counted
+            // as a damaged frame).
+            self.reset();
+            self.frame = Some(bytes);
+            return LineEnd::Frame;
+        }
+        if bytes.len() < 16 {
+            self.frame = Some(bytes);
+            return LineEnd::None;
+        }
+        if bytes[14..] != [0x0D, 0x0A] {
+            // Damaged: go on from the next A5 5A, or a last lone A5, among its bytes.
+            let next = (1..16).find(|&i| bytes[i] == 0xA5 && (i == 15 || bytes[i + 1] == 0x5A));
+            if let Some(i) = next {
+                self.frame = Some(bytes[i..].to_vec());
+            }
+        }
+        LineEnd::Frame
+    }
+
+    fn line_byte(&mut self, b: u8) -> LineEnd {
         let previous_was_cr = self.previous_was_cr;
         self.previous_was_cr = b == b'\r';
         match (self.esc, b) {
@@ -160,14 +226,8 @@ impl LineModel {
                 self.esc = Esc::Start;
                 LineEnd::None
             }
-            b'\t' => {
-                self.add(b' ');
-                LineEnd::None
-            }
-            0x20..=0x7E => {
-                self.add(b);
-                LineEnd::None
-            }
+            b'\t' => self.add(b' '),
+            0x20..=0x7E => self.add(b),
             0x80..=0xFF => {
                 if !self.refused() {
                     self.bad_character = true;
@@ -182,15 +242,22 @@ impl LineModel {
         self.too_long || self.bad_character || self.lost
     }
 
-    fn add(&mut self, b: u8) {
+    fn add(&mut self, b: u8) -> LineEnd {
         if self.refused() {
-            return;
+            return LineEnd::None;
+        }
+        let digits_and_commas = self.text.first().is_some_and(u8::is_ascii_digit)
+            && self.text.iter().all(|&c| c.is_ascii_digit() || c == b',');
+        if b == b'X' && digits_and_commas {
+            self.text.clear();
+            return LineEnd::Frame;
         }
         if self.text.len() == MAX_LINE {
             self.too_long = true;
         } else {
             self.text.push(b);
         }
+        LineEnd::None
     }
 
     fn reset(&mut self) {
@@ -256,5 +323,27 @@ mod tests {
             ends("5\u{b0}\n".as_bytes()),
             [LineEnd::Refused(Refusal::BadCharacter)]
         );
+    }
+
+    #[test]
+    fn the_model_follows_the_documented_stream_frames() {
+        let line = |s: &str| LineEnd::Line(s.into());
+        let mut frame = vec![0xA5, 0x5A];
+        frame.extend_from_slice(&[0x0D, 0x0A, 0xA5, 0x5A, 1, 2, 3, 4, 5, 6, 7, 8]);
+        frame.extend_from_slice(b"\r\n");
+        let input = [b"home\n".as_slice(), &frame, b"1,2,3,4,5,6X?\n"].concat();
+        assert_eq!(
+            ends(&input),
+            [line("home"), LineEnd::Frame, LineEnd::Frame, line("?")]
+        );
+        // A stray A5 is a bad character; garbage before a header is dropped silently.
+        assert_eq!(
+            ends(b"\xA5home\n"),
+            [LineEnd::Refused(Refusal::BadCharacter)]
+        );
+        let garbage = [b"\x80\x81".as_slice(), &frame].concat();
+        assert_eq!(ends(&garbage), [LineEnd::Frame, LineEnd::Frame]);
+        // Digits, commas and X only make a frame from a line's start.
+        assert_eq!(ends(b"0a X\n"), [line("0a X")]);
     }
 }

@@ -121,6 +121,14 @@ pub const SETTING_NAMES: &[&str] = &[
     "platform_half_angle_deg",
     "arm_mm",
     "rod_mm",
+    "accel_mm_s2",
+    "accel_deg_s2",
+    "stream.x_mm",
+    "stream.roll_deg",
+    "stream.bits",
+    "stream.axis1",
+    "stream.axis4",
+    "estop_action",
     "servo1.trim_us",
     "servo2.rate_us_rad",
     "servo3.dir",
@@ -142,6 +150,7 @@ pub const SETTING_NAMES: &[&str] = &[
 /// Setting values that are not numbers.
 pub const WORDS: &[&str] = &[
     "on", "off", "1", "0", "normal", "reversed", "+1", "-1", "maybe", "9600", "115200", "921600",
+    "x", "roll", "none", "freeze", "home",
 ];
 
 /// A setting value.
@@ -306,6 +315,33 @@ pub enum Op {
     Lost(u16),
     /// A line through `execute_line` (other transports).
     Execute(Cmd, Sep),
+    /// A binary stream frame of these counts (`A5 5A`, big-endian counts, `0D 0A`).
+    Binary([u16; 6]),
+    /// A text stream frame of these counts (`c1,c2,...,c6X`).
+    TextFrame([u16; 6]),
+    /// The e-stop input opens (`true`) or closes.
+    Estop(bool),
+}
+
+impl Op {
+    /// The bytes of a stream frame op (empty for the others).
+    pub fn frame_bytes(&self) -> Vec<u8> {
+        match self {
+            Op::Binary(counts) => {
+                let mut bytes = vec![0xA5, 0x5A];
+                for c in counts {
+                    bytes.extend_from_slice(&c.to_be_bytes());
+                }
+                bytes.extend_from_slice(b"\r\n");
+                bytes
+            }
+            Op::TextFrame(counts) => {
+                let text: Vec<String> = counts.iter().map(u16::to_string).collect();
+                format!("{}X", text.join(",")).into_bytes()
+            }
+            _ => Vec::new(),
+        }
+    }
 }
 
 /// A whole session: start-up settings choice and a list of operations.

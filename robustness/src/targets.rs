@@ -40,6 +40,7 @@ pub fn protocol(data: &[u8]) {
             }
             (LineEnd::None, Feed::Nothing | Feed::Cancelled | Feed::Overflowed) => {}
             (LineEnd::Blank, Feed::Empty) => {}
+            (LineEnd::Frame, Feed::Frame(_) | Feed::DamagedFrame) => {}
             (LineEnd::Line(text), Feed::Line) => {
                 assert_eq!(lb.line(), text, "line text");
                 assert!(lb.line().len() <= control::protocol::MAX_LINE);
@@ -369,9 +370,13 @@ pub fn run_session(session: &Session) {
             }
             Op::Lost(n) => c.rx_overflow(1 + u32::from(*n)),
             Op::Execute(cmd, sep) => c.execute(&cmd.text(*sep, false)),
+            Op::Binary(_) | Op::TextFrame(_) => c.bytes(&op.frame_bytes()),
+            Op::Estop(open) => c.estop(*open),
         }
     }
-    // Whatever happened, a fresh line is understood: cancel any partial line, then `stop`.
+    // Whatever happened, a fresh line is understood: after a pause (a binary frame cut short
+    // is dropped after two servo frames) cancel any partial line, then `stop`.
+    c.frames(2);
     let replies = c.replies;
     c.bytes(b"\x03");
     c.line("stop", b"\r\n");
@@ -412,4 +417,120 @@ pub fn script(data: &[u8]) {
     }
     c.bytes(b"\x03");
     c.line("stop", b"\n");
+}
+
+// ----- stream frames and the tracker -----
+
+/// The stream frame decoders and the tracker. The first bytes choose tracker limits and a
+/// frame rate (any values, zero, negative and huge included); the rest are received bytes:
+/// through the line assembler (frames reported must have the documented shape: binary counts
+/// from the frame's own bytes, text counts below 2^16) and, as counts, targets for the
+/// tracker, which must never produce a non-finite pose, never pass a target it approaches,
+/// and keep to the speed limit on every frame and to the acceleration limit on every frame
+/// but a hard stop on a target that jumped back.
+pub fn stream(data: &[u8]) {
+    use control::protocol::Frame;
+    use control::tracker::{TrackLimits, Tracker};
+    use kinematics_core::{Libm, Pose};
+
+    let mut u = Unstructured::new(data);
+    let mut limit = || -> f32 {
+        match u.int_in_range(0u8..=3).unwrap_or(0) {
+            0 => 0.0,
+            1 => f32::from(u.int_in_range(1u16..=5000).unwrap_or(1)),
+            2 => f32::arbitrary(&mut u).unwrap_or(0.0),
+            _ => 1e30,
+        }
+    };
+    let limits = TrackLimits {
+        mm_per_s: limit(),
+        mm_per_s2: limit(),
+        rad_per_s: limit(),
+        rad_per_s2: limit(),
+    };
+    let hz = f32::from(u.int_in_range(50u16..=333).unwrap_or(50));
+    let dt = 1.0 / hz;
+    let bytes = u.take_rest();
+
+    let mut lb = LineBuffer::new();
+    let mut tracker = Tracker::new(&Pose::HOME);
+    // Each axis' speed over the last step (position change / dt).
+    let mut velocity = [0.0f32; 6];
+    for (i, &b) in bytes.iter().enumerate() {
+        let counts = match lb.feed_at(b, (i / 64) as u32) {
+            Feed::Frame(Frame::Binary(c)) => {
+                // The counts are the frame's own bytes: it ended with 0D 0A at this byte.
+                assert!(
+                    i >= 15 && bytes[i - 1] == 0x0D && b == 0x0A,
+                    "binary frame at {i}"
+                );
+                assert!(c.iter().all(|&v| v <= 0xFFFF));
+                c
+            }
+            Feed::Frame(Frame::Text(c)) => {
+                assert_eq!(b, b'X');
+                assert!(c.iter().all(|&v| v <= 0xFFFF));
+                c
+            }
+            Feed::Line | Feed::Spoiled(_) | Feed::Empty => {
+                lb.clear();
+                continue;
+            }
+            _ => continue,
+        };
+        // Counts -> a target of up to +-500 mm / +-pi rad.
+        let target: [f32; 6] = core::array::from_fn(|k| {
+            let fraction = (counts[k] as f32 - 32768.0) / 32768.0;
+            fraction * if k < 3 { 500.0 } else { core::f32::consts::PI }
+        });
+        let target = Pose::from_array(target);
+        for _ in 0..8 {
+            let next = tracker.step::<Libm>(&target, &limits, dt);
+            let (p0, p1, goal) = (
+                tracker.pose().to_array(),
+                next.pose().to_array(),
+                target.to_array(),
+            );
+            for k in 0..6 {
+                assert!(p1[k].is_finite(), "axis {k}: {p1:?} from {p0:?}");
+                let (v_max, a_max) = if k < 3 {
+                    (limits.mm_per_s, limits.mm_per_s2)
+                } else {
+                    (limits.rad_per_s, limits.rad_per_s2)
+                };
+                let speed = (p1[k] - p0[k]).abs() / dt;
+                if v_max > 0.0 && v_max.is_finite() {
+                    let rounding = 4.0 * f32::EPSILON * p0[k].abs().max(p1[k].abs()).max(1.0) / dt;
+                    assert!(
+                        speed <= v_max * 1.001 + rounding,
+                        "axis {k}: {speed} > {v_max}"
+                    );
+                }
+                // The acceleration limit holds on every step that does not end on the target
+                // (one that does may be a hard stop on a target that jumped back).
+                let v1 = (p1[k] - p0[k]) / dt;
+                if a_max > 0.0 && a_max.is_finite() && p1[k] != goal[k] {
+                    let change = (v1 - velocity[k]).abs();
+                    let allowed = a_max * dt;
+                    // Speeds measured from f32 positions: a few units in the last place of the
+                    // position, per frame time.
+                    let rounding = 8.0 * f32::EPSILON * p0[k].abs().max(p1[k].abs()).max(1.0) / dt;
+                    assert!(
+                        change <= allowed * 1.001 + rounding,
+                        "axis {k}: speed {} -> {v1} in one frame, limit {allowed}",
+                        velocity[k]
+                    );
+                }
+                velocity[k] = v1;
+                // Never past the target from the side it was on.
+                if (goal[k] - p0[k]) * (goal[k] - p1[k]) < 0.0 {
+                    panic!(
+                        "axis {k} passed its target: {} -> {} past {}",
+                        p0[k], p1[k], goal[k]
+                    );
+                }
+            }
+            tracker = next;
+        }
+    }
 }

@@ -99,6 +99,9 @@ fn op() -> impl Strategy<Value = Op> {
         2 => Just(Op::Settle),
         1 => any::<u16>().prop_map(Op::Lost),
         1 => (cmd(), sep()).prop_map(|(c, s)| Op::Execute(c, s)),
+        3 => proptest::array::uniform6(any::<u16>()).prop_map(Op::Binary),
+        1 => proptest::array::uniform6(0u16..300).prop_map(Op::TextFrame),
+        1 => any::<bool>().prop_map(Op::Estop),
     ]
 }
 

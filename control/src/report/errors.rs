@@ -15,6 +15,7 @@ use super::format::Fixed;
 use crate::command::{Missing, ParseError, Verb};
 use crate::error::Error;
 use crate::protocol::{Lost, Spoiled, MAX_LINE};
+use crate::safety::{Estop, FREE_GPIOS};
 use crate::settings::{Expected, SettingError};
 
 /// The error codes, one per kind of refusal. `error:<code>` is what programs match on.
@@ -68,11 +69,16 @@ pub enum Code {
     PoseConflict,
     /// Not possible while moving.
     Busy,
+    /// Two settings that may not be equal are (an axis given to two stream counts, one GPIO
+    /// for two pins).
+    SettingConflict,
+    /// The emergency stop is on.
+    Estop,
 }
 
 impl Code {
     /// Every code, for documentation checks.
-    pub const ALL: [Code; 24] = [
+    pub const ALL: [Code; 26] = [
         Code::LineTooLong,
         Code::RxOverflow,
         Code::BadCharacter,
@@ -97,6 +103,8 @@ impl Code {
         Code::PathBlocked,
         Code::PoseConflict,
         Code::Busy,
+        Code::SettingConflict,
+        Code::Estop,
     ];
 
     /// The code as written after `error:`.
@@ -126,6 +134,8 @@ impl Code {
             Code::PathBlocked => "path-blocked",
             Code::PoseConflict => "pose-conflict",
             Code::Busy => "busy",
+            Code::SettingConflict => "setting-conflict",
+            Code::Estop => "e-stop",
         }
     }
 }
@@ -147,6 +157,7 @@ impl Error {
             Error::PathBlocked { .. } => Code::PathBlocked,
             Error::PoseConflict { .. } => Code::PoseConflict,
             Error::Busy | Error::Pending => Code::Busy,
+            Error::Estop(_) => Code::Estop,
         }
     }
 }
@@ -199,6 +210,9 @@ impl SettingError {
             SettingError::OutOfRange { .. } => Code::OutOfRange,
             SettingError::BadServoConfig(_) => Code::BadServoConfig,
             SettingError::BadGeometry(_) => Code::BadGeometry,
+            SettingError::StreamAxisTwice { .. } | SettingError::PinTwice { .. } => {
+                Code::SettingConflict
+            }
         }
     }
 }
@@ -239,6 +253,12 @@ impl Display for Error {
             Error::Busy => f.write_str("the platform is moving; wait for it or send stop first"),
             Error::Pending => f.write_str(
                 "the previous command is still being carried out; wait for its reply",
+            ),
+            Error::Estop(Estop::Open) => f.write_str(
+                "emergency stop: the e-stop input is open; close it, then send reset",
+            ),
+            Error::Estop(_) => f.write_str(
+                "emergency stop: the e-stop input is closed again; send reset to move again",
             ),
         }
     }
@@ -334,12 +354,20 @@ impl Display for SettingError {
                 word,
                 expected,
             } => {
-                let expected = match expected {
-                    Expected::WholeNumber => "a whole number",
-                    Expected::OnOrOff => "on or off",
-                    Expected::NormalOrReversed => "normal or reversed",
-                };
-                write!(f, "{setting}: '{word}' is not {expected}")
+                write!(f, "{setting}: '{word}' is not ")?;
+                match expected {
+                    Expected::WholeNumber => f.write_str("a whole number"),
+                    Expected::OnOrOff => f.write_str("on or off"),
+                    Expected::NormalOrReversed => f.write_str("normal or reversed"),
+                    Expected::OneOf(words) => {
+                        f.write_str("one of")?;
+                        words.iter().try_for_each(|w| write!(f, " {w}"))
+                    }
+                    Expected::FreePin => {
+                        f.write_str("off or a free GPIO:")?;
+                        FREE_GPIOS.iter().try_for_each(|p| write!(f, " {p}"))
+                    }
+                }
             }
             SettingError::NotOneOf {
                 setting,
@@ -371,6 +399,19 @@ impl Display for SettingError {
             }
             SettingError::BadServoConfig(e) => write!(f, "{}; nothing changed", ServoMessage(e)),
             SettingError::BadGeometry(e) => write!(f, "{}; nothing changed", GeometryMessage(e)),
+            SettingError::StreamAxisTwice {
+                axis,
+                first,
+                second,
+            } => write!(
+                f,
+                "stream.axis{first} and stream.axis{second} would both be {}; each axis comes from one count at most (set the other to none first); nothing changed",
+                axis.name()
+            ),
+            SettingError::PinTwice { pin } => write!(
+                f,
+                "estop_pin and power_pin cannot both be GPIO {pin}; nothing changed"
+            ),
         }
     }
 }

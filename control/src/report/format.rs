@@ -154,6 +154,12 @@ impl Display for ValueText {
                 Fixed(v, usize::from(decimals)).fmt(f)
             }
             (_, SettingValue::Number(v)) => write!(f, "{v}"),
+            (Kind::Choice(words), SettingValue::Choice(i)) => {
+                f.write_str(words.get(usize::from(i)).copied().unwrap_or("?"))
+            }
+            (_, SettingValue::Choice(i)) => write!(f, "{i}"),
+            (_, SettingValue::Pin(Some(gpio))) => write!(f, "{gpio}"),
+            (_, SettingValue::Pin(None)) => f.write_str("off"),
         }
     }
 }

@@ -35,7 +35,7 @@ pub use errors::{usage, Code};
 pub use format::{degrees, Fixed, PoseText, Six, ValueText, Vector};
 pub use replies::{
     refusal, write_banner, write_echo, write_error, write_notice, write_ok, write_prompt, Fault,
-    Listing, MotionReport, Notice, StatusReport, EOL, HELP, PROMPT, VERSION,
+    Listing, MotionReport, Notice, StatusReport, StreamCounts, EOL, HELP, PROMPT, VERSION,
 };
 
 #[cfg(test)]
@@ -49,6 +49,7 @@ mod tests {
     use crate::command::{Missing, ParseError, Verb};
     use crate::error::Error;
     use crate::protocol::{Lost, Spoiled};
+    use crate::safety::Estop;
     use crate::settings::{
         Expected, LayoutParam, ServoParam, ServoSel, SettingError, SettingId, BAUD_RATES,
     };
@@ -143,6 +144,14 @@ mod tests {
             },
             Error::Busy,
             Error::Pending,
+            Error::Setting(SettingError::StreamAxisTwice {
+                axis: Axis::Roll,
+                first: 1,
+                second: 4,
+            }),
+            Error::Setting(SettingError::PinTwice { pin: 15 }),
+            Error::Estop(Estop::Open),
+            Error::Estop(Estop::Latched),
         ]
     }
 

@@ -10,6 +10,7 @@ use super::errors::{Bytes, IkMessage};
 use super::format::{degrees, Fixed, PoseText, Six, ValueText, Vector};
 use crate::error::Error;
 use crate::protocol::Feed;
+use crate::safety::{Estop, EstopAction};
 use crate::settings::{LinkSettings, ServoParam, ServoSel, SettingId, Settings};
 
 /// Line end for everything written.
@@ -64,7 +65,7 @@ pub fn write_echo(out: &mut impl Write, feed: Feed) {
         // Bell: the rest of the line is ignored.
         Feed::Overflowed => out.write_char('\x07'),
         Feed::Empty | Feed::Line | Feed::Spoiled(_) => out.write_str(EOL),
-        Feed::Nothing => Ok(()),
+        Feed::Nothing | Feed::Frame(_) | Feed::DamagedFrame => Ok(()),
     };
 }
 
@@ -84,7 +85,8 @@ pub const HELP: &[&str] = &[
     "  nudge <axis>=<delta> ...               move the named axes by these amounts (relative)",
     "  check <x> <y> <z> <roll> <pitch> <yaw> would pose accept this? pulses and duration; nothing moves",
     "  home                                   move back to the home pose",
-    "  stop                                   freeze where it is now",
+    "  stop                                   freeze where it is now (also ends a stream)",
+    "  reset                                  clear the emergency stop once its input is closed",
     "  status (or ?)                          pose, target, motion, arm angles, pulse widths",
     "  geometry                               the active geometry",
     "  config                                 list the settings",
@@ -92,7 +94,9 @@ pub const HELP: &[&str] = &[
     "  defaults                               restore the default settings (except baud and echo)",
     "  help                                   this list",
     "axes: x y z (mm, z from the home height) roll pitch yaw (degrees, applied yaw-pitch-roll)",
-    "moves run in a straight line at speed_mm_s / speed_deg_s (0 or off: jump)",
+    "moves run in a straight line at speed_mm_s / speed_deg_s (0 or off: jump), accel_* ramps",
+    "stream frames (binary A5 5A ... 0D 0A, or text 127,127,127,127,127,127X) set the target;",
+    "  each axis follows at speed_* / accel_*; unreachable targets are clamped (see stream.*)",
     "servo settings: servo<1-6>.<trim_us|rate_us_rad|dir|min_us|max_us>, servos.<...> sets all six",
     "editing: backspace erases, ctrl-u erases the line, ctrl-c or ctrl-x abandons it; set echo off for programs",
 ];
@@ -116,6 +120,34 @@ pub enum MotionReport {
         /// Seconds in total.
         duration_s: f32,
     },
+    /// Going home because the emergency stop opened (`estop_action home`).
+    EstopHome {
+        /// Seconds done.
+        elapsed_s: f32,
+        /// Seconds in total.
+        duration_s: f32,
+    },
+    /// Following stream frames.
+    Streaming {
+        /// Each axis follows within the speed and acceleration limits (not pass-through).
+        tracking: bool,
+    },
+}
+
+/// Stream frames counted since start-up, for `status`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct StreamCounts {
+    /// Whole frames received (with counts that fit).
+    pub frames: u32,
+    /// Frames whose pose became the target (the others were superseded by a newer one before
+    /// they were applied: the newest frame wins).
+    pub applied: u32,
+    /// Frames dropped as damaged (wrong length or trailer, garbage, counts that do not fit).
+    pub damaged: u32,
+    /// Targets or steps moved back inside the workspace.
+    pub clamped: u32,
+    /// Frames refused because of the emergency stop.
+    pub refused: u32,
 }
 
 /// Something that went wrong on its own (not in reply to a line).
@@ -174,6 +206,15 @@ pub enum Notice {
     },
     /// The settings given at start-up were invalid; the defaults are used.
     SettingsRejected(Error),
+    /// The emergency-stop input opened.
+    EstopOpened {
+        /// What the platform does.
+        action: EstopAction,
+        /// A servo-power output is configured (it goes off).
+        power_pin: bool,
+    },
+    /// The emergency-stop input closed again.
+    EstopClosed,
 }
 
 /// Writes a notice line.
@@ -211,6 +252,25 @@ pub fn write_notice(out: &mut impl Write, notice: &Notice) {
                 e.code()
             ),
         ),
+        Notice::EstopOpened { action, power_pin } => line(
+            out,
+            format_args!(
+                "emergency stop: input open; {}{}; motion refused until the input is closed and reset is sent",
+                match action {
+                    EstopAction::Freeze => "platform frozen",
+                    EstopAction::Home => "going home",
+                },
+                match (power_pin, action) {
+                    (false, _) => "",
+                    (true, EstopAction::Freeze) => ", servo power off",
+                    (true, EstopAction::Home) => ", servo power off when home",
+                }
+            ),
+        ),
+        Notice::EstopClosed => line(
+            out,
+            format_args!("emergency stop: input closed; send reset to move again"),
+        ),
     }
 }
 
@@ -229,6 +289,12 @@ pub struct StatusReport {
     pub pulse_us: [f32; LEGS],
     /// The last fault, until the next accepted move.
     pub fault: Option<Fault>,
+    /// Stream frames so far.
+    pub stream: StreamCounts,
+    /// The emergency stop.
+    pub estop: Estop,
+    /// The servo-power output is on.
+    pub servo_power: bool,
 }
 
 /// A reply of several data lines. It may be written a line at a time (the controller writes
@@ -325,6 +391,23 @@ fn status_line(out: &mut impl Write, s: &StatusReport, index: usize) -> bool {
                     Fixed(duration_s, 3)
                 ),
             ),
+            MotionReport::EstopHome {
+                elapsed_s,
+                duration_s,
+            } => line(
+                out,
+                format_args!(
+                    "state: going home (e-stop) {} of {} s",
+                    Fixed(elapsed_s, 3),
+                    Fixed(duration_s, 3)
+                ),
+            ),
+            MotionReport::Streaming { tracking: true } => {
+                line(out, format_args!("state: streaming (tracking)"))
+            }
+            MotionReport::Streaming { tracking: false } => {
+                line(out, format_args!("state: streaming (pass-through)"))
+            }
         },
         1 => line(out, format_args!("pose: {}", PoseText(&s.pose))),
         2 => line(out, format_args!("target: {}", PoseText(&s.target))),
@@ -333,7 +416,32 @@ fn status_line(out: &mut impl Write, s: &StatusReport, index: usize) -> bool {
             format_args!("arm_deg: {}", Six(&degrees(&s.arm_rad), 3)),
         ),
         4 => line(out, format_args!("pulse_us: {}", Six(&s.pulse_us, 2))),
-        5 => match &s.fault {
+        5 => {
+            let c = &s.stream;
+            line(
+                out,
+                format_args!(
+                    "stream: frames={} applied={} damaged={} clamped={} refused={}",
+                    c.frames, c.applied, c.damaged, c.clamped, c.refused
+                ),
+            )
+        }
+        6 => line(
+            out,
+            format_args!(
+                "e-stop: {}",
+                match s.estop {
+                    Estop::Clear => "clear",
+                    Estop::Open => "open",
+                    Estop::Latched => "latched (input closed; send reset)",
+                }
+            ),
+        ),
+        7 => line(
+            out,
+            format_args!("servo_power: {}", if s.servo_power { "on" } else { "off" }),
+        ),
+        8 => match &s.fault {
             Some(fault) => line(out, format_args!("fault: {fault}")),
             None => return false,
         },

@@ -1,0 +1,350 @@
+//! Pose frames streamed by motion-simulator software (FlyPT Mover, SimTools, SimHub), on the
+//! same link as the command lines: their grammar, recognised byte by byte.
+//!
+//! - **Binary frame** (16 bytes): `A5 5A`, six 16-bit big-endian counts for x, y, z, roll,
+//!   pitch, yaw, then `0D 0A`. FlyPT Mover writes it with the output string
+//!   `<165><90><Axis1a><Axis2a><Axis3a><Axis4a><Axis5a><Axis6a><13><10>` (16-bit binary).
+//!   It starts with a byte no command line can contain (`A5` is not ASCII), so it may come at
+//!   any line start. The header and the trailer are 14 bytes apart: a frame whose trailer is
+//!   not where it should be (a lost or extra byte) is damaged, and decoding resynchronises on
+//!   the next `A5 5A` among the bytes already received, so one lost byte costs one frame.
+//! - **Text frame** (the SimTools / Mini-6DOF profiles' format): six decimal counts separated
+//!   by commas and ended by `X`, e.g. `127,127,131,127,120,127X`, with no line end. It starts
+//!   with a digit, which no command does. Digits and commas from a line's start, then `X`, are
+//!   a frame (damaged if they are not six counts); anything else (another character, or a line
+//!   end before the `X`) makes it a command line like any other (refused as one).
+//!
+//! What the counts mean is [`StreamSettings`]' (the `stream.*` settings): count `c` of a
+//! `b`-bit axis is the fraction `(c - 2^(b-1)) / 2^(b-1)` of that axis' full scale (mm for x,
+//! y, z; degrees for roll, pitch, yaw; a negative full scale inverts the axis), so the middle
+//! count is the home pose. Binary frames are 16-bit in the order x y z roll pitch yaw; text
+//! frames have the settable bit depth and axis order of an existing profile.
+
+use kinematics_core::pose::Axis;
+use kinematics_core::Pose;
+
+pub use crate::protocol::Frame;
+
+/// Bytes in a binary frame.
+pub const BINARY_FRAME_LEN: usize = 16;
+/// The binary frame's first byte (not ASCII: no command line contains it).
+pub const BINARY_HEADER: [u8; 2] = [0xA5, 0x5A];
+/// The binary frame's last two bytes.
+pub const BINARY_TRAILER: [u8; 2] = [0x0D, 0x0A];
+/// Ends a text frame.
+pub const TEXT_FRAME_END: u8 = b'X';
+/// Counts in a frame.
+pub const COUNTS: usize = 6;
+
+/// The six counts of a frame, in the order they came.
+pub type Counts = [u32; COUNTS];
+
+/// Bits of a binary frame's counts.
+pub const BINARY_BITS: u8 = 16;
+/// Fewest bits a text frame's counts may have (`stream.bits`).
+pub const TEXT_BITS_MIN: u8 = 8;
+/// Most bits a text frame's counts may have (`stream.bits`).
+pub const TEXT_BITS_MAX: u8 = 16;
+
+/// How stream counts become a pose (the `stream.*` settings).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StreamSettings {
+    /// Full scale of each axis, [`Axis::ALL`] order: mm for x, y, z, degrees for roll,
+    /// pitch, yaw (`stream.x_mm` .. `stream.yaw_deg`). The extreme counts mean about plus and
+    /// minus this; negative inverts the axis; 0 keeps the axis at 0.
+    pub full_scale: [f32; 6],
+    /// Bits of a text frame's counts (`stream.bits`).
+    pub text_bits: u8,
+    /// The axis each of a text frame's six counts drives (`stream.axis1` .. `stream.axis6`);
+    /// `None`: that count is ignored. No axis twice.
+    pub text_order: [Option<Axis>; 6],
+}
+
+impl Default for StreamSettings {
+    fn default() -> StreamSettings {
+        StreamSettings {
+            full_scale: [25.0, 25.0, 15.0, 15.0, 15.0, 20.0],
+            text_bits: 8,
+            text_order: Axis::ALL.map(Some),
+        }
+    }
+}
+
+/// Why a whole frame's counts are not a pose.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CountError {
+    /// A text frame's count does not fit its bit depth (`stream.bits`).
+    TooLarge {
+        /// Which count (1..=6).
+        count: u8,
+    },
+}
+
+impl StreamSettings {
+    /// The pose a frame's counts mean (see the module documentation).
+    pub fn to_pose(&self, frame: Frame) -> Result<Pose, CountError> {
+        let (counts, bits, order) = match frame {
+            Frame::Binary(counts) => (counts, BINARY_BITS, Axis::ALL.map(Some)),
+            Frame::Text(counts) => (counts, self.text_bits, self.text_order),
+        };
+        let half = 1u32 << (bits - 1);
+        let mut values = [0.0f32; 6];
+        for (i, (&count, axis)) in counts.iter().zip(order).enumerate() {
+            if count >= 2 * half {
+                return Err(CountError::TooLarge { count: i as u8 + 1 });
+            }
+            if let Some(axis) = axis {
+                let fraction = (count as f32 - half as f32) / half as f32;
+                values[axis as usize] = fraction * self.full_scale[axis as usize];
+            }
+        }
+        let [x, y, z, roll, pitch, yaw] = values;
+        Ok(Pose::from_degrees(x, y, z, roll, pitch, yaw))
+    }
+}
+
+/// What a byte did to a binary frame in progress.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BinaryFeed {
+    /// More bytes needed.
+    Pending,
+    /// A whole frame: its counts.
+    Frame(Counts),
+    /// The bytes so far are not a frame (counted as one damaged frame). Decoding goes on with
+    /// the bytes it kept (a later `A5 5A`), if any: see [`BinaryFrame::is_empty`].
+    Damaged,
+    /// The frame's first byte (`A5`) was not followed by `5A`: it was a stray byte, not the
+    /// start of a frame; this byte was not taken (the caller treats both as other input).
+    NotAFrame,
+}
+
+/// A binary frame being received.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct BinaryFrame {
+    bytes: [u8; BINARY_FRAME_LEN],
+    len: usize,
+}
+
+impl Default for BinaryFrame {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl BinaryFrame {
+    /// Nothing received.
+    pub const fn new() -> Self {
+        BinaryFrame {
+            bytes: [0; BINARY_FRAME_LEN],
+            len: 0,
+        }
+    }
+
+    /// True when no frame is in progress (the next byte belongs to the lines).
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Bytes of the frame in progress received so far.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Feeds one byte. The first byte of a frame must be `A5` (the caller routes it here).
+    pub fn feed(&mut self, byte: u8) -> BinaryFeed {
+        if self.len == 1 && byte != BINARY_HEADER[1] {
+            self.len = 0;
+            return BinaryFeed::NotAFrame;
+        }
+        self.bytes[self.len] = byte;
+        self.len += 1;
+        if self.len <= BINARY_HEADER.len() {
+            return BinaryFeed::Pending;
+        }
+        if self.len < BINARY_FRAME_LEN {
+            return BinaryFeed::Pending;
+        }
+        if self.bytes[BINARY_FRAME_LEN - 2..] != BINARY_TRAILER {
+            self.resync();
+            return BinaryFeed::Damaged;
+        }
+        let counts = core::array::from_fn(|i| {
+            u32::from(u16::from_be_bytes([
+                self.bytes[2 + 2 * i],
+                self.bytes[3 + 2 * i],
+            ]))
+        });
+        self.len = 0;
+        BinaryFeed::Frame(counts)
+    }
+
+    /// After a damaged frame: keeps the bytes from the next `A5 5A` (or a last lone `A5`) on,
+    /// if any, as the start of the next frame.
+    fn resync(&mut self) {
+        let kept = (1..self.len)
+            .find(|&start| matches!(&self.bytes[start..self.len], [0xA5] | [0xA5, 0x5A, ..]));
+        match kept {
+            Some(start) => {
+                self.bytes.copy_within(start..self.len, 0);
+                self.len -= start;
+            }
+            None => self.len = 0,
+        }
+    }
+}
+
+/// Whether a (command) line that has just started with `byte` is a text frame's beginning.
+pub fn starts_text_frame(byte: u8) -> bool {
+    byte.is_ascii_digit()
+}
+
+/// Whether the bytes of a line so far can be a text frame's (an `X` now would end one): a
+/// digit, then only digits and commas.
+pub fn is_text_frame_so_far(bytes: &[u8]) -> bool {
+    bytes.first().is_some_and(|&b| starts_text_frame(b))
+        && bytes.iter().all(|&b| b.is_ascii_digit() || b == b',')
+}
+
+/// The counts of a text frame (its text without the final `X`): exactly six decimal counts
+/// separated by commas, each below 2^16; `None` if it is not one (a damaged frame).
+pub fn parse_text_frame(text: &str) -> Option<Counts> {
+    let mut counts = [0u32; COUNTS];
+    let mut fields = text.split(',');
+    for count in counts.iter_mut() {
+        let field = fields.next()?;
+        if field.is_empty() || field.len() > 5 || !field.bytes().all(|b| b.is_ascii_digit()) {
+            return None;
+        }
+        let mut value = 0u32;
+        for b in field.bytes() {
+            value = value * 10 + u32::from(b - b'0');
+        }
+        if value > u32::from(u16::MAX) {
+            return None;
+        }
+        *count = value;
+    }
+    fields.next().is_none().then_some(counts)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn frame(counts: [u16; 6]) -> std::vec::Vec<u8> {
+        let mut bytes = std::vec![0xA5, 0x5A];
+        for c in counts {
+            bytes.extend_from_slice(&c.to_be_bytes());
+        }
+        bytes.extend_from_slice(&[0x0D, 0x0A]);
+        bytes
+    }
+
+    /// Feeds a byte stream (each frame starting where the decoder is empty and the byte is
+    /// A5, as the line assembler routes it); returns frames and damaged counts.
+    fn decode(bytes: &[u8]) -> (std::vec::Vec<Counts>, usize, usize) {
+        let mut d = BinaryFrame::new();
+        let (mut frames, mut damaged, mut other) = (std::vec::Vec::new(), 0, 0);
+        for &b in bytes {
+            if d.is_empty() && b != 0xA5 {
+                other += 1;
+                continue;
+            }
+            match d.feed(b) {
+                BinaryFeed::Pending => {}
+                BinaryFeed::Frame(c) => frames.push(c),
+                BinaryFeed::Damaged => damaged += 1,
+                BinaryFeed::NotAFrame => {
+                    damaged += 1;
+                    other += 1;
+                }
+            }
+        }
+        (frames, damaged, other)
+    }
+
+    #[test]
+    fn a_binary_frame_gives_its_six_counts() {
+        let (frames, damaged, _) = decode(&frame([0, 1, 0x8000, 0xFFFF, 0x0D0A, 0xA55A]));
+        assert_eq!(frames, [[0, 1, 0x8000, 0xFFFF, 0x0D0A, 0xA55A]]);
+        assert_eq!(damaged, 0);
+    }
+
+    #[test]
+    fn a_lost_byte_costs_one_frame_and_decoding_resynchronises() {
+        let mut bytes = std::vec::Vec::new();
+        let counts: std::vec::Vec<[u16; 6]> = (0..5)
+            .map(|i| [i, i + 1, i + 2, i + 3, i + 4, i + 5])
+            .collect();
+        for c in &counts {
+            bytes.extend(frame(*c));
+        }
+        // Lose one byte from the second frame's counts: it is damaged, the others arrive.
+        bytes.remove(16 + 5);
+        let (frames, damaged, _) = decode(&bytes);
+        assert_eq!(damaged, 1);
+        let want: std::vec::Vec<Counts> = [0, 2, 3, 4]
+            .iter()
+            .map(|&k| counts[k].map(u32::from))
+            .collect();
+        assert_eq!(frames, want);
+    }
+
+    #[test]
+    fn an_extra_byte_and_garbage_are_skipped() {
+        let mut bytes = frame([1; 6]);
+        bytes.insert(7, 0x00); // an extra byte inside the first frame
+        bytes.extend_from_slice(&[0xA5, 0x00, 0xA5, 0xA5, 0x13]); // garbage
+        bytes.extend(frame([2; 6]));
+        let (frames, damaged, _) = decode(&bytes);
+        assert_eq!(frames, [[2; 6]]);
+        assert!(damaged >= 2, "{damaged}");
+    }
+
+    #[test]
+    fn header_bytes_inside_the_counts_do_not_confuse_it() {
+        // A5 5A and 0D 0A inside the counts are data.
+        let c = [0xA55A, 0x0D0A, 0xA55A, 0x0D0A, 0x5AA5, 0x0AA5];
+        let mut bytes = frame(c);
+        bytes.extend(frame(c));
+        let (frames, damaged, _) = decode(&bytes);
+        assert_eq!(frames, [c.map(u32::from), c.map(u32::from)]);
+        assert_eq!(damaged, 0);
+    }
+
+    #[test]
+    fn text_frames_are_six_counts() {
+        assert_eq!(
+            parse_text_frame("127,0,255,65535,00012,3"),
+            Some([127, 0, 255, 65535, 12, 3])
+        );
+        for bad in [
+            "",
+            "1,2,3,4,5",
+            "1,2,3,4,5,6,7",
+            "1,,3,4,5,6",
+            "1,2,3,4,5,65536",
+            "1,2,3,4,5,6 ",
+            "1,2,3,4,5,-6",
+            "1,2,3,4,5,6X",
+            "123456,1,1,1,1,1",
+        ] {
+            assert_eq!(parse_text_frame(bad), None, "{bad:?}");
+        }
+        assert!(starts_text_frame(b'0') && starts_text_frame(b'9'));
+        assert!(!starts_text_frame(b'p') && !starts_text_frame(b'?') && !starts_text_frame(b'-'));
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn decoding_any_bytes_never_panics_and_frames_have_their_shape(
+            bytes in proptest::collection::vec(proptest::num::u8::ANY, 0..400)
+        ) {
+            let _ = decode(&bytes);
+            let text = std::string::String::from_utf8_lossy(&bytes);
+            if let Some(c) = parse_text_frame(&text) {
+                proptest::prop_assert!(c.iter().all(|&v| v <= 0xFFFF));
+            }
+        }
+    }
+}

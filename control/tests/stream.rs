@@ -1,0 +1,407 @@
+//! Stream frames through the controller, as motion-simulator software sends them: decoding,
+//! scaling, the newest frame winning, clamping to the workspace, the tracker's limits, and the
+//! emergency stop. Expected poses come from the frame format (counts -> fractions of the full
+//! scale), expected pulses from an independent IK solve of those poses.
+
+mod common;
+
+use common::{code_of, Host};
+use control::safety::Estop;
+use control::Settings;
+use kinematics_core::{ik, Libm, Pose};
+
+/// A binary frame of six 16-bit counts.
+fn binary(counts: [u16; 6]) -> Vec<u8> {
+    let mut bytes = vec![0xA5, 0x5A];
+    for c in counts {
+        bytes.extend_from_slice(&c.to_be_bytes());
+    }
+    bytes.extend_from_slice(b"\r\n");
+    bytes
+}
+
+/// The 16-bit count for a fraction (-1..1) of the full scale.
+fn count(fraction: f32) -> u16 {
+    (32768.0 + fraction * 32768.0).round().clamp(0.0, 65535.0) as u16
+}
+
+/// Pass-through: every speed and acceleration limit off.
+fn pass_through() -> Host {
+    let mut s = Host::quiet();
+    s.ok("set speed_mm_s off");
+    s.ok("set speed_deg_s off");
+    s
+}
+
+fn solve(s: &Host, pose: &Pose) -> Result<ik::Solution, ik::IkError> {
+    s.ctl
+        .settings()
+        .validate()
+        .unwrap()
+        .solve::<Libm>(&s.ctl.settings().servos, pose)
+}
+
+fn close(a: f32, b: f32, tol: f32) -> bool {
+    (a - b).abs() <= tol
+}
+
+fn poses_close(a: &Pose, b: &Pose, mm: f32, rad: f32) -> bool {
+    let (a, b) = (a.to_array(), b.to_array());
+    (0..3).all(|i| close(a[i], b[i], mm)) && (3..6).all(|i| close(a[i], b[i], rad))
+}
+
+#[test]
+fn a_binary_frame_is_applied_at_once_in_pass_through() {
+    let mut s = pass_through();
+    // A fifth of each default full scale (25, 25, 15 mm; 15, 15, 20 deg), some negative.
+    let counts = [
+        count(-0.2),
+        count(0.2),
+        count(0.2),
+        count(0.2),
+        count(-0.2),
+        count(0.2),
+    ];
+    let out = s.feed(&binary(counts));
+    assert_eq!(out, "", "frames get no reply");
+    assert!(s.ctl.take_new_pulses().is_none(), "applied by apply_stream");
+    s.ctl.apply_stream();
+    let want = Pose::from_degrees(-5.0, 5.0, 3.0, 3.0, -3.0, 4.0);
+    assert!(
+        poses_close(s.ctl.pose(), &want, 1e-3, 1e-4),
+        "{:?}",
+        s.ctl.pose()
+    );
+    let pulses = s.ctl.take_new_pulses().expect("new pulses at once");
+    let reference = solve(&s, &want).unwrap();
+    for (got, want) in pulses.iter().zip(reference.pulse_us) {
+        assert!(
+            close(*got, want, 0.05),
+            "{pulses:?} vs {:?}",
+            reference.pulse_us
+        );
+    }
+    assert!(s.ctl.servo_power(), "the first frame powers the servos");
+    assert_eq!(s.status_field("state"), "streaming (pass-through)");
+    assert_eq!(
+        s.status_field("stream"),
+        "frames=1 applied=1 damaged=0 clamped=0 refused=0"
+    );
+    // The frame rhythm holds it.
+    let held = s.frames(3);
+    assert!(held.iter().all(|p| *p == pulses));
+}
+
+#[test]
+fn the_newest_frame_wins() {
+    let mut s = pass_through();
+    for z in [0.1, 0.2, 0.3] {
+        s.feed(&binary([
+            count(0.0),
+            count(0.0),
+            count(z),
+            count(0.0),
+            count(0.0),
+            count(0.0),
+        ]));
+    }
+    s.ctl.apply_stream();
+    assert!(close(s.ctl.pose().z_mm, 0.3 * 15.0, 1e-3));
+    let c = s.ctl.stream_counts();
+    assert_eq!((c.frames, c.applied), (3, 1));
+    // Nothing fresh: nothing more applied.
+    s.ctl.apply_stream();
+    assert_eq!(s.ctl.stream_counts().applied, 1);
+}
+
+#[test]
+fn text_frames_use_the_bit_depth_and_axis_order_of_the_profile() {
+    let mut s = pass_through();
+    s.ok("set stream.bits 10");
+    // The profile sends roll, pitch, yaw, x, y, z (say).
+    for (n, axis) in ["roll", "pitch", "yaw", "x", "y", "z"].iter().enumerate() {
+        s.ok(&format!("set stream.axis{} none", n + 1));
+        let _ = axis;
+    }
+    for (n, axis) in ["roll", "pitch", "yaw", "x", "y", "z"].iter().enumerate() {
+        s.ok(&format!("set stream.axis{} {axis}", n + 1));
+    }
+    // 10 bits: 512 is the middle, 768 is +half, 256 is -half.
+    s.feed(b"768,512,256,512,768,512X");
+    s.ctl.apply_stream();
+    let want = Pose::from_degrees(0.0, 12.5, 0.0, 7.5, 0.0, -10.0);
+    assert!(
+        poses_close(s.ctl.pose(), &want, 1e-3, 1e-4),
+        "{:?}",
+        s.ctl.pose()
+    );
+    // A count that does not fit 10 bits: damaged, not applied.
+    s.feed(b"1024,512,512,512,512,512X");
+    s.ctl.apply_stream();
+    assert!(poses_close(s.ctl.pose(), &want, 1e-3, 1e-4));
+    assert_eq!(s.ctl.stream_counts().damaged, 1);
+    // Commands still work on the same link, and a frame keeps no line open.
+    s.ok("status");
+}
+
+#[test]
+fn damaged_frames_and_garbage_are_counted_and_never_applied() {
+    let mut s = pass_through();
+    let good = binary([
+        count(0.0),
+        count(0.0),
+        count(0.2),
+        count(0.0),
+        count(0.0),
+        count(0.0),
+    ]);
+    let mut bytes = good.clone();
+    bytes.remove(6); // a lost byte: this frame and no other is damaged
+    bytes.extend_from_slice(&[0x00, 0xFF, 0x13, 0xA5, 0x00]); // garbage
+    bytes.extend(good.clone());
+    let out = s.feed(&bytes);
+    assert_eq!(out, "", "garbage between frames gets no reply");
+    s.ctl.apply_stream();
+    assert!(close(s.ctl.pose().z_mm, 0.2 * 15.0, 1e-3));
+    let c = s.ctl.stream_counts();
+    assert_eq!(c.frames, 1);
+    assert!(c.damaged >= 1, "{c:?}");
+    s.ok("status");
+}
+
+#[test]
+fn an_unreachable_target_is_clamped_on_the_way_to_it_and_counted() {
+    let mut s = pass_through();
+    s.ok("set stream.z_mm 100");
+    // z = +80 mm is far outside the default workspace.
+    s.feed(&binary([
+        count(0.0),
+        count(0.0),
+        count(0.8),
+        count(0.0),
+        count(0.0),
+        count(0.0),
+    ]));
+    s.ctl.apply_stream();
+    let z = s.ctl.pose().z_mm;
+    assert!(z > 0.0 && z < 80.0, "{z}");
+    assert_eq!((s.ctl.pose().x_mm, s.ctl.pose().roll_rad), (0.0, 0.0));
+    // Reachable, and the next 1/64 of the way is not: the last reachable pose, found by
+    // bisection.
+    let here = *s.ctl.pose();
+    assert!(solve(&s, &here).is_ok());
+    let beyond = Pose {
+        z_mm: z + 80.0 / 64.0,
+        ..here
+    };
+    assert!(solve(&s, &beyond).is_err(), "clamped too early: z {z}");
+    assert_eq!(s.ctl.stream_counts().clamped, 1);
+    let pulses = s.ctl.take_new_pulses().unwrap();
+    let limits = s.ctl.settings().servos.0;
+    for (w, servo) in pulses.iter().zip(limits) {
+        assert!(w.is_finite() && *w >= servo.min_us && *w <= servo.max_us);
+    }
+    assert!(s.status_field("stream").contains("clamped=1"));
+}
+
+#[test]
+fn the_tracker_respects_speed_and_acceleration_and_does_not_overshoot() {
+    let mut s = Host::quiet();
+    s.ok("set frame_hz 200");
+    s.ok("set speed_mm_s 40");
+    s.ok("set accel_mm_s2 400");
+    s.ok("set speed_deg_s 60");
+    s.ok("set accel_deg_s2 600");
+    // A step to z = +6 mm and roll = +6 deg.
+    s.feed(&binary([
+        count(0.0),
+        count(0.0),
+        count(0.4),
+        count(0.4),
+        count(0.0),
+        count(0.0),
+    ]));
+    s.ctl.apply_stream();
+    assert_eq!(
+        *s.ctl.pose(),
+        Pose::HOME,
+        "tracking: nothing moves before a frame"
+    );
+    assert_eq!(s.status_field("state"), "streaming (tracking)");
+    let dt = 1.0 / 200.0;
+    let (mut z, mut v) = (0.0f32, 0.0f32);
+    let mut frames = 0;
+    while s.ctl.is_moving() {
+        s.frames(1);
+        frames += 1;
+        assert!(frames < 1000, "never settled");
+        let nz = s.ctl.pose().z_mm;
+        let nv = (nz - z) / dt;
+        assert!(nv <= 40.0 * 1.001, "speed {nv} mm/s at frame {frames}");
+        assert!(
+            (nv - v).abs() / dt <= 400.0 * 1.01,
+            "accel at frame {frames}"
+        );
+        assert!(nz <= 6.0 * 1.0001, "overshoot: {nz}");
+        assert!(s.ctl.pose().roll_rad <= 6f32.to_radians() * 1.0001);
+        (z, v) = (nz, nv);
+    }
+    // The counts' exact values (0.4 of the full scale, to 1/32768).
+    let fraction = (f32::from(count(0.4)) - 32768.0) / 32768.0;
+    assert!(close(z, fraction * 15.0, 1e-5), "{z}");
+    let roll = (fraction * 15.0).to_radians();
+    assert!(close(s.ctl.pose().roll_rad, roll, 1e-7));
+    // At least the time a trapezoid needs (6 mm at 400 mm/s^2 peaking below 40 mm/s: 2
+    // sqrt(6/400) s = 245 ms = 49 frames).
+    assert!(frames >= 49, "{frames}");
+    // The pulses follow the poses (solved each frame).
+    let reference = solve(&s, s.ctl.pose()).unwrap();
+    assert_eq!(s.ctl.pulses_us(), reference.pulse_us);
+}
+
+#[test]
+fn a_command_ends_the_stream_and_a_frame_starts_it_again() {
+    let mut s = pass_through();
+    s.feed(&binary([
+        count(0.1),
+        count(0.0),
+        count(0.0),
+        count(0.0),
+        count(0.0),
+        count(0.0),
+    ]));
+    s.ctl.apply_stream();
+    assert!(s.ctl.is_streaming());
+    s.ok("pose 0 0 2 0 0 0");
+    assert!(!s.ctl.is_streaming());
+    assert_eq!(
+        *s.ctl.pose(),
+        Pose::from_degrees(0.0, 0.0, 2.0, 0.0, 0.0, 0.0)
+    );
+    s.feed(&binary([
+        count(0.0),
+        count(0.0),
+        count(0.0),
+        count(0.0),
+        count(0.0),
+        count(0.0),
+    ]));
+    s.ctl.apply_stream();
+    assert!(s.ctl.is_streaming());
+    assert_eq!(*s.ctl.pose(), Pose::HOME);
+    s.ok("stop");
+    assert!(!s.ctl.is_streaming());
+}
+
+#[test]
+fn the_e_stop_freezes_refuses_moves_and_frames_until_closed_and_reset() {
+    let mut s = pass_through();
+    s.ok("set estop_pin 15");
+    s.ok("set power_pin 16");
+    assert!(!s.ctl.servo_power(), "off at start-up");
+    s.feed(&binary([
+        count(0.2),
+        count(0.0),
+        count(0.0),
+        count(0.0),
+        count(0.0),
+        count(0.0),
+    ]));
+    s.ctl.apply_stream();
+    assert!(s.ctl.servo_power());
+    let frozen = *s.ctl.pose();
+    s.ctl.set_estop_input(true);
+    assert_eq!(s.ctl.estop(), Estop::Open);
+    assert!(!s.ctl.servo_power(), "power off on e-stop");
+    assert!(!s.ctl.is_streaming());
+    let notice = s.notices();
+    assert!(
+        notice.starts_with("# emergency stop: input open; platform frozen, servo power off"),
+        "{notice:?}"
+    );
+    // Frames are refused and counted; moves are refused with the reason.
+    s.feed(&binary([
+        count(-0.2),
+        count(0.0),
+        count(0.0),
+        count(0.0),
+        count(0.0),
+        count(0.0),
+    ]));
+    s.ctl.apply_stream();
+    assert_eq!(*s.ctl.pose(), frozen);
+    assert_eq!(s.ctl.stream_counts().refused, 1);
+    let refusal = s.err("home");
+    assert_eq!(code_of(&refusal), "e-stop");
+    assert!(refusal.contains("input is open"), "{refusal}");
+    assert_eq!(s.code("reset"), "e-stop", "reset while the input is open");
+    s.ok("check 0 0 1 0 0 0"); // nothing moves: allowed
+    s.ok("status");
+    assert_eq!(s.status_field("e-stop"), "open");
+    // Closing the input is not enough.
+    s.ctl.set_estop_input(false);
+    assert!(s
+        .notices()
+        .contains("emergency stop: input closed; send reset"));
+    assert!(s.err("pose 0 0 1 0 0 0").contains("send reset"));
+    assert_eq!(*s.ctl.pose(), frozen);
+    s.ok("reset");
+    assert_eq!(s.ctl.estop(), Estop::Clear);
+    s.ok("home");
+    assert!(
+        s.ctl.servo_power(),
+        "the next accepted move powers the servos"
+    );
+}
+
+#[test]
+fn the_e_stop_can_ease_home_then_power_off() {
+    let mut s = Host::quiet();
+    s.ok("set estop_pin 15");
+    s.ok("set estop_action home");
+    s.ok("set power_pin 16");
+    s.ok("pose 5 0 3 0 0 4");
+    s.frames(200);
+    assert!(s.ctl.servo_power() && !s.ctl.is_moving());
+    s.ctl.set_estop_input(true);
+    let mut out = String::new();
+    while s.ctl.is_busy() {
+        s.ctl.work(&mut s.link, &mut out);
+    }
+    assert_eq!(out, "", "the e-stop's own move replies to nobody");
+    assert!(s.ctl.is_moving(), "going home");
+    assert!(s.ctl.servo_power(), "powered until home");
+    assert!(s.status_field("state").starts_with("going home (e-stop)"));
+    s.frames(400);
+    assert_eq!(*s.ctl.pose(), Pose::HOME);
+    assert!(!s.ctl.servo_power(), "power off once home");
+}
+
+#[test]
+fn a_stream_that_stops_eases_home_after_the_link_timeout() {
+    let mut s = pass_through();
+    s.ok("set link_timeout_s 0.2");
+    s.feed(&binary([
+        count(0.0),
+        count(0.0),
+        count(0.3),
+        count(0.0),
+        count(0.0),
+        count(0.0),
+    ]));
+    s.ctl.apply_stream();
+    s.frames(5);
+    assert!(s.ctl.is_streaming(), "frames are a sign of life");
+    s.frames(30);
+    assert!(s.notices().contains("link lost"));
+    s.frames(100);
+    assert_eq!(*s.ctl.pose(), Pose::HOME);
+    assert!(!s.ctl.is_streaming());
+}
+
+#[test]
+fn defaults_for_a_fresh_board_have_no_safety_pins() {
+    let s = Settings::default();
+    assert_eq!(s.safety.estop_pin, None);
+    assert_eq!(s.safety.power_pin, None);
+}
