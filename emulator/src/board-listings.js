@@ -18,7 +18,7 @@ const LEG = new RegExp(
 );
 /** `config`'s first line: the listing starts with the frame rate. */
 const CONFIG_START = /^# frame_hz: (\d+)$/;
-const SETTING = /^# ([a-z_]+[a-z0-9_]*): (\S+)$/;
+const SETTING = /^# ([a-z][a-z0-9_.]*): (\S+)$/;
 const SERVO = new RegExp(
   String.raw`^# servo([1-6]): trim_us=(${NUMBER}) rate_us_rad=(${NUMBER}) dir=(normal|reversed) ` +
     String.raw`min_us=(${NUMBER}) max_us=(${NUMBER})$`,
