@@ -60,13 +60,15 @@ pub enum Verb {
     Set,
     /// `defaults`.
     Defaults,
+    /// `save`.
+    Save,
     /// `help`.
     Help,
 }
 
 impl Verb {
     /// Every command word.
-    pub const ALL: [Verb; 13] = [
+    pub const ALL: [Verb; 14] = [
         Verb::Pose,
         Verb::Move,
         Verb::Nudge,
@@ -79,6 +81,7 @@ impl Verb {
         Verb::Config,
         Verb::Set,
         Verb::Defaults,
+        Verb::Save,
         Verb::Help,
     ];
 
@@ -97,6 +100,7 @@ impl Verb {
             Verb::Config => "config",
             Verb::Set => "set",
             Verb::Defaults => "defaults",
+            Verb::Save => "save",
             Verb::Help => "help",
         }
     }
@@ -227,6 +231,8 @@ pub enum Command {
     Help,
     /// `defaults`.
     Defaults,
+    /// `save`: write the platform's settings to flash.
+    Save,
     /// `set name value`.
     Set(SettingId, SettingValue),
 }
@@ -362,6 +368,7 @@ pub fn parse(line: &str) -> Result<Command, ParseError> {
         Verb::Config => simple(Command::Config, &mut words),
         Verb::Help => simple(Command::Help, &mut words),
         Verb::Defaults => simple(Command::Defaults, &mut words),
+        Verb::Save => simple(Command::Save, &mut words),
         Verb::Set => {
             let name = words.next().ok_or(ParseError::MissingField {
                 what: Missing::SettingName,

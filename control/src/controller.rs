@@ -23,6 +23,12 @@
 //!   board's main loop never stalls: frames, the watchdog and the other links are served
 //!   between slices.
 //!
+//! `save` is a job too, whose flash I/O is the board's: the controller prepares the record
+//! (the A/B choice of sector and the sequence number are [`crate::store`]'s), the board takes
+//! it with [`Controller::take_flash_write`], erases, programs and reads back, and hands the
+//! outcome to [`Controller::flash_written`]; the reply follows in [`Controller::work`]. The
+//! controller knows which settings are saved (for `config`) and never touches the flash.
+//!
 //! One job at a time: while [`Controller::is_busy`], the board feeds no bytes (they wait in the
 //! link's receive queue, or the USB host waits). A move checked while the platform moves holds
 //! the platform where it was when the command arrived until the check ends (a few
@@ -71,12 +77,15 @@ use crate::command::{self, Command};
 use crate::error::Error;
 use crate::motion::{lerp, Checkpoints, Motion, Segment, SpeedLimits};
 use crate::protocol::{Feed, Frame, Lost};
-use crate::report::{self, Fault, Listing, MotionReport, Notice, StatusReport, StreamCounts, EOL};
+use crate::report::{
+    self, Fault, Listing, MotionReport, Notice, Saved, StatusReport, StreamCounts, EOL,
+};
 use crate::safety::{Estop, EstopAction};
 use crate::session::Session;
 use crate::settings::{
     LinkSettings, SettingError, SettingId, SettingValue, Settings, DEFAULT_BAUD,
 };
+use crate::store::{self, Found, Loaded, SaveError, Store};
 use crate::tracker::{TrackLimits, Tracker};
 
 /// Linear speed for returning home after link loss when `speed_mm_s` is off, mm/s.
@@ -149,6 +158,19 @@ enum Job {
     Listing { listing: Listing, next: usize },
     /// New settings with new build numbers: their geometry and IK are built a step per slice.
     Rebuild { candidate: Settings, stage: Rebuild },
+    /// `save`: the flash write the board performs, and its outcome.
+    Save(SaveStep),
+}
+
+/// How far a [`Job::Save`] has got.
+#[derive(Debug, Clone)]
+enum SaveStep {
+    /// The write waits for the board to take it ([`Controller::take_flash_write`]).
+    Waiting(store::Write),
+    /// The board has taken it and is writing.
+    Writing(store::Write),
+    /// The board has written and read it back ([`Controller::flash_written`]).
+    Written(store::Write, Result<(), SaveError>),
 }
 
 /// How far a [`Job::Rebuild`] has got.
@@ -224,6 +246,8 @@ pub struct Controller<M: Math = Libm> {
     servo_power: bool,
     /// Servo frames so far (wrapping): the links' clock for frames cut short.
     frame_ticks: u32,
+    /// Which flash sector holds the newest good save, and its settings.
+    store: Store,
     /// The latest notices, each with its sequence number.
     notices: heapless::Deque<(u32, Notice), NOTICE_QUEUE>,
     /// Sequence number of the next notice.
@@ -277,10 +301,33 @@ impl<M: Math> Controller<M> {
             estop: Estop::Clear,
             servo_power: false,
             frame_ticks: 0,
+            store: Store::empty(),
             notices: heapless::Deque::new(),
             next_notice: 0,
             _math: PhantomData,
         })
+    }
+
+    /// The controller at power-up, from what the flash holds ([`Store::load`]): the newest
+    /// good saved settings, or the defaults; a warning notice says why when it is not simply
+    /// the last save (nothing saved, a copy that cannot be used). Saved settings these maths
+    /// cannot drive are replaced by the defaults too (see [`Controller::with_math`]).
+    pub fn power_up(loaded: Loaded) -> Self {
+        let Loaded { store, found } = loaded;
+        let mut c = Self::with_math(store.saved().copied().unwrap_or_default());
+        c.store = store;
+        match found {
+            Found::Saved { .. } => {}
+            Found::Nothing => c.notify(Notice::NoSavedSettings(None)),
+            Found::Unusable(why) => c.notify(Notice::NoSavedSettings(Some(why))),
+            Found::SavedOtherUnusable { sequence, other } => {
+                c.notify(Notice::SavedCopyUnusable {
+                    sequence,
+                    why: other,
+                });
+            }
+        }
+        c
     }
 
     // ----- what the board reads -----
@@ -372,6 +419,40 @@ impl<M: Math> Controller<M> {
     /// The last fault, until the next accepted move.
     pub fn fault(&self) -> Option<&Fault> {
         self.fault.as_ref()
+    }
+
+    /// What the controller knows of the flash: the newest good save and where it is.
+    pub fn store(&self) -> &Store {
+        &self.store
+    }
+
+    /// True while a `save` waits for the board's flash write (taken or not).
+    pub fn awaits_flash(&self) -> bool {
+        matches!(
+            self.job,
+            Some(Job::Save(SaveStep::Waiting(_) | SaveStep::Writing(_)))
+        )
+    }
+
+    /// The flash write a `save` asks for, once: the board performs it
+    /// ([`store::Write::perform`]: erase the sector, program the page, read it back) and hands
+    /// the outcome to [`Controller::flash_written`]; the reply follows in [`Controller::work`].
+    pub fn take_flash_write(&mut self) -> Option<store::Write> {
+        match self.job {
+            Some(Job::Save(SaveStep::Waiting(write))) => {
+                self.job = Some(Job::Save(SaveStep::Writing(write)));
+                Some(write)
+            }
+            _ => None,
+        }
+    }
+
+    /// The outcome of the flash write taken with [`Controller::take_flash_write`] (ignored if
+    /// none was taken).
+    pub fn flash_written(&mut self, result: Result<(), SaveError>) {
+        if let Some(Job::Save(SaveStep::Writing(write))) = self.job {
+            self.job = Some(Job::Save(SaveStep::Written(write, result)));
+        }
     }
 
     /// The pulses to write now if a command changed them outside a frame (a jump, or a
@@ -473,10 +554,12 @@ impl<M: Math> Controller<M> {
 
     /// Runs one line as if it had been typed on `session`'s link (any case, blank lines
     /// ignored) and writes its replies there, its work done to the end at once: for
-    /// transports other than the byte stream, and for tests.
+    /// transports other than the byte stream, and for tests. The one exception is `save`,
+    /// whose flash write is the board's: this returns with it waiting
+    /// ([`Controller::awaits_flash`]); perform it, then call [`Controller::work`] for the reply.
     pub fn execute_line(&mut self, session: &mut Session, line: &str, out: &mut impl Write) {
         if self.begin_line(session, line, out) == Begun::Pending {
-            while session.awaits_reply() {
+            while session.awaits_reply() && !self.awaits_flash() {
                 self.work(session, out);
             }
         }
@@ -535,6 +618,16 @@ impl<M: Math> Controller<M> {
                 Some(Ok(())) => Done::Ok,
                 Some(Err(e)) => Done::Refused(e),
             },
+            Job::Save(SaveStep::Written(write, Ok(()))) => {
+                self.store.commit(&write);
+                Done::Ok
+            }
+            Job::Save(SaveStep::Written(_, Err(e))) => Done::Refused(Error::SaveFailed(e)),
+            Job::Save(step) => {
+                // The board has not written yet.
+                self.job = Some(Job::Save(step));
+                return;
+            }
         };
         self.holding = false;
         match done {
@@ -712,10 +805,18 @@ impl<M: Math> Controller<M> {
             },
             Command::Status => Ok(self.list(Listing::Status(self.status()))),
             Command::Geometry => Ok(self.list(Listing::Geometry)),
-            Command::Config => Ok(self.list(Listing::Config(LinkSettings {
-                baud: self.baud,
-                echo: session.echo(),
-            }))),
+            Command::Config => {
+                let saved = match self.store.saved() {
+                    None => Saved::Nothing,
+                    Some(s) if *s == self.settings => Saved::Same,
+                    Some(_) => Saved::Differs,
+                };
+                let link = LinkSettings {
+                    baud: self.baud,
+                    echo: session.echo(),
+                };
+                Ok(self.list(Listing::Config(link, saved)))
+            }
             Command::Help => Ok(self.list(Listing::Help)),
             Command::Set(SettingId::Echo, SettingValue::Flag(on)) => {
                 session.set_echo(on);
@@ -740,6 +841,15 @@ impl<M: Math> Controller<M> {
                     return Err(Error::Busy);
                 }
                 self.change_settings(self.settings.with(id, value))
+            }
+            Command::Save => {
+                if self.motion.is_moving() {
+                    return Err(Error::Busy);
+                }
+                // The platform's settings only: the links keep theirs (see crate::record).
+                let write = self.store.prepare(&self.settings);
+                self.job = Some(Job::Save(SaveStep::Waiting(write)));
+                Ok(Begun::Pending)
             }
             Command::Defaults => {
                 if self.motion.is_moving() {
@@ -1600,8 +1710,8 @@ mod tests {
             c.work(&mut link, &mut out);
             lines.push(out[before..].matches("\r\n").count());
         }
-        // The global settings, 6 servos, then the reply.
-        assert_eq!(lines.len(), SettingId::GLOBAL.len() + 6 + 1);
+        // The global settings, 6 servos, whether they are saved, then the reply.
+        assert_eq!(lines.len(), SettingId::GLOBAL.len() + 6 + 1 + 1);
         assert!(lines.iter().all(|&n| n == 1), "{lines:?}");
         assert!(out.ends_with("ok\r\n"));
     }

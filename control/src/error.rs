@@ -1,8 +1,8 @@
 //! [`Error`]: why a line is refused, with what is at fault (the field, leg, servo or limit) as
 //! payload. Each layer has its own error type and this one gathers them: the line itself
 //! ([`Spoiled`]), its words ([`ParseError`]), a setting ([`SettingError`]), the kinematics
-//! ([`IkError`]) and the motion. How each is worded, and its `error:<code>`, is
-//! [`crate::report`]'s.
+//! ([`IkError`]), the motion and the flash ([`SaveError`]). How each is worded, and its
+//! `error:<code>`, is [`crate::report`]'s.
 
 use kinematics_core::ik::IkError;
 
@@ -10,6 +10,7 @@ use crate::command::ParseError;
 use crate::protocol::Spoiled;
 use crate::safety::Estop;
 use crate::settings::SettingError;
+use crate::store::SaveError;
 
 /// Why a line is refused. Nothing changed; the platform holds its pose.
 #[derive(Debug, Clone, PartialEq)]
@@ -39,6 +40,8 @@ pub enum Error {
     Busy,
     /// The emergency stop is on: no motion until its input is closed and `reset` is sent.
     Estop(Estop),
+    /// The settings could not be written to flash (the save before is kept).
+    SaveFailed(SaveError),
     /// A line came before the reply to the one before (only where the board feeds bytes while
     /// the controller is busy, which the firmware never does).
     Pending,

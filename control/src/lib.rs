@@ -13,7 +13,8 @@
 //! - [`number`]: strict decimal parsing; [`word`]: quoting what the user typed.
 //! - [`command`]: one line -> one [`command::Command`] (like grbl's `gcode`).
 //! - [`settings`]: [`Settings`], names, ranges and defaults for `set`; [`record`]: their
-//!   binary form for flash.
+//!   binary form for flash; [`store`]: the two flash sectors used in turn (A/B), so a power cut
+//!   during a save never loses the last good one.
 //! - [`motion`]: straight-line moves at bounded speed, path checks.
 //! - [`error`]: [`Error`], why a line is refused (each layer's error type gathered).
 //! - [`report`]: every reply, error code and message, data line and notice, worded once (the
@@ -64,6 +65,7 @@ pub mod report;
 pub mod safety;
 pub mod session;
 pub mod settings;
+pub mod store;
 pub mod stream;
 pub mod tracker;
 pub mod word;

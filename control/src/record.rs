@@ -1,5 +1,6 @@
-//! The settings record: [`Settings`] as a fixed-size, versioned, checksummed block of bytes for
-//! flash, and back. Writing it to flash is the board's job.
+//! The settings record: [`Settings`] and the number of the save as a fixed-size, versioned,
+//! checksummed block of bytes for flash, and back. Which flash sector it goes to is
+//! [`crate::store`]'s business; writing it is the board's.
 //!
 //! [`ENCODED_LEN`] bytes, little-endian (format version [`FORMAT_VERSION`]):
 //!
@@ -21,35 +22,60 @@
 //! | 208 | 1 | `estop_action`: 0 freeze, 1 home |
 //! | 209 | 1 | `power_pin`: GPIO, `0xFF` off |
 //! | 210 | 2 | reserved, 0 |
-//! | 212 | 4 | CRC-32 (IEEE 802.3) of bytes 0..212 |
+//! | 212 | 4 | sequence number of the save (u32; the newer of two records has the higher one) |
+//! | 216 | 4 | CRC-32 (IEEE 802.3) of bytes 0..216 |
 //!
-//! The link settings (`baud`, `echo`) are not in it: they belong to the links, not the platform.
+//! The sequence number and the checksum come last, so a write that stops anywhere before its
+//! end leaves a record whose checksum does not match (a flash page is programmed from its first
+//! byte to its last).
+//!
+//! The link settings (`baud`, `echo`) are not in it: they belong to the links, not the platform
+//! (a board that came up at a saved 921,600 baud without echo would look dead to a terminal).
 //! Decoding checks magic, version, length, checksum, every enumerated byte and finally
 //! [`Settings::validate`], so decoded settings are always usable.
 
 use kinematics_core::pose::Axis;
-use kinematics_core::{Direction, ServoSet};
+use kinematics_core::{Direction, Libm, Math, ServoSet};
 
 use crate::safety::EstopAction;
 use crate::settings::{LayoutParam, SettingError, Settings};
 
+/// Binary format version (1 also held the link settings, 2 had no sequence number and none of
+/// the acceleration, stream and safety settings; neither was ever written to a board's flash).
+pub const FORMAT_VERSION: u16 = 3;
+/// Bytes of settings between the header and the sequence number.
+pub const PAYLOAD_LEN: usize = 204;
 /// A pin byte meaning "off".
 const PIN_OFF: u8 = 0xFF;
 /// A `stream.axisN` byte meaning `none`.
 const AXIS_NONE: u8 = 6;
-
-/// Binary format version (1 also held the link settings, 2 lacked the acceleration, stream
-/// and safety settings; no release wrote either to a board).
-pub const FORMAT_VERSION: u16 = 3;
-/// Bytes between the header and the checksum.
-pub const PAYLOAD_LEN: usize = 204;
-/// Bytes of an encoded [`Settings`].
-pub const ENCODED_LEN: usize = HEADER_LEN + PAYLOAD_LEN + 4;
+/// Bytes of an encoded [`Record`].
+pub const ENCODED_LEN: usize = HEADER_LEN + PAYLOAD_LEN + 4 + 4;
+/// Offset of the sequence number.
+pub const SEQUENCE_OFFSET: usize = HEADER_LEN + PAYLOAD_LEN;
+/// Offset of the CRC-32, the last four bytes.
+pub const CRC_OFFSET: usize = SEQUENCE_OFFSET + 4;
 const HEADER_LEN: usize = 8;
 const MAGIC: [u8; 4] = *b"HXPS";
 const SERVO_RECORD_LEN: usize = 20;
 
-/// Why stored bytes are not a usable [`Settings`].
+/// One saved copy of the platform's settings.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Record {
+    /// Which save this is: each save numbers its record one higher than the newest before it
+    /// (wrapping; see [`is_newer`]).
+    pub sequence: u32,
+    /// The settings saved.
+    pub settings: Settings,
+}
+
+/// Whether sequence number `a` is newer than `b`: `a` follows `b` by less than half the
+/// number range, so the order survives the wrap from `u32::MAX` to 0.
+pub fn is_newer(a: u32, b: u32) -> bool {
+    (a.wrapping_sub(b) as i32) > 0
+}
+
+/// Why stored bytes are not a usable [`Record`].
 #[derive(Debug, Clone, PartialEq)]
 pub enum DecodeError {
     /// Fewer than [`ENCODED_LEN`] bytes.
@@ -72,7 +98,7 @@ pub enum DecodeError {
 }
 
 /// CRC-32 (IEEE 802.3, reflected, polynomial 0xEDB88320), bit by bit: small and fast enough
-/// for a 172-byte record.
+/// for a 216-byte record.
 pub fn crc32(bytes: &[u8]) -> u32 {
     let mut crc = 0xFFFF_FFFFu32;
     for &b in bytes {
@@ -138,8 +164,9 @@ impl Reader<'_> {
     }
 }
 
-/// The record of `settings` (see the module docs).
-pub fn encode(settings: &Settings) -> [u8; ENCODED_LEN] {
+/// The bytes of `record` (see the module docs).
+pub fn encode(record: &Record) -> [u8; ENCODED_LEN] {
+    let settings = &record.settings;
     let mut buf = [0u8; ENCODED_LEN];
     let mut w = Writer {
         buf: &mut buf,
@@ -188,16 +215,22 @@ pub fn encode(settings: &Settings) -> [u8; ENCODED_LEN] {
         0,
         0,
     ]);
-    let end = w.at;
-    debug_assert_eq!(end, HEADER_LEN + PAYLOAD_LEN);
-    let crc = crc32(&buf[..end]);
-    buf[end..].copy_from_slice(&crc.to_le_bytes());
+    debug_assert_eq!(w.at, SEQUENCE_OFFSET);
+    w.bytes(&record.sequence.to_le_bytes());
+    let crc = crc32(&buf[..CRC_OFFSET]);
+    buf[CRC_OFFSET..].copy_from_slice(&crc.to_le_bytes());
     buf
 }
 
 /// Reads a record back (trailing bytes are ignored), refusing anything damaged, foreign or
 /// invalid.
-pub fn decode(bytes: &[u8]) -> Result<Settings, DecodeError> {
+pub fn decode(bytes: &[u8]) -> Result<Record, DecodeError> {
+    decode_with::<Libm>(bytes)
+}
+
+/// [`decode`], the settings' geometry validated with `M`'s maths (the board's own, so that it
+/// need not carry `libm` for this alone).
+pub fn decode_with<M: Math>(bytes: &[u8]) -> Result<Record, DecodeError> {
     if bytes.len() < ENCODED_LEN {
         return Err(DecodeError::TooShort);
     }
@@ -213,9 +246,9 @@ pub fn decode(bytes: &[u8]) -> Result<Settings, DecodeError> {
     if usize::from(len) != PAYLOAD_LEN {
         return Err(DecodeError::BadLength(len));
     }
-    let end = HEADER_LEN + PAYLOAD_LEN;
-    let stored = u32::from_le_bytes([bytes[end], bytes[end + 1], bytes[end + 2], bytes[end + 3]]);
-    if crc32(&bytes[..end]) != stored {
+    let le32 =
+        |at: usize| u32::from_le_bytes([bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]]);
+    if crc32(&bytes[..CRC_OFFSET]) != le32(CRC_OFFSET) {
         return Err(DecodeError::BadChecksum);
     }
     let mut r = Reader {
@@ -277,13 +310,26 @@ pub fn decode(bytes: &[u8]) -> Result<Settings, DecodeError> {
     };
     settings.safety.power_pin = pin(r.u8());
     r.zeros(2)?;
-    settings.validate().map_err(DecodeError::Invalid)?;
-    Ok(settings)
+    settings
+        .validate_with::<M>()
+        .map_err(DecodeError::Invalid)?;
+    Ok(Record {
+        sequence: le32(SEQUENCE_OFFSET),
+        settings,
+    })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn record(sequence: u32, settings: Settings) -> Record {
+        Record { sequence, settings }
+    }
+
+    fn default_bytes() -> [u8; ENCODED_LEN] {
+        encode(&record(7, Settings::default()))
+    }
 
     #[test]
     fn encoding_roundtrips() {
@@ -314,18 +360,20 @@ mod tests {
         s.safety.estop_action = EstopAction::Home;
         s.safety.power_pin = Some(22);
         s.validate().unwrap();
-        let bytes = encode(&s);
-        assert_eq!(bytes.len(), ENCODED_LEN);
+        let bytes = encode(&record(0xDEAD_BEEF, s));
+        assert_eq!(bytes.len(), 220);
         assert_eq!(&bytes[..4], b"HXPS");
-        assert_eq!(decode(&bytes), Ok(s));
+        // The sequence number at its documented place, little-endian.
+        assert_eq!(&bytes[212..216], &[0xEF, 0xBE, 0xAD, 0xDE]);
+        assert_eq!(decode(&bytes), Ok(record(0xDEAD_BEEF, s)));
         assert_eq!(
-            decode(&encode(&Settings::default())),
-            Ok(Settings::default())
+            decode(&encode(&record(0, Settings::default()))),
+            Ok(record(0, Settings::default()))
         );
         // Trailing bytes (a flash page) are ignored.
         let mut page = [0xFFu8; 256];
         page[..ENCODED_LEN].copy_from_slice(&bytes);
-        assert_eq!(decode(&page), Ok(s));
+        assert_eq!(decode(&page), Ok(record(0xDEAD_BEEF, s)));
     }
 
     #[test]
@@ -335,8 +383,19 @@ mod tests {
     }
 
     #[test]
+    fn newer_follows_by_less_than_half_the_range() {
+        assert!(is_newer(2, 1) && !is_newer(1, 2) && !is_newer(5, 5));
+        assert!(
+            is_newer(0, u32::MAX),
+            "the wrap from u32::MAX to 0 is a step forward"
+        );
+        assert!(is_newer(3, u32::MAX - 3));
+        assert!(!is_newer(u32::MAX, 0));
+    }
+
+    #[test]
     fn any_single_bit_flip_is_rejected() {
-        let bytes = encode(&Settings::default());
+        let bytes = default_bytes();
         for i in 0..ENCODED_LEN {
             for bit in 0..8 {
                 let mut damaged = bytes;
@@ -347,31 +406,39 @@ mod tests {
     }
 
     #[test]
+    fn a_record_cut_short_is_rejected_wherever_the_write_stopped() {
+        // Bytes from `cut` on still erased (0xFF), as a page program stopped there leaves them.
+        let bytes = default_bytes();
+        for cut in 0..ENCODED_LEN {
+            let mut partial = [0xFFu8; ENCODED_LEN];
+            partial[..cut].copy_from_slice(&bytes[..cut]);
+            assert!(decode(&partial).is_err(), "cut at byte {cut}");
+        }
+    }
+
+    #[test]
     fn foreign_and_short_data_are_rejected() {
         assert_eq!(decode(&[0xFF; ENCODED_LEN]), Err(DecodeError::BadMagic));
         assert_eq!(decode(&[0; 10]), Err(DecodeError::TooShort));
-        let mut bytes = encode(&Settings::default());
-        bytes[4] = 1;
-        assert_eq!(decode(&bytes), Err(DecodeError::UnsupportedVersion(1)));
+        let mut bytes = default_bytes();
         bytes[4] = 2;
         assert_eq!(decode(&bytes), Err(DecodeError::UnsupportedVersion(2)));
-        let mut bytes = encode(&Settings::default());
+        let mut bytes = default_bytes();
         bytes[6] = 1;
         assert!(matches!(decode(&bytes), Err(DecodeError::BadLength(_))));
     }
 
     /// Re-seals damaged contents with a correct checksum, as a buggy writer would.
     fn reseal(mut bytes: [u8; ENCODED_LEN]) -> [u8; ENCODED_LEN] {
-        let end = HEADER_LEN + PAYLOAD_LEN;
-        let crc = crc32(&bytes[..end]);
-        bytes[end..].copy_from_slice(&crc.to_le_bytes());
+        let crc = crc32(&bytes[..216]);
+        bytes[216..].copy_from_slice(&crc.to_le_bytes());
         bytes
     }
 
     #[test]
     fn intact_but_invalid_contents_are_rejected() {
         use crate::settings::SettingId;
-        let default = encode(&Settings::default());
+        let default = default_bytes();
         let mut bytes = default;
         bytes[8..10].copy_from_slice(&10u16.to_le_bytes()); // frame_hz 10
         assert!(matches!(
@@ -436,8 +503,8 @@ mod tests {
         fn decoding_arbitrary_bytes_never_panics(
             bytes in proptest::collection::vec(proptest::num::u8::ANY, 0..300)
         ) {
-            if let Ok(s) = decode(&bytes) {
-                proptest::prop_assert!(s.validate().is_ok());
+            if let Ok(r) = decode(&bytes) {
+                proptest::prop_assert!(r.settings.validate().is_ok());
             }
         }
     }

@@ -9,7 +9,8 @@
 //! Two names `set` takes are not the platform's but a link's ([`LinkSettings`]): `echo` belongs
 //! to the link the line came from (each link has its own, see [`crate::session`]) and `baud` is
 //! UART0's configuration. `config` lists them with the others; `defaults` leaves them alone, so
-//! a host keeps its connection.
+//! a host keeps its connection; `save` does not keep them (see [`crate::record`]), so every
+//! power-up starts at 115200 baud with echo on, where a terminal finds the board.
 //!
 //! # Names (as `config` lists them and `set` takes them)
 //!

@@ -5,6 +5,7 @@ mod common;
 use common::{code_of, is_final, pose_values, six, Host};
 use control::report::Code;
 use control::settings::SettingId;
+use control::store::{RamFlash, SaveError, Store};
 use control::Settings;
 use kinematics_core::geometry::PairedLayout;
 use kinematics_core::{ik, Libm, Pose, ServoSet};
@@ -285,7 +286,12 @@ fn config_values_can_be_set_back_unchanged() {
     s.ok("set estop_action home");
     s.ok("set power_pin 16");
     let before = *s.ctl.settings();
-    let data = s.ok("config");
+    let mut data = s.ok("config");
+    // The last line says how the settings stand against those saved; it is not a setting.
+    assert_eq!(
+        data.pop().as_deref(),
+        Some("# saved: none (nothing saved in flash: the defaults at power-up)")
+    );
     let mut commands = Vec::new();
     for line in &data {
         let line = line.strip_prefix("# ").unwrap();
@@ -326,7 +332,7 @@ fn help_lists_every_command() {
     let help = s.ok("help").join("\n");
     for cmd in [
         "pose", "move", "nudge", "check", "home", "stop", "reset", "status", "?", "geometry",
-        "config", "set", "defaults", "help",
+        "config", "set", "defaults", "save", "help",
     ] {
         assert!(
             help.contains(&format!("  {cmd} "))
@@ -595,8 +601,8 @@ fn every_error_code_is_documented_in_the_readme() {
     for verb in control::command::Verb::ALL {
         let name = verb.name();
         assert!(
-            readme.contains(&format!("`{name}")),
-            "README does not document {name}"
+            readme.contains(&format!("| `{name}")),
+            "README's command reference does not document {name}"
         );
     }
     for id in control::settings::SettingId::GLOBAL {
@@ -624,4 +630,177 @@ fn invalid_start_up_settings_fall_back_to_defaults_and_say_so() {
         "{out}"
     );
     assert!(control::Controller::<Libm>::try_with_math(bad).is_err());
+}
+
+/// A controller powered up from `flash`, as the board starts one; its banner (with any
+/// warning) and a program's link.
+fn power_up(flash: &mut RamFlash) -> (Host, String) {
+    let loaded = Store::load(flash);
+    let mut host = Host::quiet();
+    host.ctl = control::Controller::power_up(loaded);
+    host.flash = flash.clone();
+    let mut banner = String::new();
+    host.ctl.banner(&mut host.link, &mut banner);
+    (host, banner)
+}
+
+fn saved_line(host: &mut Host) -> String {
+    host.ok("config").pop().expect("config has lines")
+}
+
+#[test]
+fn save_keeps_the_settings_for_the_next_power_up() {
+    let mut flash = RamFlash::new();
+    let (mut s, banner) = power_up(&mut flash);
+    assert_eq!(
+        banner,
+        "# hexapod control 0.1.0: poses in mm and degrees; type help\r\n\
+         # warning: no settings saved in flash; using the defaults\r\n"
+    );
+    assert_eq!(
+        saved_line(&mut s),
+        "# saved: none (nothing saved in flash: the defaults at power-up)"
+    );
+    s.ok("set servo3.trim_us 1512.5");
+    s.ok("set speed_mm_s 20");
+    s.ok("save");
+    assert_eq!(
+        saved_line(&mut s),
+        "# saved: yes (these settings are the ones saved in flash)"
+    );
+    s.ok("set servo3.trim_us 1513");
+    assert_eq!(
+        saved_line(&mut s),
+        "# saved: no (changed since the last save; save keeps them)"
+    );
+    // Power off without saving the last change: the saved settings come back, quietly.
+    let expected = {
+        let mut e = Settings::default();
+        e.servos.0[2].home_us = 1512.5;
+        e.speed_mm_s = 20.0;
+        e
+    };
+    let mut flash = s.flash.clone();
+    let (mut s, banner) = power_up(&mut flash);
+    assert_eq!(*s.ctl.settings(), expected);
+    assert!(!banner.contains("warning"), "{banner}");
+    assert_eq!(
+        s.ctl.pulses_us()[2],
+        1512.5,
+        "servo 3 at its saved trim at power-up"
+    );
+    assert!(saved_line(&mut s).starts_with("# saved: yes"));
+    // defaults, then save: back to the factory settings at the next power-up.
+    s.ok("defaults");
+    assert!(saved_line(&mut s).starts_with("# saved: no"));
+    s.ok("save");
+    let mut flash = s.flash.clone();
+    let (s, _) = power_up(&mut flash);
+    assert_eq!(*s.ctl.settings(), Settings::default());
+}
+
+#[test]
+fn save_is_refused_while_moving_and_writes_nothing() {
+    let mut s = Host::quiet();
+    s.ok("set speed_mm_s 5");
+    s.ok("pose 10 0 0 0 0 0");
+    s.frames(3);
+    assert_eq!(
+        s.err("save"),
+        "error:busy the platform is moving; wait for it or send stop first"
+    );
+    assert_eq!(s.flash, RamFlash::new(), "nothing was written");
+    s.run_until_idle();
+    s.ok("save");
+    assert_eq!(s.flash.erases, [1, 0]);
+}
+
+#[test]
+fn the_reply_to_save_waits_for_the_board_to_write_and_verify() {
+    let mut s = Host::quiet();
+    let mut out = String::new();
+    for &b in b"save\n" {
+        s.ctl.on_byte(&mut s.link, b, &mut out);
+    }
+    assert!(s.ctl.is_busy() && s.ctl.awaits_flash());
+    // No reply however much work is done until the board has written.
+    for _ in 0..10 {
+        s.ctl.work(&mut s.link, &mut out);
+    }
+    assert_eq!(out, "");
+    let write = s.ctl.take_flash_write().expect("a write to perform");
+    assert!(s.ctl.take_flash_write().is_none(), "handed over once");
+    assert_eq!((write.sector(), write.record().sequence), (0, 1));
+    assert_eq!(write.record().settings, *s.ctl.settings());
+    s.ctl.work(&mut s.link, &mut out);
+    assert_eq!(out, "", "still writing");
+    s.ctl.flash_written(write.perform(&mut s.flash));
+    s.ctl.work(&mut s.link, &mut out);
+    assert_eq!(out, "ok\r\n");
+    assert!(!s.ctl.is_busy());
+    // execute_line stops where the board's write is due.
+    let mut out = String::new();
+    s.ctl.execute_line(&mut s.link, "save", &mut out);
+    assert!(out.is_empty() && s.ctl.awaits_flash());
+    let write = s.ctl.take_flash_write().unwrap();
+    assert_eq!((write.sector(), write.record().sequence), (1, 2));
+}
+
+#[test]
+fn a_failed_save_is_an_error_and_the_save_before_is_kept() {
+    let mut s = Host::quiet();
+    s.ok("save");
+    s.ok("set servo1.trim_us 1490");
+    let mut out = String::new();
+    s.ctl.execute_line(&mut s.link, "save", &mut out);
+    let _ = s.ctl.take_flash_write().unwrap();
+    s.ctl.flash_written(Err(SaveError::Verify {
+        offset: 4100,
+        wrote: 0x00,
+        read: 0x10,
+    }));
+    s.ctl.work(&mut s.link, &mut out);
+    assert_eq!(
+        out,
+        "error:save-failed the flash did not keep what was written (byte 4100 of the settings \
+         storage read 0x10, not 0x00); the settings saved before are kept\r\n"
+    );
+    assert!(saved_line(&mut s).starts_with("# saved: no"));
+    assert_eq!(
+        s.ctl.store().newest().map(|(i, r)| (i, r.sequence)),
+        Some((0, 1))
+    );
+}
+
+#[test]
+fn power_up_says_why_the_defaults_or_an_older_copy_are_used() {
+    // A save, then a second one damaged after it was written.
+    let mut s = Host::quiet();
+    s.ok("set servo2.trim_us 1480");
+    s.ok("save");
+    s.ok("set servo2.trim_us 1470");
+    s.ok("save");
+    let mut flash = s.flash.clone();
+    flash.bytes[4096 + 30] ^= 0x04;
+    let (mut s, banner) = power_up(&mut flash);
+    assert!(
+        banner.ends_with(
+            "# warning: one of the two saved copies of the settings cannot be used (damaged: \
+             checksum mismatch); loaded the other, save 1: check config\r\n"
+        ),
+        "{banner}"
+    );
+    assert_eq!(s.ctl.settings().servos.0[1].home_us, 1480.0);
+    assert!(saved_line(&mut s).starts_with("# saved: yes"));
+    // Both damaged: the defaults.
+    flash.bytes[30] ^= 0x04;
+    let (s, banner) = power_up(&mut flash);
+    assert!(
+        banner.ends_with(
+            "# warning: the settings saved in flash cannot be used (damaged: checksum \
+             mismatch); using the defaults\r\n"
+        ),
+        "{banner}"
+    );
+    assert_eq!(*s.ctl.settings(), Settings::default());
 }

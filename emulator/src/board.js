@@ -8,9 +8,11 @@ import { fileURLToPath } from 'node:url';
 import { RP2040 } from 'rp2040js';
 
 import { loadBootrom } from './bootrom.js';
-import { loadSegments } from './elf.js';
+import { loadSegments, symbolValues } from './elf.js';
 import { attachFrameMeter, attachLoopMeter } from './loop-meter.js';
 import {
+  attachFlashChip,
+  FlashChip,
   onWatchdogExpiry,
   PadPulls,
   PacedUartInput,
@@ -49,15 +51,31 @@ export class EmulatedBoard {
    * @param {'fail'|'reset'} [options.onWatchdog] what a watchdog expiry does: `'fail'`
    *   (default) stops the run with an error; `'reset'` restarts the chip as the watchdog
    *   reset would (see `watchdogReset`).
+   * @param {'typical'|'max'|object} [options.flashTiming] the flash chip's erase and program
+   *   times (rp2040js-gaps.js, gap 7, `W25Q080_TIMING`)
+   * @param {{address: number, bytes: Uint8Array}[]} [options.segments] what to program into
+   *   the flash instead of the ELF's load segments (e.g. a UF2's blocks)
    */
-  constructor({ elf = DEFAULT_ELF, bootrom = loadBootrom(), onWatchdog = 'fail' } = {}) {
+  constructor({
+    elf = DEFAULT_ELF,
+    bootrom = loadBootrom(),
+    onWatchdog = 'fail',
+    flashTiming = 'typical',
+    segments,
+  } = {}) {
     this.elf = elf;
-    this.segments = loadSegments(elf);
+    this.segments = segments ?? loadSegments(elf);
     this.bootrom = bootrom;
     this.onWatchdog = onWatchdog;
+    this.flashTiming = flashTiming;
+    /** The flash chip (gap 7), made at the first power-on; its contents survive power cycles. */
+    this.flash = null;
     /** Watchdog resets so far: `{ nanos, wdsel }` each. */
     this.resets = [];
     this.resetPending = false;
+    /** Power cycles so far: `{ offNanos, onNanos, cut }` (`cut`: during a flash write). */
+    this.powerCycles = [];
+    this.powerCutPending = false;
 
     this.fault = null;
     this.eventPending = false;
@@ -74,8 +92,9 @@ export class EmulatedBoard {
   }
 
   /**
-   * A fresh chip with the firmware in flash, starting in boot2 at emulated time `startNanos`,
-   * with the host on UART0 and the logic analyser on the servo pins.
+   * A fresh chip starting in boot2 at emulated time `startNanos`, with the host on UART0 and
+   * the logic analyser on the servo pins. The first power-on programs the firmware into the
+   * flash; later ones find the flash as the last chip left it.
    */
   powerOn(startNanos) {
     const mcu = new RP2040();
@@ -83,12 +102,15 @@ export class EmulatedBoard {
     patchEmulatorGaps(mcu);
     // loadBootrom resets the chip and wipes flash: the firmware goes in after it.
     mcu.loadBootrom(this.bootrom);
-    for (const { address, bytes } of this.segments) {
-      const offset = address - FLASH_START;
-      if (offset < 0 || offset + bytes.length > FLASH_BYTES) {
-        throw new Error(`${this.elf}: segment at 0x${address.toString(16)} is not in flash`);
+    if (!this.flash) {
+      for (const { address, bytes } of this.segments) {
+        const offset = address - FLASH_START;
+        if (offset < 0 || offset + bytes.length > FLASH_BYTES) {
+          throw new Error(`${this.elf}: segment at 0x${address.toString(16)} is not in flash`);
+        }
+        mcu.flash.set(bytes, offset);
       }
-      mcu.flash.set(bytes, offset);
+      this.flash = new FlashChip(mcu.flash, { timing: this.flashTiming });
     }
     // Emulated time runs on across a reset (nothing is scheduled on a fresh chip yet).
     mcu.clock.tick(startNanos);
@@ -104,6 +126,14 @@ export class EmulatedBoard {
     mcu.onBreak = (code) => {
       this.fail(`firmware stopped: breakpoint/UDF #${code} at PC 0x${mcu.core.PC.toString(16)} (a panic?)`);
     };
+    // Gap 7: the flash chip (the same array as before a reset), written through the ROM.
+    attachFlashChip(mcu, this.flash, {
+      onFault: (message) => this.fail(message),
+      onPowerCut: () => {
+        this.powerCutPending = true;
+        this.eventPending = true;
+      },
+    });
     onWatchdogExpiry(mcu, () => {
       if (this.onWatchdog === 'reset') {
         this.resetPending = true;
@@ -127,7 +157,7 @@ export class EmulatedBoard {
     /** Servo frames seen and frames the firmware missed (see loop-meter.js). */
     this.frames = attachFrameMeter(mcu);
 
-    /** The world outside the other GPIOs: switches and loads (gap 6); kept across resets. */
+    /** The world outside the other GPIOs: switches and loads (gap 8); kept across resets. */
     this.pins = new PadPulls(mcu);
     for (const [n, level] of this.pinDrives ?? new Map()) {
       this.pins.drive(n, level);
@@ -162,6 +192,44 @@ export class EmulatedBoard {
       return;
     }
     this.powerOn(nanos);
+  }
+
+  /**
+   * Power off now and on again after `offMs` of emulated time: a fresh chip with the same flash
+   * (what the last one left in it), starting in boot2. What the host had received stays in
+   * `output`/`lines`; bytes still on their way to the board are lost. Also how an armed power
+   * cut ends (`cutPowerDuring`).
+   */
+  powerCycle({ offMs = 50 } = {}) {
+    const offNanos = this.mcu.clock.nanos;
+    const cut = this.powerCutPending;
+    this.powerCutPending = false;
+    const onNanos = offNanos + offMs * 1e6;
+    this.powerCycles.push({ offNanos, onNanos, cut });
+    this.powerOn(onNanos);
+  }
+
+  /**
+   * Arms a power cut during the firmware's next flash `routine` ('erase' or 'program'; the
+   * `call`-th from now) after `bytes` bytes of it (0 = before any; the whole erase or program
+   * = after it), with the bits in `mask` of the next byte's change done. The chip stops at
+   * once and comes back on after `offMs` (see `powerCycle`).
+   */
+  cutPowerDuring({ routine, call = 1, bytes, mask = 0, offMs = 50 }) {
+    this.cutOffMs = offMs;
+    this.flash.cutPowerDuring({ routine, call, bytes, mask });
+  }
+
+  /** The settings sectors (memory.x): `{ offset, bytes }` from the start of flash. */
+  get settingsStorage() {
+    const { _settings_start: start, _settings_end: end } = symbolValues(this.elf, [
+      '_settings_start',
+      '_settings_end',
+    ]);
+    if (start === undefined || end === undefined) {
+      throw new Error(`${this.elf} has no _settings_start/_settings_end (memory.x)`);
+    }
+    return { offset: start - FLASH_START, bytes: end - start };
   }
 
   // ---- time ----
@@ -221,6 +289,10 @@ export class EmulatedBoard {
         this.eventPending = false;
         if (this.resetPending) {
           this.watchdogReset();
+          ({ core, clock } = this.mcu);
+        }
+        if (this.powerCutPending) {
+          this.powerCycle({ offMs: this.cutOffMs ?? 50 });
           ({ core, clock } = this.mcu);
         }
         if (this.fault) {

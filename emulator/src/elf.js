@@ -98,3 +98,54 @@ export function symbolValues(elfPath, names) {
   }
   return values;
 }
+
+/** Sizes of the symbols whose (mangled) names `keep` accepts, by demangled-looking name. */
+export function symbolSizes(elfPath, keep) {
+  const file = readFileSync(elfPath);
+  const view = new DataView(file.buffer, file.byteOffset, file.byteLength);
+  const sectionHeaderOffset = view.getUint32(0x20, true);
+  const sectionHeaderSize = view.getUint16(0x2e, true);
+  const sectionCount = view.getUint16(0x30, true);
+  const header = (i) => sectionHeaderOffset + i * sectionHeaderSize;
+  const sizes = {};
+  for (let i = 0; i < sectionCount; i++) {
+    if (view.getUint32(header(i) + 0x04, true) !== SHT_SYMTAB) {
+      continue;
+    }
+    const offset = view.getUint32(header(i) + 0x10, true);
+    const size = view.getUint32(header(i) + 0x14, true);
+    const entrySize = view.getUint32(header(i) + 0x24, true);
+    const strings = view.getUint32(header(view.getUint32(header(i) + 0x18, true)) + 0x10, true);
+    for (let entry = offset; entry < offset + size; entry += entrySize) {
+      let end = strings + view.getUint32(entry, true);
+      const start = end;
+      while (file[end] !== 0) {
+        end++;
+      }
+      const name = file.toString('latin1', start, end);
+      const bytes = view.getUint32(entry + 8, true);
+      if (bytes > 0 && keep(name)) {
+        sizes[readableName(name)] = bytes;
+      }
+    }
+  }
+  return sizes;
+}
+
+/** `_ZN8firmware5flash10BOOT2_COPY17h...E` -> `firmware::flash::BOOT2_COPY`. */
+function readableName(mangled) {
+  const parts = [];
+  let at = mangled.startsWith('_ZN') ? 3 : -1;
+  while (at >= 0 && at < mangled.length && /\d/.test(mangled[at])) {
+    let digits = '';
+    while (/\d/.test(mangled[at])) {
+      digits += mangled[at++];
+    }
+    const part = mangled.slice(at, at + Number(digits));
+    at += Number(digits);
+    if (!/^h[0-9a-f]{16}$/.test(part)) {
+      parts.push(part);
+    }
+  }
+  return parts.length > 0 ? parts.join('::') : mangled;
+}

@@ -14,8 +14,8 @@ const LF = 0x0a;
  * The real firmware, booted, echo off, speed limits off (jumps), at `baud`, with the
  * emulator's PWM compare-register writes and UART RX deliveries time-stamped.
  */
-export function streamingBoard({ baud = 115200, elf } = {}) {
-  const board = new EmulatedBoard(elf ? { elf } : {});
+export function streamingBoard({ baud = 115200, elf, flashTiming } = {}) {
+  const board = new EmulatedBoard({ ...(elf ? { elf } : {}), ...(flashTiming ? { flashTiming } : {}) });
   const ccWrites = [];
   const pwm = board.mcu.pwm;
   const writeRegister = pwm.writeUint32.bind(pwm);
@@ -301,6 +301,39 @@ export function measureLongestPass() {
     frames: worst.frames,
     missed: worst.missed,
     lines: lines.length + moves.length,
+  };
+}
+
+/**
+ * A `save` with the flash model's `timing` ('typical' or 'max', rp2040js-gaps.js gap 7): its
+ * one long main-loop pass (the sector erase and the page program in the boot ROM with
+ * interrupts masked, and the firmware's own work in that pass), the time from its line end to
+ * its `ok` at the host, and the frames the loop missed meanwhile (the PWM hardware held the
+ * pulses). Returns { passCycles, flashCycles, replyMicros, frames, missed, longPasses, board }.
+ */
+export function measureSave({ timing = 'typical' } = {}) {
+  const { board, lineEnds } = streamingBoard({ flashTiming: timing });
+  board.runMs(50);
+  board.loop.reset();
+  board.frames.reset();
+  expectOk(board, 'save');
+  const replyNanos = board.nanos;
+  const lineEnd = lineEnds[lineEnds.length - 1];
+  board.runMs(50);
+  const { sectorEraseMs, pageProgramMs } = board.flash.times;
+  const [pass] = board.loop.longPasses;
+  if (!pass) {
+    throw new Error('a save with no long pass');
+  }
+  return {
+    passCycles: pass.cycles,
+    flashCycles: Math.round((sectorEraseMs + pageProgramMs) * 1e-3 * 125e6),
+    replyMicros: (replyNanos - lineEnd) / 1000,
+    frames: board.frames.frames,
+    missed: board.frames.missed,
+    longPasses: board.loop.longPasses.length,
+    times: board.flash.times,
+    board,
   };
 }
 

@@ -5,6 +5,10 @@
 // core sleeps in WFI, so a pass is the work it did, not the time it slept. Interrupt handlers
 // that run inside a pass count in that pass too.
 //
+// The one pass allowed to be long is a `save`'s flash write (an erase keeps the core in the
+// boot ROM for tens to hundreds of milliseconds): every pass of at least `boundCycles` is
+// listed (`longPasses`, with when it ended), so a test can check that each is a save's.
+//
 // And whether the firmware serves every servo frame: it writes the frame's new compare values
 // after each frame starts (a rising edge on servo 1's pin), so a frame period in which it wrote
 // none is a frame it missed (its pins held the old pulses one period longer).
@@ -16,12 +20,17 @@ const SLICE1_CC = 0x14 + 0x0c;
 /** Servo 1's pin. */
 const SERVO1_GPIO = 2;
 
+/** The documented bound on a main-loop pass: 1 ms at 125 MHz. */
+export const PASS_BOUND_CYCLES = 125_000;
+
 /**
  * Attaches the meter to a fresh `RP2040`. Returns the live statistics:
  * `{ passes, longestPassCycles, longestPassAtNanos, longestHandlerCycles, longestHandler,
- *    reset() }` (`longestHandler` is the exception number, 16 + IRQ number for interrupts).
+ *    longPasses, reset() }` (`longestHandler` is the exception number, 16 + IRQ number for
+ * interrupts; `longPasses`: `{ cycles, startNanos, endNanos }` of every pass of at least
+ * `boundCycles`).
  */
-export function attachLoopMeter(mcu) {
+export function attachLoopMeter(mcu, { boundCycles = PASS_BOUND_CYCLES } = {}) {
   const { core } = mcu;
   const stats = {
     passes: 0,
@@ -29,17 +38,20 @@ export function attachLoopMeter(mcu) {
     longestPassAtNanos: 0,
     longestHandlerCycles: 0,
     longestHandler: 0,
+    longPasses: [],
     reset() {
       this.passes = 0;
       this.longestPassCycles = 0;
       this.longestPassAtNanos = 0;
       this.longestHandlerCycles = 0;
       this.longestHandler = 0;
+      this.longPasses = [];
       lastFeedCycles = null;
     },
   };
 
   let lastFeedCycles = null;
+  let lastFeedNanos = 0;
   const watchdog = mcu.peripherals[WATCHDOG_BASE];
   const writeRegister = watchdog.writeUint32.bind(watchdog);
   watchdog.writeUint32 = (offset, value) => {
@@ -51,8 +63,13 @@ export function attachLoopMeter(mcu) {
           stats.longestPassCycles = pass;
           stats.longestPassAtNanos = mcu.clock.nanos;
         }
+        if (pass >= boundCycles) {
+          const endNanos = mcu.clock.nanos;
+          stats.longPasses.push({ cycles: pass, startNanos: lastFeedNanos, endNanos });
+        }
       }
       lastFeedCycles = core.cycles;
+      lastFeedNanos = mcu.clock.nanos;
     }
     writeRegister(offset, value);
   };

@@ -64,8 +64,11 @@ test('banner names the firmware version and says to type help', () => {
   assert.match(banner, /^# /, 'not a reply: the banner is a # line');
   assert.ok(banner.includes(version), `banner '${banner}' lacks version ${version}`);
   assert.match(banner, /\bhelp\b/);
-  // Echo is on by default: a prompt follows the banner.
-  board.runMs(5);
+  // A new board has nothing saved in flash, and says so (README, "Saving the settings").
+  const warning = board.waitForLine(/^#/);
+  assert.equal(warning, '# warning: no settings saved in flash; using the defaults');
+  // Echo is on by default: a prompt follows.
+  board.runMs(2);
   assert.equal(board.partialLine, '> ');
 });
 
@@ -80,7 +83,8 @@ test('at power-up every servo gets its home pulse (the reference at the home pos
 test('help lists every command, all on # lines, then ok', () => {
   const board = bootQuiet(bootrom);
   const text = ok(board, 'help').join('\n');
-  for (const command of ['pose', 'move', 'nudge', 'check', 'home', 'stop', 'status', '?', 'geometry', 'config', 'set', 'defaults', 'help']) {
+  const commands = ['pose', 'move', 'nudge', 'check', 'home', 'stop', 'status', '?', 'geometry'];
+  for (const command of [...commands, 'config', 'set', 'defaults', 'save', 'help']) {
     assert.ok(text.includes(command), `help does not mention ${command}`);
   }
   assert.match(text, /echo off/);
@@ -328,6 +332,8 @@ test('config lists every documented setting with its documented default', () => 
       (n) =>
         `servo${n}: trim_us=1500.00 rate_us_rad=${(1600 / Math.PI).toFixed(3)} dir=${n % 2 ? 'reversed' : 'normal'} min_us=1100.00 max_us=1900.00`,
     ),
+    // Then how they stand against the saved ones: a new board has nothing saved.
+    'saved: none (nothing saved in flash: the defaults at power-up)',
   ];
   assert.deepEqual(data, expected);
 });
@@ -369,7 +375,7 @@ test('LF, CRLF and CR each end a line, with the same replies', () => {
 test('echo on: typed characters come back, backspace and DEL erase, a prompt follows each reply', () => {
   const board = new EmulatedBoard({ bootrom });
   board.boot();
-  board.runMs(5);
+  assert.ok(board.runUntil(() => board.partialLine === '> ', { timeoutMs: 20 }), 'no prompt');
   const start = board.outputBytes.length;
   // "statux" <BS> "s": the line is "status". Then "cheq" <DEL> "ck 0 0 1 0 0 0".
   board.sendBytes('statux\x08s\n');

@@ -194,14 +194,15 @@ test('pose-conflict: a setting the held pose could not be driven with is refused
   ok(board, 'set servo1.max_us 1600');
 });
 
-test('busy: frame rate, geometry, servo settings and defaults are refused while moving; the move goes on', () => {
+test('busy while moving: frame rate, geometry, servos, defaults, save; the move goes on', () => {
   const settings = defaultSettings();
   const board = bootQuiet(bootrom);
   ok(board, 'set speed_mm_s 5');
   const target = [0, 0, 10, 0, 0, 0]; // 2 s
   const config = ok(board, 'config');
   ok(board, `pose ${poseText(target)}`);
-  for (const line of ['set frame_hz 100', 'set rod_mm 121', 'set servo3.trim_us 1510', 'set servos.dir normal', 'defaults']) {
+  const refusedWhileMoving = ['set frame_hz 100', 'set rod_mm 121', 'set servo3.trim_us 1510'];
+  for (const line of [...refusedWhileMoving, 'set servos.dir normal', 'defaults', 'save']) {
     const reply = refused(board, line, 'busy');
     observed.add('busy');
     assert.equal(reply, 'error:busy the platform is moving; wait for it or send stop first');
@@ -272,6 +273,34 @@ test('e-stop: with the input open, moves are refused until it is closed and rese
   expectRefusal(board, 'pose 0 0 1 0 0 0', 'e-stop', /^emergency stop: the e-stop input is closed again; send reset to move again$/);
   ok(board, 'reset');
   ok(board, 'home');
+});
+
+test('save-failed: the flash did not keep what was written; the last save stays and loads', () => {
+  const board = bootQuiet(bootrom);
+  ok(board, 'set servo1.trim_us 1510');
+  ok(board, 'save'); // save 1, sector 0
+  ok(board, 'set servo1.trim_us 1520');
+  // A worn cell in sector 1, where save 2 goes: byte 5 (the format version's high byte, 0)
+  // keeps its bit 0 set, whatever is programmed.
+  const { offset } = board.settingsStorage;
+  board.flash.wearOut(offset + 4096 + 5, 0x01);
+  const reply = expectRefusal(board, 'save', 'save-failed', /^the flash did not keep what/);
+  assert.equal(
+    reply,
+    'error:save-failed the flash did not keep what was written (byte 4101 of the settings ' +
+      'storage read 0x01, not 0x00); the settings saved before are kept',
+  );
+  // At the next power-up: save 1, and a word about the copy that failed (cleared to zeros).
+  board.powerCycle();
+  board.waitForLine(/hexapod\b.*\bhelp\b/);
+  assert.equal(
+    board.waitForLine(/^# warning/),
+    '# warning: one of the two saved copies of the settings cannot be used (damaged: not a ' +
+      'settings record); loaded the other, save 1: check config',
+  );
+  assert.equal(board.request('set echo off').reply, 'ok');
+  const servo1 = ok(board, 'config').find((l) => l.startsWith('servo1: '));
+  assert.match(servo1, /^servo1: trim_us=1510\.00 /);
 });
 
 test('every documented error code exists in the firmware and was produced above through the wire', () => {

@@ -5,6 +5,9 @@
 // (the firmware writes new compare values in every frame period), that every line gets its
 // reply in order, and that the longest main-loop pass stays under the bound the README states:
 // 1 ms (125,000 cycles at 125 MHz), a third of a frame at the highest frame rate (333 Hz).
+// The one pass allowed to be longer is a `save`'s flash write (a sector erase keeps the core in
+// the boot ROM with interrupts masked, 45 ms in the emulator's typical W25Q080 timing): the
+// last test checks that each long pass is exactly a save's, and that the pins hold meanwhile.
 // Pass lengths are CPU cycles between watchdog feeds (the loop feeds it at the top of every
 // pass; emulator/src/loop-meter.js), which the emulator counts the same on every run.
 
@@ -174,4 +177,42 @@ test('while a long reply drains at 9,600 baud the main loop sleeps instead of sp
   assert.ok(board.loop.passes < 400, `${board.loop.passes} passes while ${bytes} bytes went out`);
   const busyCycles = board.cycles - start;
   assert.ok(busyCycles < 5_000_000, `${busyCycles} cycles busy while the reply drained`);
+});
+
+test('a save is the one pass over 1 ms: its erase and program; the pins hold meanwhile', () => {
+  const board = quietBoard();
+  ok(board, 'pose 0 0 5 0 3 0');
+  board.runMs(500);
+  measure(board);
+  const before = board.pulseWidthsUs();
+  // Each reply awaited: no input is read during a save's write (README).
+  for (const line of ['save', 'status', 'config', 'check 20 0 0 0 0 0', 'save', 'help', 'save']) {
+    ok(board, line);
+  }
+  board.runMs(100);
+  const writes = [];
+  for (let i = 0; i < board.flash.ops.length; i += 2) {
+    const [erase, program] = board.flash.ops.slice(i, i + 2);
+    assert.deepEqual([erase.routine, program.routine], ['erase', 'program']);
+    writes.push([erase.nanos, program.nanos]);
+  }
+  assert.equal(writes.length, 3);
+  // One long pass per save, holding both its erase and its program; none other.
+  const long = board.loop.longPasses;
+  assert.equal(long.length, 3, JSON.stringify(long));
+  long.forEach((pass, i) => {
+    const [erase, program] = writes[i];
+    assert.ok(pass.startNanos <= erase && program <= pass.endNanos, `save ${i + 1}: not its pass`);
+    // The erase (45 ms) and the program (0.7 ms) with the core busy in the boot ROM.
+    assert.ok(pass.cycles >= 45.7e-3 * 125e6, `${pass.cycles} cycles`);
+  });
+  // Frames missed only while a save's interrupts were masked; the pins held all along.
+  for (const at of board.frames.missedAtNanos) {
+    assert.ok(
+      long.some((pass) => at >= pass.startNanos && at <= pass.endNanos + FRAME_MS * 1e6),
+      `a frame missed at ${at / 1e6} ms, outside a save`,
+    );
+  }
+  assert.deepEqual(board.pulseWidthsUs(), before);
+  assert.equal(board.resets.length, 0);
 });

@@ -4,13 +4,14 @@
 //! six pulse widths per servo frame (and right after a command that jumps or a stream frame in
 //! pass-through) -> PWM registers. This file only wires the pieces together: clocks and
 //! watchdog, UART0 ([`serial`]) with its link [`control::Session`], the six servo outputs
-//! ([`servo_pwm`]), the e-stop input and servo-power output ([`safety_pins`]) and the
-//! hardware-independent [`control::Controller`], which runs on the boot ROM's float routines
-//! ([`firmware::rom_math`]).
+//! ([`servo_pwm`]), the e-stop input and servo-power output ([`safety_pins`]), the settings
+//! saved in flash ([`flash`]) and the hardware-independent [`control::Controller`], which runs
+//! on the boot ROM's float routines ([`firmware::rom_math`]).
 
 #![no_std]
 #![no_main]
 
+mod flash;
 mod safety_pins;
 mod serial;
 mod servo_pwm;
@@ -20,8 +21,10 @@ use panic_probe as _;
 use rp2040_hal::{self as hal, clocks::Clock, fugit::ExtU32, pac, Sio, Watchdog};
 
 use control::controller::Fed;
-use control::{Session, Settings};
+use control::store::Store;
+use control::Session;
 use firmware::rom_math::RomMath;
+use flash::SettingsFlash;
 use safety_pins::{FreePin, SafetyPins};
 use serial::{Received, Serial};
 use servo_pwm::{PulseWindowUs, ServoPwm, SERVO_COUNT};
@@ -36,6 +39,10 @@ pub static BOOT2: [u8; 256] = rp2040_boot2::BOOT_LOADER_W25Q080;
 /// Reset the chip if the main loop stalls this long. A pass takes well under a millisecond
 /// (see [`main`]), so only a hang can starve the watchdog.
 const WATCHDOG_TIMEOUT_MS: u32 = 500;
+/// The watchdog's time for a `save`'s flash write: a 4 KiB sector erase takes the W25Q080 up
+/// to 400 ms and a page program up to 3 ms (datasheet maxima), with interrupts masked; 2 s
+/// leaves a wide margin and still resets a write that hangs.
+const SAVE_WATCHDOG_MS: u32 = 2000;
 /// Most received bytes handed to the controller in one pass (a line end ends the pass's input
 /// early, so at most one command runs per pass; stream frames do not end it, so the newest of
 /// the frames waiting is the one applied). 128 bytes are 8 binary frames, 1.4 ms of a stream
@@ -57,7 +64,13 @@ fn main() -> ! {
     let sio = Sio::new(p.SIO);
     let pins = hal::gpio::Pins::new(p.IO_BANK0, p.PADS_BANK0, sio.gpio_bank0, &mut p.RESETS);
 
-    let mut controller = Controller::with_math(Settings::default());
+    // The newest good settings saved in flash, or the defaults (with a warning saying why).
+    let mut settings_flash = SettingsFlash::new();
+    let mut controller = Controller::power_up(Store::load_with::<RomMath, _>(&mut settings_flash));
+    defmt::info!(
+        "settings storage at flash offset {=u32:#x}",
+        settings_flash.base()
+    );
     let mut timer = hal::Timer::new(p.TIMER, &mut p.RESETS, &clocks);
     let rx_poll = timer.alarm_0().expect("alarm 0 is taken once, here");
     let mut serial = Serial::new(
@@ -69,7 +82,7 @@ fn main() -> ! {
         controller.baud(),
         rx_poll,
     )
-    .expect("the default baud rate is in range");
+    .expect("the power-up baud rate is in range");
     let mut servos = ServoPwm::new(
         p.PWM,
         &mut p.RESETS,
@@ -80,7 +93,7 @@ fn main() -> ! {
         &controller.pulses_us(),
         &pulse_windows_us(&controller),
     )
-    .expect("the default frame rate is in range");
+    .expect("the settings' frame rate is in range (they are validated)");
     // The GPIOs left free for the e-stop input and the servo-power output
     // (control::safety::FREE_GPIOS, in that order).
     let free = |pin: FreePin| pin;
@@ -116,7 +129,9 @@ fn main() -> ! {
     // one slice of a command's long work (a path check a few IK solutions at a time, a listing
     // a line at a time: the controller splits it, see `control::Controller::work`), plus the
     // frame that came due. The longest pass is measured in the emulator (well under 1 ms,
-    // against a 3 ms frame at 333 Hz and the 500 ms watchdog; BENCHMARKS.md).
+    // against a 3 ms frame at 333 Hz and the 500 ms watchdog; BENCHMARKS.md). The one
+    // exception is a `save`'s flash write (a sector erase: tens to hundreds of milliseconds
+    // with interrupts masked), alone in its pass, with the watchdog given longer.
     let mut rx_line_errors_reported = 0;
     loop {
         watchdog.feed();
@@ -129,8 +144,24 @@ fn main() -> ! {
         }
 
         if controller.is_busy() {
-            // A slice of the work in progress; its reply comes with the last slice.
-            if serial.has_room_for_step() {
+            if let Some(write) = controller.take_flash_write() {
+                // `save`: erase the older sector, program its page, read it back. The PWM
+                // holds the pulses meanwhile (nothing moves: save is refused while moving);
+                // input waits in the UART's FIFO. The reply comes in the next pass.
+                watchdog.start(SAVE_WATCHDOG_MS.millis());
+                let result = write.perform(&mut settings_flash);
+                watchdog.start(WATCHDOG_TIMEOUT_MS.millis());
+                match result {
+                    Ok(()) => defmt::info!(
+                        "settings saved: save {} in sector {}",
+                        write.record().sequence,
+                        write.sector()
+                    ),
+                    Err(_) => defmt::error!("settings not saved: the flash did not keep them"),
+                }
+                controller.flash_written(result);
+            } else if serial.has_room_for_step() {
+                // A slice of the work in progress; its reply comes with the last slice.
                 controller.work(&mut uart, &mut serial);
                 write_new_pulses(&mut controller, &mut servos);
                 // The controller's own work (the return home after link loss) may notify.

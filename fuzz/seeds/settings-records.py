@@ -20,13 +20,14 @@ AXES = ['x', 'y', 'z', 'roll', 'pitch', 'yaw']
 RATE = 1600 / math.pi  # the default servo rate, us/rad
 
 
-def record(frame_hz, speeds, layout, servos, accels=(0.0, 0.0),
+def record(sequence, frame_hz, speeds, layout, servos, accels=(0.0, 0.0),
            stream_scale=(25.0, 25.0, 15.0, 15.0, 15.0, 20.0), stream_bits=8,
            stream_order=('x', 'y', 'z', 'roll', 'pitch', 'yaw'), estop_pin=None,
            estop_home=False, power_pin=None):
-    """speeds: (mm/s, deg/s, link timeout s); layout: base radius, base half angle, platform
-    radius, platform half angle, arm, rod; servos: six (trim, rate, min, max, reversed);
-    accels: (mm/s^2, deg/s^2); stream_order: six axis names or None; pins: GPIO or None."""
+    """sequence: the save's number; speeds: (mm/s, deg/s, link timeout s); layout: base radius,
+    base half angle, platform radius, platform half angle, arm, rod; servos: six (trim, rate,
+    min, max, reversed); accels: (mm/s^2, deg/s^2); stream_order: six axis names or None;
+    pins: GPIO or None."""
     payload = struct.pack('<HH', frame_hz, 0) + struct.pack('<3f', *speeds)
     payload += struct.pack('<6f', *layout)
     for trim, rate, lo, hi, reversed_ in servos:
@@ -37,6 +38,7 @@ def record(frame_hz, speeds, layout, servos, accels=(0.0, 0.0),
     payload += bytes([pin(estop_pin), 1 if estop_home else 0, pin(power_pin), 0, 0])
     assert len(payload) == PAYLOAD_LEN
     body = b'HXPS' + struct.pack('<HH', FORMAT_VERSION, PAYLOAD_LEN) + payload
+    body += struct.pack('<I', sequence)
     return body + struct.pack('<I', zlib.crc32(body))
 
 
@@ -46,10 +48,10 @@ def default_servos():
 
 
 SEEDS = {
-    'record-default': record(50, (50.0, 60.0, 0.0), (75.0, 20.0, 60.0, 20.0, 20.0, 120.0),
+    'record-default': record(1, 50, (50.0, 60.0, 0.0), (75.0, 20.0, 60.0, 20.0, 20.0, 120.0),
                              default_servos()),
     'record-custom': record(
-        100, (20.0, 0.0, 2.5), (90.0, 15.0, 50.0, 25.0, 25.0, 110.0),
+        0xFFFFFFFF, 100, (20.0, 0.0, 2.5), (90.0, 15.0, 50.0, 25.0, 25.0, 110.0),
         [(trim, RATE, 1000.0, 2000.0, n % 2 == 1)
          for n, trim in zip(range(1, 7), (1450.0, 1500.0, 1520.0, 1490.0, 1510.0, 1500.0))],
         accels=(400.0, 0.0), stream_scale=(30.0, -30.0, 10.0, 0.0, 12.5, 45.0), stream_bits=12,

@@ -3,6 +3,7 @@
 //! fuzzer or a test harness catches).
 
 use control::report::Code;
+use control::store::{RamFlash, Store};
 use control::{Controller, Pose, Session, Settings};
 
 use crate::line_model::{LineEnd, LineModel};
@@ -35,6 +36,8 @@ pub struct Checked {
     pub oks: usize,
     /// Frames run so far.
     pub frames: u64,
+    /// The flash `save` writes to, as the board's.
+    pub flash: RamFlash,
 }
 
 const LOG_CAP: usize = 4096;
@@ -92,6 +95,7 @@ impl Checked {
             replies: 0,
             oks: 0,
             frames: 0,
+            flash: RamFlash::new(),
         };
         let mut out = String::new();
         c.ctl.banner(&mut c.link, &mut out);
@@ -118,6 +122,29 @@ impl Checked {
             target: *self.ctl.target(),
             moving: self.ctl.is_moving(),
             pulses_us: self.ctl.pulses_us(),
+        }
+    }
+
+    /// One slice of the controller's work as the board's main loop does it: the flash write a
+    /// `save` asks for (then the store the controller knows must be what the flash holds), or
+    /// a slice of work.
+    fn work(&mut self, out: &mut String) {
+        if let Some(write) = self.ctl.take_flash_write() {
+            self.ctl.flash_written(write.perform(&mut self.flash));
+            self.ctl.work(&mut self.link, out);
+            let loaded = Store::load(&mut self.flash);
+            assert_eq!(
+                &loaded.store,
+                self.ctl.store(),
+                "after a save the controller's store differs from what the flash holds"
+            );
+            assert_eq!(
+                loaded.settings(),
+                Some(self.ctl.settings()),
+                "save saved other settings"
+            );
+        } else {
+            self.ctl.work(&mut self.link, out);
         }
     }
 
@@ -179,7 +206,7 @@ impl Checked {
         // command changes nothing" can be checked; the controller's tests cover them.)
         let mut slices = 0u32;
         while self.ctl.is_busy() {
-            self.ctl.work(&mut self.link, &mut out);
+            self.work(&mut out);
             slices += 1;
             assert!(slices < 100_000, "a command's work never ends: {out:?}");
         }
@@ -310,7 +337,7 @@ impl Checked {
             // The controller's own work (the return home after link loss), as the main loop
             // runs it between frames.
             while self.ctl.is_busy() && !self.link.awaits_reply() {
-                self.ctl.work(&mut self.link, &mut out);
+                self.work(&mut out);
             }
             self.ctl.write_notices(&mut self.link, &mut out);
             self.record(&out);
@@ -363,6 +390,10 @@ impl Checked {
         let before = self.state();
         let mut out = String::new();
         self.ctl.execute_line(&mut self.link, line, &mut out);
+        // A save's flash write is the board's; then its reply.
+        while self.ctl.is_busy() {
+            self.work(&mut out);
+        }
         self.record(&out);
         check_output_bytes(&out);
         let blank = line.bytes().all(|b| b == b' ' || b == b'\t');

@@ -198,6 +198,8 @@ pub enum Cmd {
     Help,
     /// `defaults`
     Defaults,
+    /// `save`
+    Save,
     /// `set name value` (name index into [`SETTING_NAMES`]).
     Set(u8, Value),
     /// Printable text as typed.
@@ -258,6 +260,7 @@ impl Cmd {
             Cmd::Config => "config".into(),
             Cmd::Help => "help".into(),
             Cmd::Defaults => "defaults".into(),
+            Cmd::Save => "save".into(),
             Cmd::Set(i, v) => join(
                 "set",
                 vec![

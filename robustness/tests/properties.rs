@@ -61,6 +61,7 @@ fn cmd() -> impl Strategy<Value = Cmd> {
         1 => Just(Cmd::Config),
         1 => Just(Cmd::Help),
         1 => Just(Cmd::Defaults),
+        1 => Just(Cmd::Save),
         5 => (
             0..SETTING_NAMES.len() as u8,
             prop_oneof![

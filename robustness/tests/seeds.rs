@@ -72,8 +72,11 @@ fn controller_seeds() {
 fn settings_record_seeds_decode() {
     for (name, data) in seeds("settings") {
         if data.starts_with(b"HXPS") {
-            let s = control::record::decode(&data).unwrap_or_else(|e| panic!("{name}: {e:?}"));
+            let record = control::record::decode(&data).unwrap_or_else(|e| panic!("{name}: {e:?}"));
+            let s = record.settings;
             if name.ends_with("record-default") {
+                // The first save of a board (the encoder's sequence number 1).
+                assert_eq!(record.sequence, 1);
                 let d = control::Settings::default();
                 assert_eq!(s.frame_hz, d.frame_hz);
                 assert_eq!(

@@ -17,6 +17,7 @@ use crate::error::Error;
 use crate::protocol::{Lost, Spoiled, MAX_LINE};
 use crate::safety::{Estop, FREE_GPIOS};
 use crate::settings::{Expected, SettingError};
+use crate::store::SaveError;
 
 /// The error codes, one per kind of refusal. `error:<code>` is what programs match on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -74,11 +75,13 @@ pub enum Code {
     SettingConflict,
     /// The emergency stop is on.
     Estop,
+    /// The settings could not be written to flash.
+    SaveFailed,
 }
 
 impl Code {
     /// Every code, for documentation checks.
-    pub const ALL: [Code; 26] = [
+    pub const ALL: [Code; 27] = [
         Code::LineTooLong,
         Code::RxOverflow,
         Code::BadCharacter,
@@ -105,6 +108,7 @@ impl Code {
         Code::Busy,
         Code::SettingConflict,
         Code::Estop,
+        Code::SaveFailed,
     ];
 
     /// The code as written after `error:`.
@@ -136,6 +140,7 @@ impl Code {
             Code::Busy => "busy",
             Code::SettingConflict => "setting-conflict",
             Code::Estop => "e-stop",
+            Code::SaveFailed => "save-failed",
         }
     }
 }
@@ -158,6 +163,7 @@ impl Error {
             Error::PoseConflict { .. } => Code::PoseConflict,
             Error::Busy | Error::Pending => Code::Busy,
             Error::Estop(_) => Code::Estop,
+            Error::SaveFailed(_) => Code::SaveFailed,
         }
     }
 }
@@ -259,6 +265,18 @@ impl Display for Error {
             ),
             Error::Estop(_) => f.write_str(
                 "emergency stop: the e-stop input is closed again; send reset to move again",
+            ),
+            Error::SaveFailed(SaveError::Flash) => f.write_str(
+                "the flash refused the write; the settings saved before are kept",
+            ),
+            Error::SaveFailed(SaveError::Verify {
+                offset,
+                wrote,
+                read,
+            }) => write!(
+                f,
+                "the flash did not keep what was written (byte {offset} of the settings storage \
+                 read 0x{read:02X}, not 0x{wrote:02X}); the settings saved before are kept"
             ),
         }
     }

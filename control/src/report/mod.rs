@@ -16,7 +16,8 @@
 //!     [`Code`]s (lowercase words joined by `-`); the message names the field, leg, servo or
 //!     limit involved.
 //! - Every other line starts with `# `: data (`# key: value`), help text, the banner and
-//!   notices about things that happened on their own (`# fault: ...`, `# link lost: ...`).
+//!   notices about things that happened on their own (`# fault: ...`, `# link lost: ...`,
+//!   `# warning: ...`, e.g. about the settings found in flash at power-up).
 //!   A program can therefore read lines until one starts with `ok` or `error:`, and ignore
 //!   or parse the `# ` lines before it.
 //! - A blank line gets no reply (with echo on, just a fresh prompt).
@@ -35,7 +36,7 @@ pub use errors::{usage, Code};
 pub use format::{degrees, Fixed, PoseText, Six, ValueText, Vector};
 pub use replies::{
     refusal, write_banner, write_echo, write_error, write_notice, write_ok, write_prompt, Fault,
-    Listing, MotionReport, Notice, StatusReport, StreamCounts, EOL, HELP, PROMPT, VERSION,
+    Listing, MotionReport, Notice, Saved, StatusReport, StreamCounts, EOL, HELP, PROMPT, VERSION,
 };
 
 #[cfg(test)]
@@ -152,6 +153,11 @@ mod tests {
             Error::Setting(SettingError::PinTwice { pin: 15 }),
             Error::Estop(Estop::Open),
             Error::Estop(Estop::Latched),
+            Error::SaveFailed(crate::store::SaveError::Verify {
+                offset: 4101,
+                wrote: 0,
+                read: 1,
+            }),
         ]
     }
 

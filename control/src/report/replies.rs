@@ -10,6 +10,7 @@ use super::errors::{Bytes, IkMessage};
 use super::format::{degrees, Fixed, PoseText, Six, ValueText, Vector};
 use crate::error::Error;
 use crate::protocol::Feed;
+use crate::record::{DecodeError, FORMAT_VERSION};
 use crate::safety::{Estop, EstopAction};
 use crate::settings::{LinkSettings, ServoParam, ServoSel, SettingId, Settings};
 
@@ -92,6 +93,7 @@ pub const HELP: &[&str] = &[
     "  config                                 list the settings",
     "  set <name> <value>                     change a setting (names as in config)",
     "  defaults                               restore the default settings (except baud and echo)",
+    "  save                                   keep the settings in flash for the next power-up",
     "  help                                   this list",
     "axes: x y z (mm, z from the home height) roll pitch yaw (degrees, applied yaw-pitch-roll)",
     "moves run in a straight line at speed_mm_s / speed_deg_s (0 or off: jump), accel_* ramps",
@@ -215,6 +217,17 @@ pub enum Notice {
     },
     /// The emergency-stop input closed again.
     EstopClosed,
+    /// Power-up found no usable settings in flash (`None`: nothing was ever saved); the
+    /// defaults are used.
+    NoSavedSettings(Option<DecodeError>),
+    /// Power-up loaded a saved copy of the settings, but the other copy cannot be used (it
+    /// may have been the newer one: a save cut short, or damage).
+    SavedCopyUnusable {
+        /// The sequence number of the copy loaded.
+        sequence: u32,
+        /// Why the other cannot be used.
+        why: DecodeError,
+    },
 }
 
 /// Writes a notice line.
@@ -271,7 +284,60 @@ pub fn write_notice(out: &mut impl Write, notice: &Notice) {
             out,
             format_args!("emergency stop: input closed; send reset to move again"),
         ),
+        Notice::NoSavedSettings(None) => line(
+            out,
+            format_args!("warning: no settings saved in flash; using the defaults"),
+        ),
+        Notice::NoSavedSettings(Some(why)) => line(
+            out,
+            format_args!(
+                "warning: the settings saved in flash cannot be used ({}); using the defaults",
+                Unusable(why)
+            ),
+        ),
+        Notice::SavedCopyUnusable { sequence, why } => line(
+            out,
+            format_args!(
+                "warning: one of the two saved copies of the settings cannot be used ({}); \
+                 loaded the other, save {sequence}: check config",
+                Unusable(why)
+            ),
+        ),
     }
+}
+
+/// Why a record in flash cannot be used, in a user's words.
+struct Unusable<'a>(&'a DecodeError);
+
+impl Display for Unusable<'_> {
+    fn fmt(&self, f: &mut Formatter<'_>) -> fmt::Result {
+        match self.0 {
+            DecodeError::UnsupportedVersion(v) => write!(
+                f,
+                "written in format version {v}; this firmware reads version {FORMAT_VERSION}"
+            ),
+            DecodeError::BadChecksum => f.write_str("damaged: checksum mismatch"),
+            DecodeError::BadMagic | DecodeError::TooShort => {
+                f.write_str("damaged: not a settings record")
+            }
+            DecodeError::BadLength(n) => write!(f, "damaged: payload length {n}"),
+            DecodeError::BadField { offset } => write!(f, "damaged: byte {offset}"),
+            DecodeError::Invalid(e) => {
+                write!(f, "invalid: error:{} {e}", Error::from(e.clone()).code())
+            }
+        }
+    }
+}
+
+/// How the running settings stand against those saved in flash (the last line of `config`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Saved {
+    /// They are the ones saved.
+    Same,
+    /// They have changed since the last save.
+    Differs,
+    /// Nothing usable is saved.
+    Nothing,
 }
 
 /// Everything `status` shows, as it was when the command ran.
@@ -306,8 +372,9 @@ pub enum Listing {
     Status(StatusReport),
     /// `geometry`: the layout, the geometry and the IK's home arm angles.
     Geometry,
-    /// `config`: the platform's settings and the asking link's.
-    Config(LinkSettings),
+    /// `config`: the platform's settings, the asking link's, and how they stand against those
+    /// saved in flash.
+    Config(LinkSettings, Saved),
     /// `help`.
     Help,
     /// `check` of an acceptable pose: its arm angles (rad), pulses (us) and the move's
@@ -335,7 +402,7 @@ impl Listing {
         match self {
             Listing::Status(report) => status_line(out, report, index),
             Listing::Geometry => geometry_line(out, settings, solver, index),
-            Listing::Config(link) => config_line(out, settings, link, index),
+            Listing::Config(link, saved) => config_line(out, settings, link, *saved, index),
             Listing::Help => HELP.get(index).is_some_and(|text| {
                 line(out, format_args!("{text}"));
                 true
@@ -502,11 +569,12 @@ fn geometry_line(out: &mut impl Write, settings: &Settings, solver: &Solver, ind
 }
 
 /// `config`: `# name: value` (the platform's settings and the link settings, in
-/// [`SettingId::GLOBAL`] order), then the servos one line each.
+/// [`SettingId::GLOBAL`] order), then the servos one line each, then `# saved: ...`.
 fn config_line(
     out: &mut impl Write,
     settings: &Settings,
     link: &LinkSettings,
+    saved: Saved,
     index: usize,
 ) -> bool {
     if let Some(&id) = SettingId::GLOBAL.get(index) {
@@ -516,6 +584,15 @@ fn config_line(
         return true;
     }
     let servo = index - SettingId::GLOBAL.len() + 1;
+    if servo == LEGS + 1 {
+        let text = match saved {
+            Saved::Same => "yes (these settings are the ones saved in flash)",
+            Saved::Differs => "no (changed since the last save; save keeps them)",
+            Saved::Nothing => "none (nothing saved in flash: the defaults at power-up)",
+        };
+        line(out, format_args!("saved: {text}"));
+        return true;
+    }
     if servo > LEGS {
         return false;
     }

@@ -1,6 +1,7 @@
 //! A test host on one link: bytes in, text out, with helpers to pick replies apart.
 #![allow(dead_code)] // each test file uses a different subset
 
+use control::store::RamFlash;
 use control::{Controller, Session, Settings};
 
 /// True for a final reply line (`ok...` or `error:...`).
@@ -21,6 +22,8 @@ pub struct Host {
     pub link: Session,
     /// Everything written so far.
     pub log: String,
+    /// The flash a `save` writes to, as the board's.
+    pub flash: RamFlash,
 }
 
 impl Host {
@@ -37,6 +40,17 @@ impl Host {
             ctl: Controller::new(settings),
             link: Session::new(),
             log: String::new(),
+            flash: RamFlash::new(),
+        }
+    }
+
+    /// Does a slice of the controller's work as the board's main loop does: the flash write a
+    /// `save` asks for, or a slice of work.
+    pub fn work(&mut self, out: &mut String) {
+        if let Some(write) = self.ctl.take_flash_write() {
+            self.ctl.flash_written(write.perform(&mut self.flash));
+        } else {
+            self.ctl.work(&mut self.link, out);
         }
     }
 
@@ -47,7 +61,7 @@ impl Host {
         for &b in bytes {
             self.ctl.on_byte(&mut self.link, b, &mut out);
             while self.ctl.is_busy() {
-                self.ctl.work(&mut self.link, &mut out);
+                self.work(&mut out);
             }
         }
         self.log.push_str(&out);
@@ -119,7 +133,7 @@ impl Host {
                 let pulses = self.ctl.on_frame();
                 let mut out = String::new();
                 while self.ctl.is_busy() {
-                    self.ctl.work(&mut self.link, &mut out);
+                    self.work(&mut out);
                 }
                 self.log.push_str(&out);
                 pulses
