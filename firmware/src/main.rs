@@ -162,7 +162,10 @@ fn main() -> ! {
         // is something to do now. Output waiting for room in the TX FIFO is no reason to stay
         // awake: the TX interrupt wakes the loop when the FIFO has drained.
         let room = serial.has_room_for_step();
-        let waiting_for_tx = baud_change_pending && !serial.tx_pending() && !serial.tx_idle();
+        // A baud change waiting for the UART's last bytes to leave: stay awake (they leave within
+        // 32 character times, and no interrupt marks the end). Not `&& !tx_idle()`: the UART
+        // may have gone idle since the check above, and then nothing would wake the loop.
+        let waiting_for_tx = baud_change_pending && !serial.tx_pending();
         sleep_unless(|| {
             (room && (controller.is_busy() || serial.rx_pending()))
                 || servos.frame_pending()
