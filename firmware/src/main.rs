@@ -1,8 +1,9 @@
 //! hexapod-fw: the RP2040 board layer.
 //!
-//! Data flows one way: UART0 bytes -> controller (lines, commands, motion) -> six pulse
-//! widths per servo frame (and right after a command that jumps) -> PWM registers. This file
-//! only wires the pieces together: clocks and watchdog, UART0 ([`serial`]) with its link
+//! Data flows one way: serial bytes (UART0 and the USB port) -> controller (lines, commands,
+//! motion) -> six pulse widths per servo frame (and right after a command that jumps) -> PWM
+//! registers. This file only wires the pieces together: clocks and watchdog, the two serial
+//! links, UART0 ([`serial`]) and USB CDC ([`usb_serial`]), each with its own
 //! [`control::Session`], the six servo outputs ([`servo_pwm`]) and the hardware-independent
 //! [`control::Controller`], which runs on the boot ROM's float routines
 //! ([`firmware::rom_math`]).
@@ -12,15 +13,19 @@
 
 mod serial;
 mod servo_pwm;
+mod usb_serial;
+
+use core::fmt;
 
 use defmt_rtt as _;
 use panic_probe as _;
-use rp2040_hal::{self as hal, clocks::Clock, fugit::ExtU32, pac, Sio, Watchdog};
+use rp2040_hal::{self as hal, clocks::Clock, fugit::ExtU32, pac, Sio, Timer, Watchdog};
 
 use control::{Session, Settings};
 use firmware::rom_math::RomMath;
 use serial::{Received, Serial};
 use servo_pwm::{PulseWindowUs, ServoPwm, SERVO_COUNT};
+use usb_serial::UsbSerial;
 
 type Controller = control::Controller<RomMath>;
 
@@ -32,9 +37,35 @@ pub static BOOT2: [u8; 256] = rp2040_boot2::BOOT_LOADER_W25Q080;
 /// Reset the chip if the main loop stalls this long. A pass takes well under a millisecond
 /// (see [`main`]), so only a hang can starve the watchdog.
 const WATCHDOG_TIMEOUT_MS: u32 = 500;
-/// Most received bytes handed to the controller in one pass (a line end ends the pass's input
-/// early, so at most one command runs per pass).
+/// Most received bytes handed to the controller in one pass, both links together (a line end
+/// ends the pass's input early, so at most one command runs per pass).
 const RX_BYTES_PER_PASS: usize = 64;
+
+/// A serial link's port, as the main loop uses it: received bytes in, output written.
+trait Port: fmt::Write {
+    /// The output of one controller step fits (or is dropped anyway): the step may be taken.
+    fn has_room_for_step(&self) -> bool;
+    /// The next received byte, or where bytes were lost.
+    fn receive(&mut self) -> Option<Received>;
+}
+
+impl Port for Serial {
+    fn has_room_for_step(&self) -> bool {
+        Serial::has_room_for_step(self)
+    }
+    fn receive(&mut self) -> Option<Received> {
+        self.read()
+    }
+}
+
+impl Port for UsbSerial {
+    fn has_room_for_step(&self) -> bool {
+        UsbSerial::has_room_for_step(self)
+    }
+    fn receive(&mut self) -> Option<Received> {
+        self.read()
+    }
+}
 
 #[hal::entry]
 fn main() -> ! {
@@ -50,6 +81,7 @@ fn main() -> ! {
     );
     let sio = Sio::new(p.SIO);
     let pins = hal::gpio::Pins::new(p.IO_BANK0, p.PADS_BANK0, sio.gpio_bank0, &mut p.RESETS);
+    let timer = Timer::new(p.TIMER, &mut p.RESETS, &clocks);
 
     let mut controller = Controller::with_math(Settings::default());
     let mut serial = Serial::new(
@@ -73,57 +105,100 @@ fn main() -> ! {
     )
     .expect("the default frame rate is in range");
     watchdog.start(WATCHDOG_TIMEOUT_MS.millis());
+    let mut usb = UsbSerial::new(
+        p.USBCTRL_REGS,
+        p.USBCTRL_DPRAM,
+        clocks.usb_clock,
+        &mut p.RESETS,
+    );
 
-    // UART0's line assembly, echo and prompt (the platform's state is the controller's).
-    let mut uart = Session::new();
-    controller.banner(&mut uart, &mut serial);
+    // Each link's line assembly, echo and prompt (the platform's state is the controller's).
+    // UART0 is greeted now; the USB port when a host opens it.
+    let mut uart_link = Session::new();
+    let mut usb_link = Session::new();
+    controller.banner(&mut uart_link, &mut serial);
     defmt::info!("ready");
 
-    // The main loop. Every pass is short, whatever arrives: it runs at most one command, or
-    // one slice of a command's long work (a path check a few IK solutions at a time, a listing
-    // a line at a time: the controller splits it, see `control::Controller::work`), plus the
-    // frame that came due. The longest pass is measured in the emulator (well under 1 ms,
-    // against a 3 ms frame at 333 Hz and the 500 ms watchdog; BENCHMARKS.md).
+    // The main loop. Every pass is short, whatever arrives on either link: it runs at most one
+    // command (from one link or the other, the link that goes first alternating), or one slice
+    // of a command's long work (a path check a few IK solutions at a time, a listing a line at
+    // a time: the controller splits it, see `control::Controller::work`), plus the frame that
+    // came due. A reply goes to the link that sent the line, notices to every open link. The
+    // longest pass is measured in the emulator (well under 1 ms, against a 3 ms frame at
+    // 333 Hz and the 500 ms watchdog; BENCHMARKS.md).
     let mut rx_line_errors_reported = 0;
+    let mut usb_first = false;
     loop {
         watchdog.feed();
 
-        // Lost input is announced at once, to every link; the line it cut is refused when the
-        // loop reaches the gap.
+        // The USB host opened its port (DTR): a new terminal, greeted like UART0 at power-up;
+        // or closed it (its output is dropped from now on). A host that stopped reading has its
+        // output dropped too, after a while, so that it holds up nothing else.
+        if usb.take_open_change(usb_link.awaits_reply()) == Some(true) {
+            usb_link.reopen();
+            controller.banner(&mut usb_link, &mut usb);
+        }
+        usb.watch_output(timer.get_counter_low());
+
+        // Lost input (only UART0 loses any) is announced at once, to every link; the line it
+        // cut is refused when the loop reaches the gap.
         if let Some(lost) = serial.take_new_loss() {
             defmt::warn!("serial receive: input lost (at least {} bytes)", lost.bytes);
-            controller.on_input_lost(&mut uart, lost.bytes, lost.in_uart, &mut serial);
+            controller.on_input_lost(&mut uart_link, lost.bytes, lost.in_uart, &mut serial);
+            if usb.takes_notices() {
+                controller.write_notices(&mut usb_link, &mut usb);
+            }
         }
 
         if controller.is_busy() {
-            // A slice of the work in progress; its reply comes with the last slice.
-            if serial.has_room_for_step() {
-                controller.work(&mut uart, &mut serial);
+            // A slice of the work in progress, with the link that sent the command (the
+            // controller's own work, the return home after link loss, goes with UART0's). Its
+            // reply comes with the last slice.
+            let usb_job = usb_link.awaits_reply();
+            let room = if usb_job {
+                usb.has_room_for_step()
+            } else {
+                serial.has_room_for_step()
+            };
+            if room {
+                if usb_job {
+                    controller.work(&mut usb_link, &mut usb);
+                } else {
+                    controller.work(&mut uart_link, &mut serial);
+                }
                 write_new_pulses(&mut controller, &mut servos);
                 // The controller's own work (the return home after link loss) may notify.
-                controller.write_notices(&mut uart, &mut serial);
+                controller.write_notices(&mut uart_link, &mut serial);
+                if usb.takes_notices() {
+                    controller.write_notices(&mut usb_link, &mut usb);
+                }
             }
         } else {
-            // Serial bytes -> controller, up to the end of one line. Input waits in the receive
-            // queue while the transmit buffer lacks room for a step's output, so replies are
-            // never cut.
-            for _ in 0..RX_BYTES_PER_PASS {
-                if !serial.has_room_for_step() {
+            // Received bytes -> controller, up to the end of one line, from one link and then,
+            // if no line ended, the other. Input waits (in the receive queue, or for USB in the
+            // host) while its link lacks room for a step's output, so replies are never cut.
+            usb_first = !usb_first;
+            let mut budget = RX_BYTES_PER_PASS;
+            for usb_turn in [usb_first, !usb_first] {
+                let line_ended = if usb_turn {
+                    feed(
+                        &mut controller,
+                        &mut usb_link,
+                        &mut usb,
+                        &mut servos,
+                        &mut budget,
+                    )
+                } else {
+                    feed(
+                        &mut controller,
+                        &mut uart_link,
+                        &mut serial,
+                        &mut servos,
+                        &mut budget,
+                    )
+                };
+                if line_ended {
                     break;
-                }
-                match serial.read() {
-                    Some(Received::Byte(byte)) => {
-                        controller.on_byte(&mut uart, byte, &mut serial);
-                        // A jump (speed limits off) is written now, not at the next frame; the
-                        // compare registers latch it at the next period start.
-                        write_new_pulses(&mut controller, &mut servos);
-                        if byte == b'\r' || byte == b'\n' || controller.is_busy() {
-                            break;
-                        }
-                    }
-                    // The gap where bytes were lost: the line it cuts is refused at its end.
-                    Some(Received::Lost(lost)) => controller.on_rx_overflow(&mut uart, lost),
-                    None => break,
                 }
             }
         }
@@ -133,24 +208,30 @@ fn main() -> ! {
         if frames > 0 {
             let pulses_us = controller.on_frame();
             servos.set_frame_pulse_widths_us(&pulses_us, &pulse_windows_us(&controller));
-            controller.write_notices(&mut uart, &mut serial);
+            controller.write_notices(&mut uart_link, &mut serial);
+            if usb.takes_notices() {
+                controller.write_notices(&mut usb_link, &mut usb);
+            }
             if frames > 1 {
                 defmt::warn!("missed {} servo frames", frames - 1);
             }
         }
 
         apply_frame_rate(&controller, &mut servos);
-        // A baud change waits for the reply announcing it to have left the UART at the old
-        // rate; then the prompt held back for it goes out at the new one.
+        // A baud change (UART0's, from either link) waits for the reply announcing it to have
+        // left the UART at the old rate; then the prompt held back for it goes out at the new
+        // one. USB has no rate: a prompt held back there goes out at once.
         let baud = controller.baud();
         let baud_change_pending = baud != serial.baud();
         if baud_change_pending && serial.tx_idle() {
             match serial.set_baud(baud) {
-                Ok(()) => uart.write_deferred_prompt(&mut serial),
+                Ok(()) => uart_link.write_deferred_prompt(&mut serial),
                 Err(_) => defmt::error!("baud rate {} out of range", baud),
             }
         }
+        usb_link.write_deferred_prompt(&mut usb);
         serial.send_some();
+        usb.send_some();
 
         let rx_line_errors = serial.rx_line_errors();
         if rx_line_errors != rx_line_errors_reported {
@@ -158,20 +239,61 @@ fn main() -> ! {
             defmt::warn!("serial receive: {} line errors so far", rx_line_errors);
         }
 
-        // Sleep until an interrupt (bytes received, TX FIFO half empty, a frame) unless there
-        // is something to do now. Output waiting for room in the TX FIFO is no reason to stay
-        // awake: the TX interrupt wakes the loop when the FIFO has drained.
-        let room = serial.has_room_for_step();
+        // Sleep until an interrupt (bytes received on either link, TX FIFO half empty, USB
+        // output taken, a frame) unless there is something to do now. Output waiting for room
+        // is no reason to stay awake: the UART's TX interrupt, or the USB interrupt when the
+        // host takes a packet, wakes the loop.
+        let uart_room = serial.has_room_for_step();
+        let usb_room = usb.has_room_for_step();
+        let job_can_go = if usb_link.awaits_reply() {
+            usb_room
+        } else {
+            uart_room
+        };
         // A baud change waiting for the UART's last bytes to leave: stay awake (they leave within
         // 32 character times, and no interrupt marks the end). Not `&& !tx_idle()`: the UART
         // may have gone idle since the check above, and then nothing would wake the loop.
         let waiting_for_tx = baud_change_pending && !serial.tx_pending();
+        let usb_opens_or_closes = usb.open_change_pending(usb_link.awaits_reply());
         sleep_unless(|| {
-            (room && (controller.is_busy() || serial.rx_pending()))
-                || servos.frame_pending()
-                || waiting_for_tx
+            let input_or_work = if controller.is_busy() {
+                job_can_go
+            } else {
+                (uart_room && serial.rx_pending()) || (usb_room && usb.rx_pending())
+            };
+            input_or_work || servos.frame_pending() || waiting_for_tx || usb_opens_or_closes
         });
     }
+}
+
+/// Feeds bytes received on one link to the controller until a line ends (or a command's work
+/// begins), `budget` bytes have been fed, the link lacks room for a step's output or has
+/// nothing more. Returns whether a line ended (then the pass takes no more input).
+fn feed(
+    controller: &mut Controller,
+    link: &mut Session,
+    port: &mut impl Port,
+    servos: &mut ServoPwm,
+    budget: &mut usize,
+) -> bool {
+    while *budget > 0 && port.has_room_for_step() {
+        match port.receive() {
+            Some(Received::Byte(byte)) => {
+                *budget -= 1;
+                controller.on_byte(link, byte, port);
+                // A jump (speed limits off) is written now, not at the next frame; the compare
+                // registers latch it at the next period start.
+                write_new_pulses(controller, servos);
+                if byte == b'\r' || byte == b'\n' || controller.is_busy() {
+                    return true;
+                }
+            }
+            // The gap where bytes were lost: the line it cuts is refused at its end.
+            Some(Received::Lost(lost)) => controller.on_rx_overflow(link, lost),
+            None => return false,
+        }
+    }
+    false
 }
 
 /// Writes the pulses a command changed outside the frame rhythm (a jump), if any.
