@@ -262,15 +262,26 @@ test('closing the port drops its output and abandons its line; opening it greets
   assert.equal(board.usb.waitForLine(FINAL_REPLY), refusal);
   board.runMs(2);
   assert.ok(board.usb.output.endsWith(` 0 0 0\r\n${refusal}\r\n> `));
-  // Closed and opened again and again: each opening gets one banner.
+  // Closed and opened again and again, the last times at once while a long check keeps the
+  // main loop busy on UART0 (both requests answered within one of its passes): each opening
+  // gets one banner.
   for (let i = 0; i < 3; i++) {
     board.usb.close();
     board.runMs(3);
     board.usb.open();
     board.usb.waitForLine(BANNER);
   }
+  assert.equal(board.request('set speed_mm_s 1').reply, 'ok');
+  for (let i = 0; i < 3; i++) {
+    board.sendLine('check 20 0 0 0 0 0');
+    board.runMs(10);
+    board.usb.close();
+    board.usb.open();
+    board.usb.waitForLine(BANNER);
+    board.waitForLine(FINAL_REPLY, { timeoutMs: 1000 });
+  }
   board.runMs(5);
-  assert.equal(board.usb.lines.filter((line) => BANNER.test(line)).length, 1 + 1 + 3);
+  assert.equal(board.usb.lines.filter((line) => BANNER.test(line)).length, 1 + 1 + 3 + 3);
   assert.equal(board.usb.request('status').reply, 'ok');
 });
 

@@ -89,6 +89,8 @@ struct Shared {
     port: SerialPort<'static, UsbBus>,
     rx: Producer<'static, u8, RX_QUEUE_BYTES>,
     tx: Consumer<'static, u8, TX_QUEUE_BYTES>,
+    /// `HOST_OPEN` as this handler last set it.
+    was_open: bool,
     /// Output taken from the transmit queue that the port has not accepted yet.
     tx_packet: [u8; PACKET_BYTES],
     tx_packet_len: usize,
@@ -98,6 +100,10 @@ struct Shared {
 static SHARED: Mutex<RefCell<Option<Shared>>> = Mutex::new(RefCell::new(None));
 /// The host has the port open: configured and DTR set (written by the interrupt).
 static HOST_OPEN: AtomicBool = AtomicBool::new(false);
+/// Times the host has opened the port (wrapping; written by the interrupt): an opening the
+/// main loop did not see `HOST_OPEN` low for (closed and opened again within a pass) still
+/// counts as a new terminal.
+static OPENINGS: AtomicU32 = AtomicU32::new(0);
 /// The interrupt left received data unread for lack of room in the receive queue.
 static RX_HELD: AtomicBool = AtomicBool::new(false);
 /// Bytes the port has accepted for sending so far (wrapping): progress of the output.
@@ -109,6 +115,8 @@ pub struct UsbSerial {
     tx: Producer<'static, u8, TX_QUEUE_BYTES>,
     /// The link as the main loop treats it: open (the banner has been written) or not.
     open: bool,
+    /// `OPENINGS` when the link was last opened.
+    openings_seen: u32,
     /// The host stopped reading: output is dropped until it takes some again.
     stalled: bool,
     /// `TX_TAKEN` when output last moved (or nothing waited), and when that was.
@@ -158,6 +166,7 @@ impl UsbSerial {
                 port,
                 rx: rx_producer,
                 tx: tx_consumer,
+                was_open: false,
                 tx_packet: [0; PACKET_BYTES],
                 tx_packet_len: 0,
                 tx_packet_sent: 0,
@@ -170,6 +179,7 @@ impl UsbSerial {
             rx: rx_consumer,
             tx: tx_producer,
             open: false,
+            openings_seen: 0,
             stalled: false,
             taken_seen: 0,
             moved_at_us: 0,
@@ -179,23 +189,35 @@ impl UsbSerial {
     }
 
     /// If the host opened or closed the port since the last call: `Some(true)` when it opened
-    /// (write the banner now), `Some(false)` when it closed. A closing counts at once (output is
-    /// dropped from now on); an opening waits while `reply_awaited` (the link's command still
-    /// runs: its reply belongs to the terminal that closed, and is dropped with it).
+    /// (write the banner now), `Some(false)` when it closed (closed and opened again: the next
+    /// call says it opened). A closing counts at once (output is dropped from now on); an
+    /// opening waits while `reply_awaited` (the link's command still runs: its reply belongs to
+    /// the terminal that closed, and is dropped with it).
     pub fn take_open_change(&mut self, reply_awaited: bool) -> Option<bool> {
-        let host_open = HOST_OPEN.load(Ordering::Relaxed);
-        if host_open == self.open || (host_open && reply_awaited) {
-            return None;
-        }
-        self.open = host_open;
+        let change = self.open_change(reply_awaited)?;
+        self.open = change;
         self.stalled = false;
-        Some(host_open)
+        if change {
+            self.openings_seen = OPENINGS.load(Ordering::Relaxed);
+        }
+        Some(change)
     }
 
     /// Whether [`UsbSerial::take_open_change`] has something to say now.
     pub fn open_change_pending(&self, reply_awaited: bool) -> bool {
+        self.open_change(reply_awaited).is_some()
+    }
+
+    fn open_change(&self, reply_awaited: bool) -> Option<bool> {
         let host_open = HOST_OPEN.load(Ordering::Relaxed);
-        host_open != self.open && !(host_open && reply_awaited)
+        let reopened = OPENINGS.load(Ordering::Relaxed) != self.openings_seen;
+        if self.open && (!host_open || reopened) {
+            Some(false)
+        } else if !self.open && host_open && !reply_awaited {
+            Some(true)
+        } else {
+            None
+        }
     }
 
     /// Watches the output: a host that has the port open and has taken none of it for
@@ -287,6 +309,12 @@ impl Shared {
     fn service(&mut self) {
         self.device.poll(&mut [&mut self.port]);
         let open = self.device.state() == UsbDeviceState::Configured && self.port.dtr();
+        if open && !self.was_open {
+            // Only this handler writes it (the M0+ has no atomic add).
+            let openings = OPENINGS.load(Ordering::Relaxed).wrapping_add(1);
+            OPENINGS.store(openings, Ordering::Relaxed);
+        }
+        self.was_open = open;
         HOST_OPEN.store(open, Ordering::Relaxed);
         self.receive();
         self.transmit(open);
