@@ -98,3 +98,40 @@ export function symbolValues(elfPath, names) {
   }
   return values;
 }
+
+/** Every symbol in the ELF's symbol table with a size: `[{ name, value, size }]` (raw names). */
+export function sizedSymbols(elfPath) {
+  const file = readFileSync(elfPath);
+  const view = new DataView(file.buffer, file.byteOffset, file.byteLength);
+  const sectionHeaderOffset = view.getUint32(0x20, true);
+  const sectionHeaderSize = view.getUint16(0x2e, true);
+  const sectionCount = view.getUint16(0x30, true);
+  const header = (i) => sectionHeaderOffset + i * sectionHeaderSize;
+  const symbols = [];
+  for (let i = 0; i < sectionCount; i++) {
+    if (view.getUint32(header(i) + 0x04, true) !== SHT_SYMTAB) {
+      continue;
+    }
+    const offset = view.getUint32(header(i) + 0x10, true);
+    const size = view.getUint32(header(i) + 0x14, true);
+    const entrySize = view.getUint32(header(i) + 0x24, true);
+    const strings = view.getUint32(header(view.getUint32(header(i) + 0x18, true)) + 0x10, true);
+    for (let entry = offset; entry < offset + size; entry += entrySize) {
+      const symbolSize = view.getUint32(entry + 8, true);
+      if (symbolSize === 0) {
+        continue;
+      }
+      let end = strings + view.getUint32(entry, true);
+      const start = end;
+      while (file[end] !== 0) {
+        end++;
+      }
+      symbols.push({
+        name: file.toString('latin1', start, end),
+        value: view.getUint32(entry + 4, true),
+        size: symbolSize,
+      });
+    }
+  }
+  return symbols;
+}
