@@ -40,7 +40,8 @@ const BEFORE = { commit: '2e2bad8', mean: 40582, min: 40325, max: 40872 };
  */
 const WITHOUT_USB = { commit: '4f8c60a', flash: 140616, ram: 5280 };
 /** The USB code and data in the ELF's symbol table (rust names; the handler by its own). */
-const USB_SYMBOL = /usb_serial|usb_device|usbd_serial|rp2040_hal\.\.usb\.\.|rp2040_hal3usb|USBCTRL_IRQ/;
+const USB_SYMBOL =
+  /usb_serial|usb_device|usbd_serial|rp2040_hal\.\.usb\.\.|rp2040_hal3usb|USBCTRL_IRQ/;
 /** Where the RP2040's SRAM starts: symbols below it are in flash. */
 const RAM_START = 0x20000000;
 
@@ -111,7 +112,8 @@ const usbRates = [];
 for (const linesPerSecond of [1000, 1500, 2000, 2500, Infinity]) {
   const result = measureUsbStream(lines, { linesPerSecond });
   usbRates.push({ offered: linesPerSecond, ...result });
-  log(`  offered ${linesPerSecond}/s: ${result.ok}/${result.lines} ok, ${fmt(result.linesPerSecond)} lines/s`);
+  const answered = `${result.ok}/${result.lines} ok, ${fmt(result.linesPerSecond)} lines/s`;
+  log(`  offered ${linesPerSecond}/s: ${answered}`);
 }
 const usbLockStep = measureLockStep(lines.slice(0, 500), { usb: true });
 
@@ -162,12 +164,19 @@ const smallUsb = stat(latencySmallUsb);
 const jumpUsb = stat(latencyJumpUsb);
 const usbRateRows = usbRates
   .map((r) => {
-    const offered = Number.isFinite(r.offered) ? `${fmt(r.offered)}/s` : 'all at once (as fast as the firmware takes them)';
-    const outcome = r.ok === r.lines ? 'all `ok`' : `${r.ok} of ${r.lines} \`ok\`; first other reply: \`${r.errors[0] ?? ''}\``;
+    const offered = Number.isFinite(r.offered)
+      ? `${fmt(r.offered)}/s`
+      : 'all at once (as fast as the firmware takes them)';
+    const outcome =
+      r.ok === r.lines
+        ? 'all `ok`'
+        : `${r.ok} of ${r.lines} \`ok\`; first other reply: \`${r.errors[0] ?? ''}\``;
     return `| ${offered} | ${fmt(r.linesPerSecond)}/s | ${outcome} |`;
   })
   .join('\n');
-const usbBest = usbRates.filter((r) => r.ok === r.lines).reduce((a, r) => (a && a.linesPerSecond > r.linesPerSecond ? a : r), null);
+const usbBest = usbRates
+  .filter((r) => r.ok === r.lines)
+  .reduce((a, r) => (a && a.linesPerSecond > r.linesPerSecond ? a : r), null);
 const rel = (path) => relative(REPO, path);
 
 const report = `# Benchmarks
