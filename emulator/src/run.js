@@ -1,7 +1,7 @@
 #!/usr/bin/env node
-// Interactive runner: the firmware in the emulator, in (roughly) real time, with UART0 on
-// your terminal or on a pseudo-terminal, and the six measured servo pulse widths as a
-// status line. Usually started with `./dev run [--pty]`.
+// Interactive runner: the firmware in the emulator, in (roughly) real time, with its USB
+// serial port (or UART0) on your terminal or on a pseudo-terminal, and the six measured servo
+// pulse widths as a status line. Usually started with `./dev run [--uart] [--pty]`.
 
 import { spawn } from 'node:child_process';
 import { dirname, join } from 'node:path';
@@ -11,14 +11,16 @@ import { fileURLToPath } from 'node:url';
 import { DEFAULT_ELF, EmulatedBoard } from './board.js';
 import { loadBootrom } from './bootrom.js';
 
-const USAGE = `usage: ./dev run [--pty] [--local-echo] [--elf PATH]
+const USAGE = `usage: ./dev run [--uart] [--pty] [--local-echo] [--elf PATH]
 
-Runs the firmware in the emulator with UART0 on this terminal (raw mode, like picocom).
-  Enter sends LF. The firmware echoes what you type; if its echo is off, --local-echo
-  shows typed characters here. Ctrl-] or Ctrl-C quits.
-  --pty      put UART0 on a pseudo-terminal instead and print its path, for picocom,
-             screen or a host program (e.g. picocom -b 115200 --omap crlf /dev/pts/N).
-             Ctrl-C quits.
+Runs the firmware in the emulator with a USB cable in the Pico's USB port and this terminal
+on the serial port it brings (as picocom /dev/ttyACM0 would be, in raw mode): the port opens
+at once and the board greets it. Enter sends LF. The firmware echoes what you type; if its
+echo is off, --local-echo shows typed characters here. Ctrl-] or Ctrl-C quits.
+  --uart     this terminal on UART0 (GP0/GP1, 115200 baud) instead, no USB cable
+  --pty      put the port on a pseudo-terminal instead and print its path, for picocom,
+             screen or a host program (e.g. picocom --omap crlf /dev/pts/N). The board
+             greets the port before you connect: press Enter for a prompt. Ctrl-C quits.
   --elf PATH firmware ELF (default: ${DEFAULT_ELF})
 The status line (stderr) shows the six measured servo pulse widths in microseconds.`;
 
@@ -39,6 +41,7 @@ function main() {
   try {
     ({ values: options } = parseArgs({
       options: {
+        uart: { type: 'boolean', default: false },
         pty: { type: 'boolean', default: false },
         'local-echo': { type: 'boolean', default: false },
         elf: { type: 'string', default: DEFAULT_ELF },
@@ -57,11 +60,15 @@ function main() {
   const board = new EmulatedBoard({
     elf: options.elf,
     bootrom: loadBootrom({ log: (message) => process.stderr.write(`${message}\n`) }),
+    usb: !options.uart,
   });
+  // The serial link on this terminal: the USB port's, as a Pico owner uses it, or UART0's.
+  const link = options.uart ? board.uart : board.usb;
+  const name = options.uart ? 'UART0' : 'The USB serial port';
   const status = new StatusLine(process.stderr);
   const connection = options.pty
-    ? new PtyConnection(board, status)
-    : new TerminalConnection(board, { echo: options['local-echo'] });
+    ? new PtyConnection(link, name, status)
+    : new TerminalConnection(link, { echo: options['local-echo'] });
 
   const quit = (code, message) => {
     connection.close();
@@ -118,14 +125,14 @@ function runInRealTime(board, status, onFault) {
   step();
 }
 
-/** UART0 <-> this terminal in raw mode. */
+/** A serial link (`board.uart`, `board.usb`) <-> this terminal in raw mode. */
 class TerminalConnection {
-  constructor(board, { echo }) {
-    this.board = board;
+  constructor(link, { echo }) {
+    this.link = link;
     this.echo = echo;
     this.onQuit = () => {};
     this.previousByte = null;
-    board.onOutput((byte) => this.show(byte));
+    link.onOutput((byte) => this.show(byte));
     if (process.stdin.isTTY) {
       process.stdin.setRawMode(true);
     }
@@ -141,7 +148,7 @@ class TerminalConnection {
       }
       // Enter gives CR in raw mode; lines end with LF on the wire.
       const sent = byte === CR ? LF : byte;
-      this.board.sendBytes([sent]);
+      this.link.sendBytes([sent]);
       if (this.echo) {
         if (sent === LF) {
           process.stdout.write('\r\n');
@@ -172,9 +179,9 @@ class TerminalConnection {
   }
 }
 
-/** UART0 <-> a pseudo-terminal, through a tiny Python bridge (pty-bridge.py). */
+/** A serial link <-> a pseudo-terminal, through a tiny Python bridge (pty-bridge.py). */
 class PtyConnection {
-  constructor(board, status) {
+  constructor(link, name, status) {
     this.onQuit = () => {};
     const bridgeScript = join(dirname(fileURLToPath(import.meta.url)), 'pty-bridge.py');
     this.bridge = spawn('python3', [bridgeScript], { stdio: ['pipe', 'pipe', 'inherit'] });
@@ -189,7 +196,7 @@ class PtyConnection {
     let pending = Buffer.alloc(0);
     this.bridge.stdout.on('data', (data) => {
       if (path !== null) {
-        board.sendBytes(data);
+        link.sendBytes(data);
         return;
       }
       // The first line is the pty's path; anything after it is already input.
@@ -199,15 +206,13 @@ class PtyConnection {
         return;
       }
       path = pending.subarray(0, newline).toString();
-      status.message(
-        `UART0 is on ${path}  (e.g. picocom -b 115200 --omap crlf ${path}); Ctrl-C quits`,
-      );
+      status.message(`${name} is on ${path}  (e.g. picocom --omap crlf ${path}); Ctrl-C quits`);
       const rest = pending.subarray(newline + 1);
       if (rest.length > 0) {
-        board.sendBytes(rest);
+        link.sendBytes(rest);
       }
     });
-    board.onOutput((byte) => this.bridge.stdin.write(Buffer.from([byte])));
+    link.onOutput((byte) => this.bridge.stdin.write(Buffer.from([byte])));
   }
 
   close() {
