@@ -55,10 +55,12 @@
 //! frame wins (the board feeds every waiting byte, then calls [`Controller::apply_stream`],
 //! which applies only the newest frame). An unreachable target is clamped: the last reachable
 //! pose on the straight line from the current pose to it, found by bisection
-//! ([`CLAMP_STEPS`] IK solutions), and counted. With every speed and acceleration limit off
+//! ([`CLAMP_STEPS`] IK solutions, as a job a slice per pass: so a clamped frame takes effect
+//! a few passes, well under a millisecond, later), and counted. With every speed and acceleration limit off
 //! the pose is applied at once (pass-through, like a jump: [`Controller::take_new_pulses`]);
 //! otherwise each axis follows it at the servo frame rate within the limits
-//! ([`crate::tracker`]), and a step that would leave the workspace is clamped too. An accepted
+//! ([`crate::tracker`]); a step that would leave the workspace (the axes' own paths to a
+//! reachable goal can) stops the tracker where it is, counted as a clamp too. An accepted
 //! move (`pose`, `move`, `nudge`, `home`) or `stop` ends the stream (while a move's path is
 //! checked the stream holds, as a move in progress does; a refused one lets it go on); the
 //! next frame starts it again from wherever the platform is.
@@ -118,8 +120,9 @@ pub const LINK_LOSS_SPEED_DEG_S: f32 = 15.0;
 /// solutions' worth): then a slice checks one pose.
 pub const CHECKS_PER_SLICE: u32 = 3;
 
-/// IK solutions of a clamp's bisection: the clamped pose is within 1/64 of the way from the
-/// last reachable pose to the target (on the RP2040 a clamp costs up to 7 IK solutions).
+/// Halvings of a clamp's bisection: the clamped pose is within 1/64 of the way from the
+/// current pose to the target (a clamp costs 1 + 6 IK solutions, the 6 as the controller's
+/// own job, [`CHECKS_PER_SLICE`] per pass).
 pub const CLAMP_STEPS: u32 = 6;
 
 /// Notices kept for links that have not shown them yet (the latest ones).
@@ -161,41 +164,6 @@ struct Streaming {
     goal: Pose,
     /// Where the tracker is and how fast it goes.
     tracker: Tracker,
-    /// The newest target's check (and clamp), a slice per [`Controller::apply_stream`].
-    search: Option<Clamp>,
-}
-
-/// The check of a stream target, clamped to the last pose on the straight line from where the
-/// platform was that can be taken (the IK within the servo limits, and with torque ratings the
-/// holding torques), a slice at a time: the target first, then [`CLAMP_STEPS`] bisection steps.
-#[derive(Debug, Clone, Copy, PartialEq)]
-struct Clamp {
-    from: Pose,
-    to: Pose,
-    /// The target has been tried (and could not be taken).
-    tried: bool,
-    /// Fractions of the way known to be reachable and not.
-    reachable: f32,
-    unreachable: f32,
-    /// Bisection steps made.
-    steps: u32,
-    /// The farthest reachable pose found and its solution (`None`: `from`, whose solution is
-    /// the current one).
-    best: (Pose, Option<Solution>),
-}
-
-impl Clamp {
-    fn new(from: Pose, to: Pose) -> Clamp {
-        Clamp {
-            from,
-            to,
-            tried: false,
-            reachable: 0.0,
-            unreachable: 1.0,
-            steps: 0,
-            best: (from, None),
-        }
-    }
 }
 
 /// The pulses set with `servo`: the pose they correspond to (the forward kinematics), or why
@@ -303,6 +271,29 @@ enum Job {
     Rebuild { candidate: Settings, stage: Rebuild },
     /// `save`: the flash write the board performs, and its outcome.
     Save(SaveStep),
+    /// An unreachable stream target being clamped, a few IK solutions per slice (the
+    /// controller's own work: no reply); with torque ratings, a reachable one whose holding
+    /// torques are checked first.
+    Clamp(Bisection),
+}
+
+/// A clamp in progress: bisection on the straight line from `from` (which can be driven) to
+/// `to` (which cannot), [`CLAMP_STEPS`] halvings in all.
+#[derive(Debug, Clone, Copy)]
+struct Bisection {
+    from: Pose,
+    to: Pose,
+    /// `to` is within reach with this solution, but its holding torques are still to be
+    /// checked against the ratings (the first slice); if they are within them, `to` is the
+    /// goal, else the bisection goes on.
+    unchecked: Option<Solution>,
+    /// Fractions of the way known to be drivable and not.
+    reachable: f32,
+    unreachable: f32,
+    /// The furthest drivable pose found and its solution (`None`: only `from`).
+    best: Option<(Pose, Solution)>,
+    /// Halvings done.
+    steps: u32,
 }
 
 /// How far a [`Job::Save`] has got.
@@ -525,20 +516,15 @@ impl<M: Math> Controller<M> {
     /// True while a move is in progress, or a stream's tracker has not settled on its goal.
     pub fn is_moving(&self) -> bool {
         self.motion.is_moving()
-            || self.stream.as_ref().is_some_and(|s| {
-                s.fresh || s.search.is_some() || !s.tracker.at_rest() || s.tracker.pose() != s.goal
-            })
+            || self
+                .stream
+                .as_ref()
+                .is_some_and(|s| s.fresh || !s.tracker.at_rest() || s.tracker.pose() != s.goal)
     }
 
     /// True while stream frames drive the platform.
     pub fn is_streaming(&self) -> bool {
         self.stream.is_some()
-    }
-
-    /// True while a stream target waits to be applied or checked: keep calling
-    /// [`Controller::apply_stream`] (a slice of the check per call) without sleeping.
-    pub fn stream_pending(&self) -> bool {
-        self.stream.is_some_and(|s| s.fresh || s.search.is_some())
     }
 
     /// With pulses set by `servo`: the pose they correspond to, or why there is none; `None`
@@ -628,8 +614,9 @@ impl<M: Math> Controller<M> {
 
     // ----- what the board calls -----
 
-    /// Writes the start-up banner (and any notice, e.g. refused settings), then the prompt, to
-    /// one link.
+    /// Writes the banner (and the notices this link has not shown, e.g. refused settings), then
+    /// the prompt, to one link: at power-up, and when a link opens (a USB host opening its
+    /// port, after [`Session::reopen`]).
     pub fn banner(&self, session: &mut Session, out: &mut impl Write) {
         report::write_banner(out);
         self.flush_notices(session, out);
@@ -678,42 +665,40 @@ impl<M: Math> Controller<M> {
         }
     }
 
-    /// Applies the newest stream frame: its pose, clamped to what can be taken, becomes the
-    /// pose now (pass-through: the new pulses are ready from
-    /// [`Controller::take_new_pulses`]) or the tracker's goal. The check is done a slice per
-    /// call (up to [`CHECKS_PER_SLICE`] IK solutions, or one pose with its holding torques;
-    /// a target that needs clamping takes 1 + [`CLAMP_STEPS`] poses): the board calls it after
-    /// feeding the bytes waiting, every pass while [`Controller::stream_pending`]. A newer frame
-    /// starts the check afresh.
+    /// Applies the newest stream frame if one arrived since the last call: its pose becomes the
+    /// pose now (pass-through: the new pulses are ready from [`Controller::take_new_pulses`])
+    /// or the tracker's goal, if it can be taken; else it is clamped. One IK solution here; a
+    /// clamp (the target out of reach, or with torque ratings, a target whose holding torques
+    /// are to be checked) is the controller's own job ([`Controller::work`], a slice per pass).
+    /// The board calls it after feeding the bytes waiting.
     pub fn apply_stream(&mut self) {
-        let Some(mut stream) = self.stream else {
+        let Some(mut stream) = self.stream.filter(|s| s.fresh) else {
             return;
         };
-        if stream.fresh {
-            stream.fresh = false;
-            self.stream_counts.applied = self.stream_counts.applied.wrapping_add(1);
-            stream.search = Some(Clamp::new(*self.motion.pose(), stream.target));
-            self.servo_power = true;
-            self.fault = None;
-        }
-        if let Some(mut search) = stream.search {
-            match self.clamp_slice(&mut search) {
-                None => stream.search = Some(search),
-                Some((pose, solution)) => {
-                    stream.search = None;
-                    if self.track_limits() == TrackLimits::OFF {
-                        if let Some(solution) = solution {
-                            self.motion = Motion::new(pose);
-                            self.solution = solution;
-                            self.new_pulses = true;
-                        }
-                        stream.tracker.hold_at(&pose);
-                    }
-                    stream.goal = pose;
-                }
+        stream.fresh = false;
+        self.stream = Some(stream);
+        self.stream_counts.applied = self.stream_counts.applied.wrapping_add(1);
+        self.servo_power = true;
+        self.fault = None;
+        let from = *self.motion.pose();
+        match self
+            .solver
+            .solve::<M>(&self.settings.servos, &stream.target)
+        {
+            Ok(solution) if !self.settings.payload.checked() => {
+                self.reach_stream_goal(stream.target, Some(solution))
+            }
+            // Within reach, but with torque ratings its holding torques are checked first, as
+            // the controller's own job (a slice of their own), then it is the goal or clamped.
+            Ok(solution) => self.start_clamp(from, stream.target, Some(solution)),
+            Err(_) => {
+                // Unreachable: clamped by a bisection that runs as the controller's own job,
+                // a slice per pass (so no pass grows by its IK solutions); the platform goes
+                // on towards the previous goal meanwhile.
+                self.stream_counts.clamped = self.stream_counts.clamped.wrapping_add(1);
+                self.start_clamp(from, stream.target, None);
             }
         }
-        self.stream = Some(stream);
     }
 
     /// The emergency-stop input, as the board reads it (`open`: the pin is high; call it every
@@ -750,10 +735,12 @@ impl<M: Math> Controller<M> {
     pub fn work(&mut self, session: &mut Session, out: &mut impl Write) {
         let commanded = !matches!(
             self.job,
-            Some(Job::Path {
-                purpose: Purpose::ReturnHome | Purpose::EstopHome,
-                ..
-            })
+            Some(
+                Job::Path {
+                    purpose: Purpose::ReturnHome | Purpose::EstopHome,
+                    ..
+                } | Job::Clamp(_)
+            )
         );
         if commanded && !session.awaits_reply() {
             return;
@@ -850,6 +837,16 @@ impl<M: Math> Controller<M> {
                 self.job = Some(Job::Save(step));
                 return;
             }
+            Job::Clamp(mut bisection) => match self.clamp_slice(&mut bisection) {
+                None => {
+                    self.job = Some(Job::Clamp(bisection));
+                    return;
+                }
+                Some((pose, solution)) => {
+                    self.reach_stream_goal(pose, solution);
+                    Done::Quiet
+                }
+            },
         };
         self.holding = false;
         match done {
@@ -1191,7 +1188,6 @@ impl<M: Math> Controller<M> {
                     fresh: true,
                     goal: here,
                     tracker: Tracker::new(&here),
-                    search: None,
                 });
             }
         }
@@ -1219,77 +1215,95 @@ impl<M: Math> Controller<M> {
                 stream.tracker = next;
             }
             Err(_) => {
-                let from = *self.motion.pose();
-                let (pose, solution) = self.clamp_now(&from, &next.pose());
-                if let Some(solution) = solution {
-                    self.motion = Motion::new(pose);
-                    self.solution = solution;
-                }
-                stream.tracker.hold_at(&pose);
-                stream.goal = pose;
+                // The goal can be driven (it was clamped), but the axes' own paths to it
+                // leave the workspace here: stop where the last step was, a step (at most one
+                // frame's travel) short of the edge, rather than spend a bisection in this
+                // pass (which also holds a clamp of the goal: the pass must stay short).
+                let here = *self.motion.pose();
+                stream.tracker.hold_at(&here);
+                stream.goal = here;
+                self.stream_counts.clamped = self.stream_counts.clamped.wrapping_add(1);
             }
         }
         self.stream = Some(stream);
     }
 
-    /// A slice of a stream target's check ([`Clamp`]): `None` while poses remain to be tried,
-    /// then the pose to take and its solution (`None` when that is where it started, whose
-    /// solution is the current one). Counts a clamp when the target cannot be taken.
-    fn clamp_slice(&mut self, c: &mut Clamp) -> Option<(Pose, Option<Solution>)> {
-        let torque = self.settings.payload.checked();
-        for _ in 0..self.poses_per_slice() {
-            if !c.tried {
-                c.tried = true;
-                match self.pose_check(&c.to, torque) {
-                    Ok(solution) => return Some((c.to, Some(solution))),
-                    Err(_) => {
-                        self.stream_counts.clamped = self.stream_counts.clamped.wrapping_add(1);
-                    }
-                }
-                continue;
-            }
-            let t = 0.5 * (c.reachable + c.unreachable);
-            let pose = lerp(&c.from, &c.to, t);
-            match self.pose_check(&pose, torque) {
-                Ok(solution) => {
-                    c.reachable = t;
-                    c.best = (pose, Some(solution));
-                }
-                Err(_) => c.unreachable = t,
-            }
-            c.steps += 1;
-            if c.steps >= CLAMP_STEPS {
-                return Some(c.best);
-            }
+    /// Starts clamping a stream target as the controller's own job: `to` cannot be reached
+    /// (`unchecked: None`), or can, with this solution, but its holding torques are to be
+    /// checked against the ratings first. (One job at a time: a job already running means this
+    /// frame came through a transport that feeds while busy; then the goal stays where it was.)
+    fn start_clamp(&mut self, from: Pose, to: Pose, unchecked: Option<Solution>) {
+        if self.job.is_none() {
+            self.job = Some(Job::Clamp(Bisection {
+                from,
+                to,
+                unchecked,
+                reachable: 0.0,
+                unreachable: 1.0,
+                best: None,
+                steps: 0,
+            }));
         }
-        None
     }
 
-    /// The last pose on the straight line from `from` (which can be driven) to `to` that can
-    /// be driven, within 1/2^[`CLAMP_STEPS`] of the way, and its solution (`None` when that is
-    /// `from` itself, whose solution is the current one), at once (up to 1 + [`CLAMP_STEPS`]
-    /// IK solutions; the tracker's step within a frame). Counts a clamp if `to` cannot be
-    /// driven.
-    fn clamp_now(&mut self, from: &Pose, to: &Pose) -> (Pose, Option<Solution>) {
-        let servos = &self.settings.servos;
-        if let Ok(solution) = self.solver.solve::<M>(servos, to) {
-            return (*to, Some(solution));
+    /// A slice of a clamp: the target's holding torques if they are to be checked (then the
+    /// target is the goal if they are within the ratings), else
+    /// [`Controller::poses_per_slice`] more halvings of the bisection (each pose within reach
+    /// and, with ratings, within them). `Some` when it is done: the goal and its solution
+    /// (`None`: where the bisection started, whose solution is the current one).
+    fn clamp_slice(&mut self, b: &mut Bisection) -> Option<(Pose, Option<Solution>)> {
+        let torque = self.settings.payload.checked();
+        if let Some(solution) = b.unchecked.take() {
+            let held = self
+                .settings
+                .payload
+                .check::<M>(&self.solver, &b.to, &solution.arm_rad);
+            if held.is_ok() {
+                return Some((b.to, Some(solution)));
+            }
+            self.stream_counts.clamped = self.stream_counts.clamped.wrapping_add(1);
+            return None;
         }
-        self.stream_counts.clamped = self.stream_counts.clamped.wrapping_add(1);
-        let (mut reachable, mut unreachable) = (0.0f32, 1.0f32);
-        let mut best = (*from, None);
-        for _ in 0..CLAMP_STEPS {
-            let t = 0.5 * (reachable + unreachable);
-            let pose = lerp(from, to, t);
-            match self.solver.solve::<M>(servos, &pose) {
+        for _ in 0..self.poses_per_slice() {
+            if b.steps >= CLAMP_STEPS {
+                break;
+            }
+            b.steps += 1;
+            let t = 0.5 * (b.reachable + b.unreachable);
+            let pose = lerp(&b.from, &b.to, t);
+            match self.pose_check(&pose, torque) {
                 Ok(solution) => {
-                    reachable = t;
-                    best = (pose, Some(solution));
+                    b.reachable = t;
+                    b.best = Some((pose, solution));
                 }
-                Err(_) => unreachable = t,
+                Err(_) => b.unreachable = t,
             }
         }
-        best
+        (b.steps >= CLAMP_STEPS).then(|| {
+            b.best
+                .map_or((b.from, None), |(pose, solution)| (pose, Some(solution)))
+        })
+    }
+
+    /// A stream target, or what it was clamped to, is the goal: in pass-through the pose now
+    /// (`solution`: its IK; `None` to stay where the platform is), else the tracker's goal.
+    /// Nothing if the stream has ended meanwhile (a clamp's job outlived it).
+    fn reach_stream_goal(&mut self, pose: Pose, solution: Option<Solution>) {
+        let Some(mut stream) = self.stream else {
+            return;
+        };
+        if self.track_limits() == TrackLimits::OFF {
+            if let Some(solution) = solution {
+                self.motion = Motion::new(pose);
+                self.solution = solution;
+                self.new_pulses = true;
+            }
+            stream.tracker.hold_at(self.motion.pose());
+            stream.goal = *self.motion.pose();
+        } else {
+            stream.goal = pose;
+        }
+        self.stream = Some(stream);
     }
 
     /// Ends the stream (the platform holds where it is).
@@ -2248,6 +2262,42 @@ mod tests {
             to_program,
             "s\r\n# warning: receive queue overflowed, input lost (at least 9 bytes so far)\r\n> s"
         );
+    }
+
+    #[test]
+    fn a_reopened_link_starts_afresh_and_shows_only_what_came_while_it_was_closed() {
+        let mut c = quiet();
+        let mut usb = program();
+        let mut out = std::string::String::new();
+        c.on_input_lost(&mut usb, 3, false, &mut out);
+        for &b in b"pose 1" {
+            c.on_byte(&mut usb, b, &mut out);
+        }
+        // Closed (the host dropped DTR); a notice comes meanwhile, then the host opens again.
+        c.notify(Notice::InputLost {
+            at_least: 7,
+            in_uart: true,
+        });
+        usb.reopen();
+        assert!(usb.echo(), "a new terminal: echo on");
+        assert_eq!(usb.typed(), "", "the partial line is abandoned");
+        out.clear();
+        c.banner(&mut usb, &mut out);
+        assert_eq!(
+            out,
+            std::format!(
+                "# hexapod control {}: poses in mm and degrees; type help\r\n\
+                 # warning: UART receive error, input lost (at least 7 bytes)\r\n> ",
+                report::VERSION
+            )
+        );
+        // The new terminal's first line is a line of its own.
+        out.clear();
+        for &b in b"home\r" {
+            c.on_byte(&mut usb, b, &mut out);
+        }
+        finish(&mut c, &mut usb, &mut out);
+        assert_eq!(out, "home\r\nok\r\n> ");
     }
 
     #[test]

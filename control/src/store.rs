@@ -47,6 +47,8 @@ pub trait NorFlash {
 }
 
 /// What a sector holds.
+// Read once per sector at power-up; no heap to box the record into.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone, PartialEq)]
 pub enum Sector {
     /// Nothing: its record page reads all `0xFF`.

@@ -653,10 +653,12 @@ fn a_stream_target_that_would_overload_is_clamped_one_pose_per_pass() {
     }
     frame.extend_from_slice(b"\r\n");
     s.feed(&frame);
+    // The target's IK at once; its torques, then each of the CLAMP_STEPS halvings with its
+    // torques, a pass each.
     let passes = s.apply_stream();
     assert_eq!(
         passes,
-        1 + CLAMP_STEPS,
+        1 + 1 + CLAMP_STEPS,
         "one pose with its torques per pass"
     );
     assert_eq!(s.ctl.stream_counts().clamped, 1);

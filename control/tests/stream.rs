@@ -182,11 +182,11 @@ fn an_unreachable_target_is_clamped_on_the_way_to_it_and_counted() {
         count(0.0),
         count(0.0),
     ]));
-    // The target and CLAMP_STEPS bisection steps, CHECKS_PER_SLICE poses per pass.
+    // The target's IK at once; CLAMP_STEPS bisection steps, CHECKS_PER_SLICE a pass.
     let passes = s.apply_stream();
     assert_eq!(
         passes,
-        (1 + control::controller::CLAMP_STEPS).div_ceil(control::controller::CHECKS_PER_SLICE)
+        1 + control::controller::CLAMP_STEPS.div_ceil(control::controller::CHECKS_PER_SLICE)
     );
     let z = s.ctl.pose().z_mm;
     assert!(z > 0.0 && z < 80.0, "{z}");
@@ -409,4 +409,33 @@ fn defaults_for_a_fresh_board_have_no_safety_pins() {
     let s = Settings::default();
     assert_eq!(s.safety.estop_pin, None);
     assert_eq!(s.safety.power_pin, None);
+}
+
+#[test]
+fn a_clamp_is_the_controllers_own_work_a_slice_at_a_time() {
+    let mut s = pass_through();
+    s.ok("set stream.z_mm 100");
+    s.feed(&binary([
+        count(0.0),
+        count(0.0),
+        count(0.8),
+        count(0.0),
+        count(0.0),
+        count(0.0),
+    ]));
+    s.ctl.apply_stream();
+    // The target's own IK failed: the bisection (6 IK solutions) is left to `work`, a few per
+    // slice, so the pass that fed the frame stays short; nothing moved yet.
+    assert!(s.ctl.is_busy());
+    assert_eq!(*s.ctl.pose(), Pose::HOME);
+    let mut slices = 0;
+    let mut out = String::new();
+    while s.ctl.is_busy() {
+        s.ctl.work(&mut s.link, &mut out);
+        slices += 1;
+    }
+    assert_eq!(out, "", "the controller's own work replies to nobody");
+    assert!(slices >= 2, "{slices} slice(s) for 6 IK solutions");
+    assert!(s.ctl.pose().z_mm > 0.0);
+    assert!(s.ctl.take_new_pulses().is_some());
 }
