@@ -350,9 +350,9 @@ function mostTorque(settings, pose) {
   return Math.max(...answer.torque_kgcm.map(Math.abs));
 }
 
-test('torque-limit: names the servo, the torque it would need (as the host core computes it) and its rating', () => {
+linkTest('torque-limit: names the servo, the torque it would need (as the host core computes it) and its rating', (link) => {
   const settings = withPayload(defaultSettings(), 1);
-  const board = quietBoardAt(null);
+  const board = quietBoardAt(link, null);
   setPayload(board, 1);
   const check = { next: ['check 0 0 -1 0 0 0', 4] }; // with the torque line
   for (const pose of [[10, 0, 0, 0, 0, 0], [0, -8, 0, 0, 0, 0], [0, 0, 0, 0, 0, 9]]) {
@@ -374,13 +374,13 @@ test('torque-limit: names the servo, the torque it would need (as the host core 
   }
 });
 
-test('path-blocked by torque: both ends within the ratings, the middle of the way not', () => {
+linkTest('path-blocked by torque: both ends within the ratings, the middle of the way not', (link) => {
   const settings = withPayload(defaultSettings(), 2.5);
   const from = [-1, 5.5, 6, -0.5, -4.5, 13];
   const to = [-9, 10.5, -4.5, -5, 7.5, 8];
   assert.ok(mostTorque(settings, from) < 2.5 && mostTorque(settings, to) < 2.5);
   assert.ok(mostTorque(settings, lerpPose(from, to, 0.5)) > 2.5);
-  const board = quietBoardAt(from);
+  const board = quietBoardAt(link, from);
   setPayload(board, 2.5);
   expectRefusal(
     board,
@@ -391,8 +391,8 @@ test('path-blocked by torque: both ends within the ratings, the middle of the wa
   );
 });
 
-test('pose-conflict: a rating or payload the held pose would exceed is refused', () => {
-  const board = quietBoardAt([0, 0, -8, 0, 0, 0]);
+linkTest('pose-conflict: a rating or payload the held pose would exceed is refused', (link) => {
+  const board = quietBoardAt(link, [0, 0, -8, 0, 0, 0]);
   ok(board, 'set payload_g 2000');
   // At z = -8 each servo needs about 0.6 kgf cm (a sixth of 2 kgf on a 2 cm arm, less the rods' lean).
   const need = mostTorque(withPayload(defaultSettings(), 'off'), [0, 0, -8, 0, 0, 0]);
@@ -406,11 +406,12 @@ test('pose-conflict: a rating or payload the held pose would exceed is refused',
   );
 });
 
-test('no-pose: pulses set with servo that correspond to no pose refuse moves until driven back', () => {
+linkTest('no-pose: pulses set with servo that correspond to no pose refuse moves until driven back', (link) => {
   const settings = defaultSettings();
-  const board = quietBoardAt(null);
+  const board = quietBoardAt(link, null);
   ok(board, 'servo 1 1900');
   ok(board, 'servo 2 1900');
+  runFrames(board, 2); // the pins take the new pulses at their next period
   const pulses = [1900, 1900, 1500, 1500, 1500, 1500];
   assert.equal(reference.forwardKinematics(settings, pulses, status(board).pose).ok, false, 'the host core finds none either');
   assert.match(ok(board, 'status').find((l) => l.startsWith('pulse_pose: ')), /^pulse_pose: none \(the rods cannot all reach their joints/);
