@@ -30,10 +30,10 @@ before(() => {
 });
 
 const SECTOR_BYTES = 4096;
-/** The record (control/src/record.rs): 220 bytes, sequence number at 212, CRC-32 at 216. */
-const RECORD_BYTES = 220;
-const SEQUENCE_AT = 212;
-const CRC_AT = 216;
+/** The record (control/src/record.rs): 236 bytes, sequence number at 228, CRC-32 at 232. */
+const RECORD_BYTES = 236;
+const SEQUENCE_AT = 228;
+const CRC_AT = 232;
 const NOTHING_SAVED = '# warning: no settings saved in flash; using the defaults';
 const USING_DEFAULTS = /^# warning: .*using the defaults$/;
 const OTHER_COPY = new RegExp(
@@ -167,8 +167,8 @@ test('save while moving is error:busy and writes nothing', () => {
 
 /**
  * Every step of a save a power cut can fall on, with what the documented layout says the next
- * power-up loads: the old settings until the record is complete to its last byte (220 bytes,
- * the sequence number at 212 and the CRC last), the new ones from then on.
+ * power-up loads: the old settings until the record is complete to its last byte (236 bytes,
+ * the sequence number at 228 and the CRC last), the new ones from then on.
  */
 const CUTS = [
   { routine: 'erase', bytes: 0, loads: 'old', what: 'before the erase' },
