@@ -132,6 +132,7 @@ mod tests {
             data: text.lines().map(str::to_string).collect(),
             notices: vec![],
             last: "ok".into(),
+            at: std::time::Instant::now(),
         }
     }
 
@@ -168,6 +169,7 @@ mod tests {
             ],
             notices: vec![],
             last: "ok".into(),
+            at: std::time::Instant::now(),
         };
         let c = stream_counters(&reply).unwrap();
         assert_eq!((c.frames, c.applied, c.damaged, c.clamped), (12, 10, 1, 2));

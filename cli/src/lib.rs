@@ -7,6 +7,9 @@
 //! - [`link`]: a serial link to a board, honouring its protocol; [`board`]: what its replies
 //!   say (`config` as settings, `status`'s counters);
 //! - [`configure`]: `init`, `apply`, `pull`, `send`, `shell`;
+//! - [`trajectory`]: trajectory CSV files, and each row as the board will get it, checked;
+//!   [`demo`]: built-in trajectories; [`streamer`]: sending them at their own timing;
+//!   [`drive`]: `stream` and `demo`;
 //! - [`flash_image`]: `uf2`, with the settings sectors written as the board's `save` does;
 //! - [`elf`]: the load segments of an ELF file, where a programmer writes them;
 //! - [`uf2`]: a UF2 file of those segments, for the RP2040's USB drag-and-drop bootloader, and
@@ -15,8 +18,12 @@
 pub mod board;
 pub mod build_file;
 pub mod configure;
+pub mod demo;
+pub mod drive;
 pub mod elf;
 pub mod flash_image;
 pub mod link;
 pub mod messages;
+pub mod streamer;
+pub mod trajectory;
 pub mod uf2;

@@ -57,6 +57,8 @@ pub struct Reply {
     pub notices: Vec<String>,
     /// The final reply: `ok` or `error:<code> <message>`.
     pub last: String,
+    /// When the final reply arrived.
+    pub at: Instant,
 }
 
 impl Reply {
@@ -182,11 +184,17 @@ impl Link {
     /// documentation).
     pub fn request(&mut self, line: &str) -> Result<Reply, Problem> {
         self.send_line(line)?;
+        self.read_reply(line)
+    }
+
+    /// Reads the reply to `line`, just sent.
+    pub fn read_reply(&mut self, line: &str) -> Result<Reply, Problem> {
         let until = Instant::now() + self.timeout;
         let mut reply = Reply {
             data: Vec::new(),
             notices: Vec::new(),
             last: String::new(),
+            at: Instant::now(),
         };
         loop {
             let Some(received) = self.next_line(until)? else {
@@ -195,6 +203,7 @@ impl Link {
             let text = received.line;
             if is_final(&text) {
                 reply.last = text;
+                reply.at = received.at;
                 return Ok(reply);
             }
             if is_notice(&text) {
@@ -230,6 +239,7 @@ impl Link {
                 }
                 if ours.is_none() {
                     ours = Some(text);
+                    reply.at = received.at;
                 }
             } else if is_notice(&text) {
                 reply.notices.push(text);

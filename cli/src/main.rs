@@ -10,7 +10,8 @@ use clap::{Args, Parser, Subcommand};
 
 use cli::link::Link;
 use cli::messages::Problem;
-use cli::{configure, flash_image};
+use cli::trajectory::Mode;
+use cli::{configure, demo, drive, flash_image, streamer};
 
 #[derive(Parser)]
 #[command(
@@ -75,6 +76,49 @@ enum Command {
         port: Port,
     },
 
+    /// Stream a trajectory (CSV: time,x,y,z,roll,pitch,yaw in s, mm, degrees) at its own
+    /// timing; every row is checked against the board's settings before anything is sent
+    Stream {
+        /// The trajectory file
+        file: PathBuf,
+        #[command(flatten)]
+        port: Port,
+        #[command(flatten)]
+        stream: StreamOptions,
+    },
+    /// Built-in trajectories, streamed to a board (--port) or written as CSV (--output)
+    Demo {
+        /// Which
+        #[arg(value_enum)]
+        kind: demo::Kind,
+        #[command(flatten)]
+        port: OptionalPort,
+        /// Write the trajectory to this CSV file instead
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+        /// The platform (a build file) the CSV is checked against; the default platform
+        /// without it (a board's own settings when streaming)
+        #[arg(long)]
+        settings: Option<PathBuf>,
+        /// Radius or amplitude, mm (the tour: the farthest it goes)
+        #[arg(long, default_value_t = 10.0)]
+        amplitude_mm: f64,
+        /// One turn or sine period, s
+        #[arg(long, default_value_t = 4.0)]
+        period_s: f64,
+        /// Length, s
+        #[arg(long, default_value_t = 12.0)]
+        duration_s: f64,
+        /// Rows per second, Hz
+        #[arg(long, default_value_t = 50.0)]
+        rate_hz: f64,
+        /// The tour keeps within this fraction of the reach
+        #[arg(long, default_value_t = 0.9)]
+        edge_fraction: f64,
+        #[command(flatten)]
+        stream: StreamOptions,
+    },
+
     // Flash it.
     /// Write a UF2 file of the firmware (and, with --settings, of a build file's settings):
     /// hold BOOTSEL while plugging the Pico in, then copy the file onto the RPI-RP2 drive
@@ -111,6 +155,36 @@ struct OptionalPort {
     port: Option<String>,
     #[command(flatten)]
     link: LinkOptions,
+}
+
+#[derive(Args)]
+struct StreamOptions {
+    /// Send `pose` lines, each answered (round trip per row), instead of binary frames
+    #[arg(long)]
+    text: bool,
+    /// A row sent later than this after its time counts as late, ms
+    #[arg(long, default_value_t = 10.0)]
+    late_ms: f64,
+    /// How often a `status` is sent during a binary stream (its round trip is measured), s
+    #[arg(long, default_value_t = 0.5)]
+    status_every_s: f64,
+}
+
+impl StreamOptions {
+    fn options(&self) -> Result<streamer::Options, Problem> {
+        let duration = |option: &'static str, seconds: f64| {
+            Duration::try_from_secs_f64(seconds).map_err(|e| Problem::Option {
+                option,
+                why: e.to_string(),
+            })
+        };
+        Ok(streamer::Options {
+            mode: if self.text { Mode::Text } else { Mode::Binary },
+            status_every: duration("--status-every-s", self.status_every_s)?,
+            late_after: duration("--late-ms", self.late_ms / 1e3)?,
+            progress: true,
+        })
+    }
 }
 
 #[derive(Args)]
@@ -165,6 +239,44 @@ fn main() -> ExitCode {
             .open(&port.port)
             .and_then(|mut link| configure::shell(&mut link))
             .map(|()| String::new()),
+        Command::Stream { file, port, stream } => stream.options().and_then(|options| {
+            let mut link = port.link.open(&port.port)?;
+            drive::stream(&mut link, &file, &options)
+        }),
+        Command::Demo {
+            kind,
+            port,
+            output,
+            settings,
+            amplitude_mm,
+            period_s,
+            duration_s,
+            rate_hz,
+            edge_fraction,
+            stream,
+        } => stream.options().and_then(|options| {
+            let shape = demo::Shape {
+                kind,
+                amplitude_mm,
+                period_s,
+                duration_s,
+                rate_hz,
+                ramp_s: period_s.min(duration_s / 4.0),
+                edge_fraction,
+            };
+            demo::check(&shape)?;
+            let mut link = match &port.port {
+                Some(name) => Some(port.link.open(name)?),
+                None => None,
+            };
+            drive::demo(
+                &shape,
+                link.as_mut(),
+                output.as_deref(),
+                settings.as_deref(),
+                &options,
+            )
+        }),
         Command::Uf2 {
             elf,
             output,

@@ -88,6 +88,19 @@ pub enum Problem {
         /// Why.
         why: String,
     },
+    /// A stream that ended with rows refused, frames lost or notices (the summary says which).
+    StreamTrouble {
+        /// The trajectory.
+        file: String,
+        /// Rows (or `status` lines) refused.
+        refused: usize,
+        /// Notices the board sent (`# warning: ...`).
+        notices: usize,
+        /// Frames the board did not count as received whole (damaged or never seen).
+        lost_frames: u64,
+        /// Frames the board refused (e-stop).
+        refused_frames: u64,
+    },
     /// A pose the platform cannot take (the board's words for why).
     Pose {
         /// The pose, as typed.
@@ -291,6 +304,16 @@ impl Display for Problem {
             Problem::Elf { path, why } => write!(f, "{path}: {why}"),
             Problem::Option { option, why } => write!(f, "{option}: {why}"),
             Problem::Pose { pose, why } => write!(f, "pose {pose}: {why}"),
+            Problem::StreamTrouble {
+                file,
+                refused,
+                notices,
+                lost_frames,
+                refused_frames,
+            } => write!(
+                f,
+                "{file}: the stream did not go through whole: {refused} lines refused,                  {lost_frames} frames damaged or lost, {refused_frames} frames refused,                  {notices} notices from the board (see above)"
+            ),
         }
     }
 }
@@ -428,3 +451,94 @@ pub fn storage_problem(e: &crate::flash_image::StorageError) -> String {
         ),
     }
 }
+
+/// The progress bar of `stream` (indicatif's template).
+pub const PROGRESS_TEMPLATE: &str = "{bar:40} {pos}/{len} rows  {elapsed_precise}";
+
+/// A row the board refused during a stream.
+pub fn row_refused(line: u64, sent: &str, reply: &str) -> String {
+    format!("line {line}: the board refused '{sent}': {reply}")
+}
+
+/// The summary of a stream.
+pub fn stream_summary(file: &str, port: &str, s: &crate::streamer::Summary) -> String {
+    use crate::streamer::min_median_max;
+    use crate::trajectory::Mode;
+    let mut out = String::new();
+    let how = match s.mode {
+        Mode::Binary => "binary frames",
+        Mode::Text => "pose lines",
+    };
+    out += &format!(
+        "{file}: {} rows sent to {port} as {how} in {:.2} s\n",
+        s.sent, s.duration_s
+    );
+    match (s.mode, &s.counters) {
+        (Mode::Binary, Some(c)) => {
+            out += &format!(
+                "  frames sent: {}; the board counted frames={} applied={} damaged={} \
+                 clamped={} refused={}\n",
+                s.sent, c.frames, c.applied, c.damaged, c.clamped, c.refused
+            );
+        }
+        _ => {
+            out += &format!(
+                "  lines sent: {}, ok: {}, refused: {}\n",
+                s.sent,
+                s.sent - s.refusals.len(),
+                s.refusals.len()
+            );
+        }
+    }
+    let what = match s.mode {
+        Mode::Binary => {
+            "status lines sent during the stream, line to reply; frames get no \
+                         reply, so their own latency cannot be seen from the host"
+        }
+        Mode::Text => "each pose line to its reply",
+    };
+    match min_median_max(&s.round_trips_ms) {
+        Some((min, median, max)) => {
+            out += &format!(
+                "  round trip ({what}): {} samples, min {min:.2} ms, median {median:.2} ms, \
+                 max {max:.2} ms\n",
+                s.round_trips_ms.len()
+            )
+        }
+        None => out += &format!("  round trip ({what}): no samples\n"),
+    }
+    out += &format!(
+        "  late rows (sent more than {:.1} ms after their time): {} (latest {:.2} ms)\n",
+        s.late_after_ms, s.late, s.worst_late_ms
+    );
+    let errors = s.refusals.len() + s.notices.len();
+    out += &format!("  errors: {errors}");
+    if let Some(first) = s.refusals.first() {
+        out += &format!(" (first: line {}: {})", first.line, first.reply);
+    } else if let Some(first) = s.notices.first() {
+        out += &format!(" (first: {first})");
+    }
+    out
+}
+
+/// What a demo is called in messages (its rows' "file").
+pub fn demo_name(kind: crate::demo::Kind) -> String {
+    use clap::ValueEnum;
+    let name = kind
+        .to_possible_value()
+        .map_or_else(|| "?".to_string(), |v| v.get_name().to_string());
+    format!("demo {name}")
+}
+
+/// `demo` with neither a port nor an output file.
+pub const DEMO_NEEDS_A_PLACE: &str =
+    "give --port PORT to stream the demo to a board, or --output FILE.csv to write it";
+
+/// `demo`: a time that is not positive.
+pub const MUST_BE_POSITIVE: &str = "must be a positive number of seconds";
+/// `demo`: the row rate.
+pub const RATE_RANGE: &str = "must be 1..1000 rows per second";
+/// `demo`: the size.
+pub const AMPLITUDE_RANGE: &str = "must be 0..500 mm";
+/// `demo`: the tour's fraction of the reach.
+pub const FRACTION_RANGE: &str = "must be more than 0 and at most 1";
