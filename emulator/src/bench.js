@@ -20,7 +20,7 @@ import {
   measureWorstCommand,
   stackHighWaterBytes,
 } from './firmware-bench.js';
-import { benchPoses, profileIk, runIkBench } from './ik-bench.js';
+import { benchPoses, profileIk, runIkBench, runKinematicsBench } from './ik-bench.js';
 
 const REPO = join(dirname(fileURLToPath(import.meta.url)), '..', '..');
 const CLOCK_HZ = 125e6;
@@ -77,6 +77,20 @@ if (ik.failures.length > 0) {
 }
 
 const profile = profileIk(poses.slice(0, 5));
+
+// ---- the rest of the kinematics ----
+const LIMITS_POSES = 20;
+log('forward kinematics, Jacobian, torque, limits ...');
+const kin = runKinematicsBench(poses, { limitsPoses: LIMITS_POSES });
+const kinParts = { fk: kin.fk, jacobian: kin.jacobian, torque: kin.torque };
+for (const [name, part] of Object.entries(kinParts)) {
+  if (part.failures > 0) {
+    throw new Error(`${name}: the chip failed on ${part.failures} poses the host solved`);
+  }
+}
+const histogram = Object.entries(kin.fk.histogram)
+  .map(([n, count]) => `${count} in ${n}`)
+  .join(', ');
 
 // ---- latency ----
 log('latency ...');
@@ -195,6 +209,34 @@ Accuracy, largest pulse-width difference over the ${ik.poses} poses:
 Target: at most 0.01 us (one PWM count is 0.32 us). The ROM's routines against \`libm\` on the
 chip: sin ${ik.mathDiff.sin.toExponential(1)}, cos (left in r1 by \`fsin\`) ${ik.mathDiff.cos.toExponential(1)}, sqrt ${ik.mathDiff.sqrt.toExponential(1)} (relative), atan2 ${ik.mathDiff.atan2.toExponential(1)} rad.
 
+## The rest of the kinematics
+
+The same benchmark firmware and poses, each computation with \`RomMath\` bracketed by the
+marker like the IK (\`firmware/src/bin/bench.rs\`, commands \`f\`, \`j\`, \`q\`, \`w\`):
+
+| | cycles, mean | min | max | ms at 125 MHz (mean) |
+|---|---:|---:|---:|---:|
+| forward kinematics: six pulses -> pose, from the previous frame's pose (\`forward::Closure::pulses\` + \`forward::solve\`; ${fmt(kin.fk.iterations.mean, 2)} iterations on average, at most ${kin.fk.iterations.max}: ${histogram}) | ${fmt(kin.fk.mean)} | ${fmt(kin.fk.min)} | ${fmt(kin.fk.max)} | ${fmt(us(kin.fk.mean) / 1000, 3)} |
+| servo Jacobian (\`jacobian::Jacobian::at\`: the IK, the arm tips, six rows) | ${fmt(kin.jacobian.mean)} | ${fmt(kin.jacobian.min)} | ${fmt(kin.jacobian.max)} | ${fmt(us(kin.jacobian.mean) / 1000, 3)} |
+| holding torques of a payload from the pose (\`statics::holding_loads\`: the IK, the Jacobian, a 6x6 solve) | ${fmt(kin.torque.mean)} | ${fmt(kin.torque.min)} | ${fmt(kin.torque.max)} | ${fmt(us(kin.torque.mean) / 1000, 3)} |
+| the same from the IK's arm angles (\`statics::servo_holding_torques\`, no IK) | ${fmt(kin.torque.fromAngles.mean)} | ${fmt(kin.torque.fromAngles.min)} | ${fmt(kin.torque.fromAngles.max)} | ${fmt(us(kin.torque.fromAngles.mean) / 1000, 3)} |
+| \`limits\`: the reach along all 12 axis-directions within the servo limits (\`workspace::Limits\`, ${fmt(kin.limits.tests.mean)} IKs on average, ${kin.limits.tests.min} to ${kin.limits.tests.max}; first ${kin.limits.poses} poses) | ${fmt(kin.limits.mean)} | ${fmt(kin.limits.min)} | ${fmt(kin.limits.max)} | ${fmt(us(kin.limits.mean) / 1000, 1)} |
+
+Targets: forward kinematics under 150,000 cycles (1.2 ms), in at most 8 iterations. Each
+iteration evaluates the six closures (no IK) and at most one Jacobian and one 6x6
+factorisation, so a firmware can run one per main-loop pass (\`forward::Newton::step\`), and
+\`limits\` one IK per step (\`workspace::Limits::step\`).
+
+Accuracy on the chip, against the f64 reference (\`host-tests\`, via \`bench_poses\`):
+
+| | largest error |
+|---|---:|
+| forward kinematics from the f64 reference's pulses, vs the pose they came from | ${kin.fk.worstMm.toExponential(1)} mm, ${kin.fk.worstRad.toExponential(1)} rad (per coordinate) |
+| servo Jacobian vs f64 central finite differences (per row and half, relative to its largest entry) | ${kin.jacobian.worst.toExponential(1)} |
+| holding torques vs f64 \`J^T tau = w\` with a finite-difference \`J\` (relative to the largest) | ${kin.torque.worst.toExponential(1)} |
+
+Payload of the torque benchmark: 1 kg, 30 mm above the platform's centre.
+
 ## Command to output
 
 The real firmware (\`target/thumbv6m-none-eabi/release/firmware\`), echo off, speed limits off
@@ -309,11 +351,15 @@ ${Object.entries(storageSymbols)
 node emulator/src/bench.js --poses 1000 --seed 7   # more poses, another seed
 \`\`\`
 
-Files: \`firmware/src/bin/bench.rs\` (IK benchmark firmware), \`host-tests/examples/bench_poses.rs\`
-(poses and f64 reference pulses), \`emulator/src/ik-bench.js\`, \`emulator/src/firmware-bench.js\`,
+Files: \`firmware/src/bin/bench.rs\` (IK and kinematics benchmark firmware),
+\`host-tests/examples/bench_poses.rs\` (poses, f64 reference pulses, Jacobians and torques), \`emulator/src/ik-bench.js\`, \`emulator/src/firmware-bench.js\`,
 \`emulator/src/bench.js\` (this report). \`emulator/test/rom-math.test.js\` runs a small IK
 comparison in \`./dev test\` (no timing assertions).
 `;
 writeFileSync(args.out, report);
 log(`wrote ${rel(args.out)}`);
+log(
+  `FK ${fmt(kin.fk.mean)} cycles (${fmt(kin.fk.iterations.mean, 2)} iterations), ` +
+    `Jacobian ${fmt(kin.jacobian.mean)}, torque ${fmt(kin.torque.mean)}, limits ${fmt(kin.limits.mean)}`,
+);
 log(`IK ${fmt(ik.rom.mean)} cycles (libm ${fmt(ik.libm.mean)}), max error ${ik.worst.romVsRef.toExponential(2)} us; latency ${fmt(small.mean)} us; sustained ${best ? fmt(best.linesPerSecond) : 'none'} lines/s; worst command ${fmt(worst.micros / 1000, 1)} ms`);

@@ -169,3 +169,128 @@ export function profileIk(poses, { elf = BENCH_ELF } = {}) {
     .map(([name, { cycles, calls }]) => ({ name, cycles: cycles / poses.length, calls: calls / poses.length }))
     .sort((a, b) => b.cycles - a.cycles);
 }
+
+/** Cycles of each marker bracket after the first, minus the first (the empty one). */
+function measuredBrackets(edges, count, what) {
+  const highs = [];
+  for (let i = 0; i + 1 < edges.length; i += 2) {
+    highs.push(edges[i + 1].cycles - edges[i].cycles);
+  }
+  if (highs.length !== count + 1) {
+    throw new Error(`${what}: expected ${count + 1} marker pulses, saw ${highs.length}`);
+  }
+  return highs.slice(1).map((h) => h - highs[0]);
+}
+
+const words = (line) => line.split(' ');
+const floats = (list) => list.map(bitsToF32);
+
+/**
+ * The rest of the kinematics on the chip, with the firmware's ROM maths (see
+ * `firmware/src/bin/bench.rs`): per pose, the forward kinematics from the f64 reference's
+ * pulses starting a frame's step away, the servo Jacobian and the holding torques of the
+ * benchmark payload; on the first `limitsPoses` poses the twelve excursions (`limits`).
+ * Returns cycle statistics and the largest errors against the f64 reference (the pose itself
+ * for the forward kinematics; `ref_j`, `ref_torque` from `bench_poses`).
+ */
+export function runKinematicsBench(poses, { elf = BENCH_ELF, limitsPoses = 20 } = {}) {
+  const board = new EmulatedBoard({ elf });
+  const edges = [];
+  board.mcu.gpio[MARKER_GPIO].addListener((state) => edges.push({ state, cycles: board.cycles }));
+  board.waitForLine(/^bench ready/, { timeoutMs: 1000 });
+  const ask = (line, prefix, { timeoutMs = 2000, brackets = 1 } = {}) => {
+    edges.length = 0;
+    const final = new RegExp(`^(${prefix} |error)`);
+    const reply = board.request(line, { final, timeoutMs }).reply;
+    if (!reply.startsWith(`${prefix} `)) {
+      throw new Error(`${line}: ${reply}`);
+    }
+    const cycles = measuredBrackets(edges, brackets, line);
+    return { reply: words(reply).slice(1), cycles: cycles[0], more: cycles.slice(1) };
+  };
+  const fk = { cycles: [], iterations: [], failures: 0, worstMm: 0, worstRad: 0 };
+  const jac = { cycles: [], failures: 0, worst: 0 };
+  const torque = { cycles: [], fromAngles: [], failures: 0, worst: 0 };
+  const limits = { cycles: [], tests: [] };
+  for (const [index, pose] of poses.entries()) {
+    const f = ask(`f ${[...pose.ref_us_bits, ...pose.start_bits].join(' ')}`, 'f');
+    if (f.reply[0] === 'x') {
+      fk.failures++;
+    } else {
+      const found = floats(f.reply.slice(0, 6));
+      fk.cycles.push(f.cycles);
+      fk.iterations.push(Number(f.reply[6].slice(2)));
+      for (let k = 0; k < 6; k++) {
+        const d = Math.abs(found[k] - pose.pose[k]);
+        if (k < 3) {
+          fk.worstMm = Math.max(fk.worstMm, d);
+        } else {
+          fk.worstRad = Math.max(fk.worstRad, d);
+        }
+      }
+    }
+    const j = ask(`j ${pose.pose_bits.join(' ')}`, 'j');
+    if (j.reply[0] === 'x') {
+      jac.failures++;
+    } else {
+      jac.cycles.push(j.cycles);
+      const values = floats(j.reply);
+      // Per row and per half (per mm, per rad): the error relative to the half's largest entry.
+      for (let row = 0; row < 6; row++) {
+        for (const [from, to] of [[0, 3], [3, 6]]) {
+          let scale = 0;
+          let error = 0;
+          for (let k = from; k < to; k++) {
+            scale = Math.max(scale, Math.abs(pose.ref_j[6 * row + k]));
+            error = Math.max(error, Math.abs(values[6 * row + k] - pose.ref_j[6 * row + k]));
+          }
+          jac.worst = Math.max(jac.worst, error / scale);
+        }
+      }
+    }
+    const q = ask(`q ${pose.pose_bits.join(' ')}`, 'q', { brackets: 2 });
+    if (q.reply[0] === 'x') {
+      torque.failures++;
+    } else {
+      torque.cycles.push(q.cycles);
+      torque.fromAngles.push(q.more[0]);
+      const values = floats(q.reply);
+      const scale = Math.max(...pose.ref_torque.map(Math.abs));
+      for (let i = 0; i < 12; i++) {
+        torque.worst = Math.max(torque.worst, Math.abs(values[i] - pose.ref_torque[i % 6]) / scale);
+      }
+    }
+    if (index < limitsPoses) {
+      const w = ask(`w ${pose.pose_bits.join(' ')}`, 'w', { timeoutMs: 60000 });
+      limits.cycles.push(w.cycles);
+      limits.tests.push(Number(w.reply[12].slice(2)));
+    }
+  }
+  const histogram = {};
+  for (const n of fk.iterations) {
+    histogram[n] = (histogram[n] ?? 0) + 1;
+  }
+  return {
+    poses: poses.length,
+    fk: {
+      ...summary(fk.cycles),
+      iterations: summary(fk.iterations),
+      histogram,
+      failures: fk.failures,
+      worstMm: fk.worstMm,
+      worstRad: fk.worstRad,
+    },
+    jacobian: { ...summary(jac.cycles), failures: jac.failures, worst: jac.worst },
+    torque: {
+      ...summary(torque.cycles),
+      fromAngles: summary(torque.fromAngles),
+      failures: torque.failures,
+      worst: torque.worst,
+    },
+    limits: {
+      ...summary(limits.cycles),
+      poses: limits.cycles.length,
+      tests: summary(limits.tests),
+    },
+  };
+}

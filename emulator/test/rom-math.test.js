@@ -7,15 +7,18 @@ import assert from 'node:assert/strict';
 import { existsSync } from 'node:fs';
 import { before, test } from 'node:test';
 
-import { BENCH_ELF, benchPoses, runIkBench } from '../src/ik-bench.js';
+import { BENCH_ELF, benchPoses, runIkBench, runKinematicsBench } from '../src/ik-bench.js';
 
 /** Largest pulse difference accepted, us (the PWM resolution is 0.32 us). */
 const PULSE_TOL_US = 0.01;
 
 let result;
+let kinematics;
 before(() => {
   assert.ok(existsSync(BENCH_ELF), `no benchmark ELF at ${BENCH_ELF}: build it with \`cargo fw\``);
-  result = runIkBench(benchPoses(12, 2024));
+  const poses = benchPoses(12, 2024);
+  result = runIkBench(poses);
+  kinematics = runKinematicsBench(poses.slice(0, 6), { limitsPoses: 1 });
 });
 
 test('the chip solves every pose the host solves', () => {
@@ -36,4 +39,17 @@ test('fsin leaves the cosine in r1, and the ROM routines match libm', () => {
   for (const [name, value] of Object.entries({ sin, cos, sqrt, atan2 })) {
     assert.ok(Number.isFinite(value) && value <= 1e-6, `${name}: ${value}`);
   }
+});
+
+test('the rest of the kinematics on the chip agrees with the f64 reference', () => {
+  // Forward kinematics from the reference's pulses back to their pose, a frame's step away
+  // (the bound of host-tests/tests/forward.rs), the Jacobian against finite differences, the
+  // torques against an f64 solve (see emulator/src/ik-bench.js).
+  const { fk, jacobian, torque, limits } = kinematics;
+  assert.equal(fk.failures + jacobian.failures + torque.failures, 0);
+  assert.ok(fk.iterations.max <= 8, `${fk.iterations.max} iterations`);
+  assert.ok(fk.worstMm <= 1e-3 && fk.worstRad <= 1e-4, `${fk.worstMm} mm, ${fk.worstRad} rad`);
+  assert.ok(jacobian.worst <= 1e-4, `Jacobian: ${jacobian.worst}`);
+  assert.ok(torque.worst <= 1e-4, `torque: ${torque.worst}`);
+  assert.equal(limits.poses, 1);
 });

@@ -1,7 +1,9 @@
 //! Geometries, a seeded random number generator and pose samplers shared by the tests.
 
+use kinematics_core::configuration::{CubicConfiguration, GeneralConfiguration};
 use kinematics_core::geometry::{CircularLayout, PairedLayout};
-use kinematics_core::{Geometry, Pose};
+use kinematics_core::legs::Struts;
+use kinematics_core::{Geometry, Pose, Vec3};
 
 /// The angles of the general circular configuration of the Stewart platform Simscape model
 /// documentation, degrees: servo shafts...
@@ -166,4 +168,73 @@ impl Rng {
             v[5] as f32,
         )
     }
+}
+
+/// Rotation centres the tests try (platform frame, mm): the platform frame's origin, the
+/// Simscape documentation's default {B} 50 mm above it, a point below and off-axis (a motion
+/// platform's pivot under a seat), and one far below.
+pub const CENTRES_MM: [[f32; 3]; 4] = [
+    [0.0, 0.0, 0.0],
+    [0.0, 0.0, 50.0],
+    [12.0, -7.5, -35.0],
+    [0.0, 0.0, -118.0],
+];
+
+/// A named strut platform with the pose box it is exercised over.
+#[derive(Debug, Clone)]
+pub struct StrutCase {
+    /// What it is.
+    pub name: &'static str,
+    /// The struts.
+    pub struts: Struts,
+    /// Half-widths of the pose box: mm for x, y, z and degrees for roll, pitch, yaw.
+    pub range: [f64; 6],
+}
+
+/// The strut platforms the tests run on: the Simscape documentation's general configuration
+/// (its 90 mm height), the same with its default frame {B} 50 mm above the platform, its cubic
+/// configuration turning about the cube's centre, and the default servo build's anchors as
+/// struts.
+pub fn strut_cases() -> Vec<StrutCase> {
+    let general = Struts::from_general(&GeneralConfiguration::SIMSCAPE, 90.0).expect("valid");
+    let mut general_b = general;
+    general_b
+        .set_rotation_centre_mm(Vec3::new(0.0, 0.0, 50.0))
+        .expect("valid");
+    let cube = CubicConfiguration::SIMSCAPE;
+    let mut cubic = Struts::from_cubic(&cube).expect("valid");
+    cubic
+        .set_rotation_centre_mm(cube.cube_centre_mm())
+        .expect("valid");
+    let g = Geometry::default();
+    let legs = g.legs();
+    let paired = Struts::new(
+        core::array::from_fn(|i| legs[i].base_mm),
+        core::array::from_fn(|i| legs[i].platform_mm),
+        g.home_height_mm(),
+    )
+    .expect("valid");
+    let range = [10.0, 10.0, 8.0, 6.0, 6.0, 10.0];
+    vec![
+        StrutCase {
+            name: "Simscape general, H 90",
+            struts: general,
+            range,
+        },
+        StrutCase {
+            name: "Simscape general, centre at {B} (+50)",
+            struts: general_b,
+            range,
+        },
+        StrutCase {
+            name: "Simscape cubic, centre at the cube's",
+            struts: cubic,
+            range,
+        },
+        StrutCase {
+            name: "default servo build's anchors as struts",
+            struts: paired,
+            range: [15.0, 15.0, 12.0, 8.0, 8.0, 15.0],
+        },
+    ]
 }

@@ -3,6 +3,8 @@
 //! For each leg ("The Mathematics of the Stewart Platform"):
 //! - eq. 1: `R = Rz(yaw) Ry(pitch) Rx(roll)`;
 //! - eq. 2, 3: platform joint `q_i = T + R p_i` with `T = (x, y, h0 + z)`, leg `l_i = q_i - b_i`;
+//!   with a rotation centre `c` set (see [`crate::configuration`]) the platform turns about it
+//!   and `T = (x, y, h0 + z) + c - R c`: one rotation of `c` per pose, none with `c = 0`;
 //! - eq. 9: the arm tip `A(alpha) = b + a (cos(alpha) cos(beta), cos(alpha) sin(beta), sin(alpha))`
 //!   is at rod length `s` from `q` exactly when `L = M sin(alpha) + N cos(alpha)` with
 //!   `L = |l|^2 - (s^2 - a^2)`, `M = 2a l_z`, `N = 2a (cos(beta) l_x + sin(beta) l_y)`.
@@ -30,6 +32,7 @@
 use core::f32::consts::PI;
 use core::fmt;
 
+use crate::configuration::{check_centre, Anchors, ConfigurationError};
 use crate::fixed::{
     from_fixed_sq, mul_mm, rotate_mm, to_fixed, to_fixed_sq, MAX_FIXED_MM, MAX_FIXED_ROD_TERM_MM2,
     MAX_FIXED_TWO_ARM_MM, MAX_ROTATION_ENTRY, MM_FRAC, ROT_FRAC,
@@ -201,8 +204,9 @@ struct LegConstants {
 }
 
 /// The IK of one geometry: the geometry, its home arm angles, the per-leg constants the IK
-/// needs on every pose, computed once by [`Solver::new`], and the solving itself
-/// ([`Solver::solve`], [`Solver::arm_angles`]).
+/// needs on every pose, computed once by [`Solver::new`], the rotation centre
+/// ([`Solver::set_rotation_centre_mm`], the platform frame's origin by default), and the
+/// solving itself ([`Solver::solve`], [`Solver::arm_angles`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Solver {
     geometry: Geometry,
@@ -223,6 +227,17 @@ pub struct Solver {
     /// Planar, every `p_i` and offset coordinate within `fixed::MAX_FIXED_MM`, `2a` and
     /// `s^2 - a^2` within their bounds: the IK may compute `l`, `L`, `M`, `N` in fixed point.
     fixed_point: bool,
+    /// The rotation centre `c`, platform frame, mm (module `configuration`): the platform turns
+    /// about it and a pose's `(x, y, z)` is how far it moved from home.
+    centre_mm: [f32; 3],
+    /// `c != 0`: the IK adds `c - R c` to the pose's translation (one rotation of `c` per
+    /// pose); with `c = 0` it does nothing more than before.
+    centred: bool,
+    /// The IK needs `R`'s third column: the platform is not planar or `c` has a `z`.
+    full_rotation: bool,
+    /// `(cos(beta_i), sin(beta_i))` with the `M` of [`Solver::new_with`]: the direction of arm
+    /// `i`'s plane (for the arm tip of eq. 4-6 outside the hot loop).
+    arm_planes: [[f32; 2]; LEGS],
 }
 
 /// The pose's part of eq. 2, 3 in fixed point: the first two columns of `R` (`fixed::ROT_FRAC`
@@ -256,7 +271,12 @@ impl Solver {
             planar_platform: legs.iter().all(|leg| leg.platform_mm.z == 0.0),
             flat_base: legs.iter().all(|leg| leg.base_mm.z == legs[0].base_mm.z),
             fixed_point: false,
+            centre_mm: [0.0; 3],
+            centred: false,
+            full_rotation: false,
+            arm_planes: [[1.0, 0.0]; LEGS],
         };
+        solver.full_rotation = !solver.planar_platform;
         let two_arm_mm = solver.two_arm_mm;
         let rod_term_mm2 =
             f64::from(rod_mm) * f64::from(rod_mm) - f64::from(arm_mm) * f64::from(arm_mm);
@@ -266,8 +286,14 @@ impl Solver {
             solver.two_arm_q = to_fixed(two_arm_mm, MM_FRAC);
             solver.rod_term_q = to_fixed_sq(rod_term_mm2);
         }
-        for (c, leg) in solver.constants.iter_mut().zip(legs.iter()) {
+        for ((c, leg), plane) in solver
+            .constants
+            .iter_mut()
+            .zip(legs.iter())
+            .zip(solver.arm_planes.iter_mut())
+        {
             let (sin_beta, cos_beta) = M::sin_cos(leg.beta_rad);
+            *plane = [cos_beta, sin_beta];
             c.platform_mm = leg.platform_mm.into();
             c.offset_mm = [
                 -leg.base_mm.x,
@@ -313,14 +339,61 @@ impl Solver {
         self.constants[index].alpha0_rad
     }
 
+    /// The home arm angles `alpha0` (eq. 12) of all legs, rad.
+    pub fn alpha0s_rad(&self) -> [f32; LEGS] {
+        core::array::from_fn(|i| self.constants[i].alpha0_rad)
+    }
+
+    /// `(cos(beta_i), sin(beta_i))` of leg `index` (0..=5): the direction of its arm's plane.
+    pub fn arm_plane(&self, index: usize) -> [f32; 2] {
+        self.arm_planes[index]
+    }
+
+    /// The rotation centre `c`, platform frame, mm (see [`crate::configuration`]).
+    pub fn rotation_centre_mm(&self) -> Vec3 {
+        Vec3::from(self.centre_mm)
+    }
+
+    /// Sets the rotation centre `c` (platform frame, mm): from now on the platform turns about
+    /// it, and a pose's `(x, y, z)` is how far `c` moved from its home position. The geometry,
+    /// the home pose and `alpha0` do not change (at home `R = I`). Refused if not finite or
+    /// farther than [`crate::configuration::MAX_CENTRE_MM`] from the platform frame's origin.
+    pub fn set_rotation_centre_mm(&mut self, centre_mm: Vec3) -> Result<(), ConfigurationError> {
+        let c = check_centre(centre_mm)?;
+        self.centre_mm = c.into();
+        self.centred = c != Vec3::zeros();
+        self.full_rotation = !self.planar_platform || c.z != 0.0;
+        Ok(())
+    }
+
+    /// [`Solver::set_rotation_centre_mm`], by value.
+    pub fn with_rotation_centre_mm(
+        mut self,
+        centre_mm: Vec3,
+    ) -> Result<Solver, ConfigurationError> {
+        self.set_rotation_centre_mm(centre_mm)?;
+        Ok(self)
+    }
+
+    /// The anchors this solver works with: servo shafts, platform joints, `h0`, the rotation
+    /// centre (for the kinematics outside the IK: Jacobian, statics, forward kinematics).
+    pub fn anchors(&self) -> Anchors {
+        let legs = self.geometry.legs();
+        Anchors {
+            base_mm: core::array::from_fn(|i| legs[i].base_mm),
+            platform_mm: core::array::from_fn(|i| legs[i].platform_mm),
+            home_height_mm: self.geometry.home_height_mm(),
+            rotation_centre_mm: self.rotation_centre_mm(),
+        }
+    }
+
     /// The fixed-point pose, or `None` where the float path must run: a geometry that is not
     /// planar or too large ([`Solver::fixed_point`]), or a position or rotation beyond the
     /// bounds of `fixed::MAX_FIXED_MM`.
-    fn fixed_pose(&self, pose: &Pose, r: &crate::Mat3) -> Option<FixedPose> {
+    fn fixed_pose(&self, position: [f32; 3], r: &crate::Mat3) -> Option<FixedPose> {
         if !self.fixed_point {
             return None;
         }
-        let position = [pose.x_mm, pose.y_mm, pose.z_mm];
         let rows: [[f32; 2]; 3] = core::array::from_fn(|k| [r[(k, 0)], r[(k, 1)]]);
         let in_bounds = position.iter().all(|v| below(v.abs(), MAX_FIXED_MM))
             && rows
@@ -349,16 +422,25 @@ impl Solver {
     /// the chip several times cheaper than the 3 conversions, 6 `fmul` and 6 `fadd` per leg.
     /// Integer arithmetic is the same everywhere, so the host runs it too.
     pub(crate) fn arm_angles_raw<M: Math>(&self, pose: &Pose) -> Result<[f32; LEGS], u8> {
-        let r = pose.rotation_columns::<M>(!self.planar_platform);
+        let r = pose.rotation_columns::<M>(self.full_rotation);
         let real = Real::<M>::new;
         let row = |i: usize| [real(r[(i, 0)]), real(r[(i, 1)]), real(r[(i, 2)])];
         let rows = [row(0), row(1), row(2)];
-        let position = [real(pose.x_mm), real(pose.y_mm), real(pose.z_mm)];
+        let mut translation = [pose.x_mm, pose.y_mm, pose.z_mm];
+        if self.centred {
+            // About the rotation centre c: q = T + c + R (p - c) = (T + c - R c) + R p.
+            let c = self.centre_mm.map(real);
+            for (k, t) in translation.iter_mut().enumerate() {
+                let rc = rows[k][0] * c[0] + rows[k][1] * c[1] + rows[k][2] * c[2];
+                *t = (real(*t) + (c[k] - rc)).0;
+            }
+        }
+        let position = translation.map(real);
         let rod_sq_minus_arm_sq = real(self.rod_sq_minus_arm_sq);
         let two_arm = real(self.two_arm_mm);
         // With a flat base every leg has the same z offset: `z + offset_z` once for all legs
         // (the same sum each leg would compute).
-        let fixed = self.fixed_pose(pose, &r);
+        let fixed = self.fixed_pose(translation, &r);
         let shared_z = if fixed.is_none() {
             position[2] + real(self.constants[0].offset_mm[2])
         } else {
@@ -431,6 +513,10 @@ impl Solver {
     }
 
     /// Each arm's angle from its home angle, `alpha_i - alpha0_i` wrapped into `(-pi, pi]`, rad.
+    /// Only [`Solver::solve`] calls it, so it is inlined there: [`Solver::arm_angles`] repeats
+    /// the same steps rather than call it, because a second caller made the compiler keep it
+    /// as a function of its own, which cost the firmware's IK about 400 cycles per pose on the
+    /// RP2040 (measured with `./dev bench`).
     fn arm_offsets<M: Math>(&self, pose: &Pose) -> Result<[f32; LEGS], IkError> {
         check_pose(pose)?;
         let mut alpha = self
@@ -445,9 +531,15 @@ impl Solver {
 
     /// Arm angles `alpha_i` for a pose (eq. 9), rad, each within `(-pi, pi]` of its `alpha0`.
     pub fn arm_angles<M: Math>(&self, pose: &Pose) -> Result<[f32; LEGS], IkError> {
-        let mut alpha = self.arm_offsets::<M>(pose)?;
+        // The steps of `arm_offsets`, then back from the offsets (the same operations).
+        check_pose(pose)?;
+        let mut alpha = self
+            .arm_angles_raw::<M>(pose)
+            .map_err(|leg| IkError::Unreachable { leg })?;
         for (i, a) in alpha.iter_mut().enumerate() {
-            *a = (Real::<M>::new(self.constants[i].alpha0_rad) + Real::new(*a)).0;
+            let alpha0 = Real::<M>::new(self.constants[i].alpha0_rad);
+            let offset = wrap_angle_rad::<M>((Real::new(*a) - alpha0).0);
+            *a = (alpha0 + Real::new(offset)).0;
         }
         Ok(alpha)
     }

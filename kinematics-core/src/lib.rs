@@ -1,35 +1,63 @@
-//! Inverse kinematics of a six-servo Stewart platform ("hexapod"), `no_std`, `f32`, no allocation.
+//! The kinematics of six-legged Stewart platforms ("hexapods"), `no_std`, `f32`, no allocation:
+//! RC-servo platforms (the firmware's) and platforms of linear struts.
 //!
-//! The maths follows "The Mathematics of the Stewart Platform" (a rotary RC-servo platform);
-//! equation numbers in comments are that document's. The general circular layout follows the
-//! Stewart platform Simscape model documentation. Data flows one way:
+//! The servo IK follows "The Mathematics of the Stewart Platform" (a rotary RC-servo platform);
+//! equation numbers in comments are that document's. The configurations, frames, struts,
+//! Jacobian, stiffness and approximate forward kinematics follow the Stewart platform Simscape
+//! model documentation (cited by function name), link motions and actuation the ROBOOP
+//! `LinkStewart` class reference, statics the report on a force applied at the centre of a
+//! Stewart platform, and the forward kinematics the lesson of the planar 3-RPR forward
+//! kinematics project. The servo IK's data flows one way:
 //!
 //! [`Pose`] (mm, rad) -> rotation `R` (eq. 1) -> platform joints `q_i` and leg vectors `l_i`
 //! (eq. 2, 3) -> servo arm angles `alpha_i` (eq. 9) -> pulse widths `W_i` (eq. 13, 14).
 //!
 //! - [`geometry`]: where the servos and rod joints are; derived home height `h0` (eq. 10).
+//! - [`configuration`]: the anchors of either kind of leg, the frames and the rotation centre a
+//!   pose turns the platform about; the general and cubic configuration generators.
 //! - [`pose`]: the platform pose and its rotation matrix.
 //! - [`servo`]: per-servo pulse mapping (home pulse, rate, direction, limits).
 //! - [`ik`]: pose -> arm angles -> pulse widths, all-or-nothing with errors naming the leg/servo;
-//!   an [`ik::Solver`] is the IK of one geometry: it owns it, derives the home arm angles
-//!   `alpha0` (eq. 12) and holds what it computes once per geometry.
+//!   an [`ik::Solver`] is the IK of one geometry: it owns it (and its rotation centre), derives
+//!   the home arm angles `alpha0` (eq. 12) and holds what it computes once per geometry.
+//! - [`legs`]: the legs at a pose: linear [`legs::Struts`] (lengths, unit vectors, strokes) and
+//!   servo arms ([`legs::ArmState`]); the [`legs::Actuators`] trait both implement.
+//! - [`jacobian`]: joint rates per unit twist, condition number, Euler-angle rates.
+//! - [`rates`]: joint rates from a twist and back, servo speed limits.
+//! - [`statics`]: joint forces for a wrench, holding torques of a payload, stiffness, compliance.
+//! - [`dynamics`]: link and arm motions along a trajectory, actuation with inertia.
+//! - [`forward`]: forward kinematics, approximate and by Newton's method, a step at a time.
+//! - [`workspace`]: the reach along each axis, a test at a time, and sampled grids.
+//! - [`linalg`]: the 6x6 linear algebra; [`error`]: [`KinematicsError`].
 //! - [`math`]: the few transcendental functions the IK needs, behind a trait so the firmware can
 //!   supply the RP2040 boot ROM's fast routines while the host uses `libm`.
 //! - `fixed` (private): the fixed-point arithmetic of the IK's hot loop (integer instructions for
 //!   a chip without an FPU).
 //!
-//! Legs and servos are numbered 1..=6 in everything a user sees (errors, reports) and indexed
-//! 0..=5 in arrays. Leg `i` is driven by servo `i`.
+//! Lengths are mm, angles rad, forces N, moments and servo torques N mm, masses kg, unless a
+//! name says otherwise. Legs and servos are numbered 1..=6 in everything a user sees (errors,
+//! reports) and indexed 0..=5 in arrays. Leg `i` is driven by servo `i`.
 #![cfg_attr(not(test), no_std)]
 #![deny(missing_docs)]
 
+pub mod configuration;
+pub mod dynamics;
+pub mod error;
 mod fixed;
+pub mod forward;
 pub mod geometry;
 pub mod ik;
+pub mod jacobian;
+pub mod legs;
+pub mod linalg;
 pub mod math;
 pub mod pose;
+pub mod rates;
 pub mod servo;
+pub mod statics;
+pub mod workspace;
 
+pub use error::KinematicsError;
 pub use geometry::{Geometry, GeometryError, Leg};
 pub use ik::{IkError, Solution, Solver};
 pub use math::{Libm, Math};

@@ -13,6 +13,8 @@
 use core::marker::PhantomData;
 use core::ops::{Add, Mul, Neg, Sub};
 
+use crate::{Mat3, Vec3};
+
 /// Scalar functions used by the kinematics. Implementations must return NaN (never panic) for
 /// inputs outside their domain; callers check results for finiteness.
 pub trait Math {
@@ -118,6 +120,71 @@ pub fn lt(a: f32, b: f32) -> bool {
     let (a_bits, b_bits) = (a.to_bits(), b.to_bits());
     let not_nan = |x: u32| x & 0x7fff_ffff <= 0x7f80_0000;
     not_nan(a_bits) && not_nan(b_bits) && !le(b, a)
+}
+
+/// `u . v` with `M`'s arithmetic.
+pub(crate) fn dot<M: Math>(u: Vec3, v: Vec3) -> f32 {
+    let r = Real::<M>::new;
+    (r(u.x) * r(v.x) + r(u.y) * r(v.y) + r(u.z) * r(v.z)).0
+}
+
+/// `u x v` with `M`'s arithmetic.
+pub(crate) fn cross<M: Math>(u: Vec3, v: Vec3) -> Vec3 {
+    let r = Real::<M>::new;
+    Vec3::new(
+        (r(u.y) * r(v.z) - r(u.z) * r(v.y)).0,
+        (r(u.z) * r(v.x) - r(u.x) * r(v.z)).0,
+        (r(u.x) * r(v.y) - r(u.y) * r(v.x)).0,
+    )
+}
+
+/// `u + v` with `M`'s arithmetic.
+pub(crate) fn add<M: Math>(u: Vec3, v: Vec3) -> Vec3 {
+    let r = Real::<M>::new;
+    Vec3::new(
+        (r(u.x) + r(v.x)).0,
+        (r(u.y) + r(v.y)).0,
+        (r(u.z) + r(v.z)).0,
+    )
+}
+
+/// `u - v` with `M`'s arithmetic.
+pub(crate) fn sub<M: Math>(u: Vec3, v: Vec3) -> Vec3 {
+    let r = Real::<M>::new;
+    Vec3::new(
+        (r(u.x) - r(v.x)).0,
+        (r(u.y) - r(v.y)).0,
+        (r(u.z) - r(v.z)).0,
+    )
+}
+
+/// `m v` with `M`'s arithmetic. A vector with `z = 0` (every joint of a planar layout) skips
+/// the third column: adding `m_k2 * 0` changes nothing.
+pub(crate) fn mul_mat_vec<M: Math>(m: &Mat3, v: Vec3) -> Vec3 {
+    let r = Real::<M>::new;
+    let planar = is_zero(v.z);
+    let row = |k: usize| {
+        let xy = r(m[(k, 0)]) * r(v.x) + r(m[(k, 1)]) * r(v.y);
+        if planar {
+            xy.0
+        } else {
+            (xy + r(m[(k, 2)]) * r(v.z)).0
+        }
+    };
+    Vec3::new(row(0), row(1), row(2))
+}
+
+/// `x == 0` (either sign) in integer instructions.
+#[inline]
+pub(crate) fn is_zero(x: f32) -> bool {
+    x.to_bits() << 1 == 0
+}
+
+/// `|x|` as bits: non-negative floats (and NaN above them all) order like their bit patterns,
+/// so the largest magnitude can be found in integer instructions.
+#[inline]
+pub(crate) fn abs_bits(x: f32) -> u32 {
+    x.to_bits() & 0x7fff_ffff
 }
 
 /// [`Math`] backed by the portable `libm` crate (correctly rounded or nearly so).

@@ -150,7 +150,9 @@ impl Pose {
 
     /// [`Pose::rotation`], but with `third_column` false the third column is left zero (and its
     /// five multiplications and two additions are not done): the IK of a platform whose joints
-    /// all have `z = 0` never uses it.
+    /// all have `z = 0` never uses it. Always inlined: in the IK's hot path that saves about 50
+    /// cycles per pose on the RP2040 (measured with `./dev bench`).
+    #[inline(always)]
     pub(crate) fn rotation_columns<M: Math>(&self, third_column: bool) -> Mat3 {
         let sin_cos = |x: f32| {
             let (s, c) = M::sin_cos(x);
