@@ -11,7 +11,7 @@ use clap::{Args, Parser, Subcommand};
 use cli::link::Link;
 use cli::messages::Problem;
 use cli::trajectory::Mode;
-use cli::{configure, demo, drive, flash_image, streamer};
+use cli::{configure, demo, draw, drive, flash_image, streamer};
 
 #[derive(Parser)]
 #[command(
@@ -59,6 +59,22 @@ enum Command {
         /// Replace the file if it exists
         #[arg(long)]
         force: bool,
+    },
+
+    // See and size it.
+    /// Draw the platform at a pose (SVG and PNG): top, front, side and perspective views
+    Draw {
+        /// The platform (a build file); the default platform without it
+        #[arg(long)]
+        settings: Option<PathBuf>,
+        /// The pose: x y z roll pitch yaw (mm, degrees), as `pose` takes it
+        #[arg(long, default_value = "0 0 0 0 0 0", allow_hyphen_values = true)]
+        pose: String,
+        /// Where to write: FILE.svg and FILE.png
+        #[arg(short, long, default_value = "platform")]
+        output: PathBuf,
+        #[command(flatten)]
+        formats: Formats,
     },
 
     // Drive it.
@@ -158,6 +174,16 @@ struct OptionalPort {
 }
 
 #[derive(Args)]
+struct Formats {
+    /// Write only the SVG
+    #[arg(long, conflicts_with = "png_only")]
+    svg_only: bool,
+    /// Write only the PNG
+    #[arg(long)]
+    png_only: bool,
+}
+
+#[derive(Args)]
 struct StreamOptions {
     /// Send `pose` lines, each answered (round trip per row), instead of binary frames
     #[arg(long)]
@@ -229,6 +255,18 @@ fn main() -> ExitCode {
             .link
             .open(&port.port)
             .and_then(|mut link| configure::pull(&mut link, &output, force)),
+        Command::Draw {
+            settings,
+            pose,
+            output,
+            formats,
+        } => draw::draw(
+            settings.as_deref(),
+            &pose,
+            &output,
+            !formats.png_only,
+            !formats.svg_only,
+        ),
         Command::Send { port, lines } => port
             .link
             .open(&port.port)

@@ -542,3 +542,49 @@ pub const RATE_RANGE: &str = "must be 1..1000 rows per second";
 pub const AMPLITUDE_RANGE: &str = "must be 0..500 mm";
 /// `demo`: the tour's fraction of the reach.
 pub const FRACTION_RANGE: &str = "must be more than 0 and at most 1";
+
+/// A drawing's title.
+pub fn drawing_title(pose: &str) -> String {
+    format!("pose {pose}  (x y z mm, roll pitch yaw degrees)")
+}
+
+/// A drawing of a pose the platform takes.
+pub const DRAWING_REACHABLE: &str =
+    "reachable: every leg reaches its joint within its servo's limits";
+
+/// A drawing of a pose the platform cannot take: its lines.
+pub fn drawing_refused(words: &str, arms_at: f64) -> Vec<String> {
+    let mut lines = vec![format!("refused: {words}")];
+    if arms_at < 1.0 {
+        lines.push(format!(
+            "the arms are drawn at the last reachable pose on the straight way from home ({:.0}% \
+             of the way); the dashed rod cannot meet its joint",
+            arms_at * 100.0
+        ));
+    }
+    lines
+}
+
+/// A view's title.
+pub fn view_title(view: crate::draw::View) -> &'static str {
+    use crate::draw::View;
+    match view {
+        View::Top => "top (looking down; x right, y up)",
+        View::Front => "front (looking along +y; x right, z up)",
+        View::Side => "side (looking along -x; y right, z up)",
+        View::Perspective => "perspective",
+    }
+}
+
+/// A scale bar's label.
+pub fn scale_bar(mm: f64) -> String {
+    format!("{mm:.0} mm")
+}
+
+/// A pose text that the firmware's parser read as something else.
+pub const NOT_A_POSE: &str = "not six numbers x y z roll pitch yaw";
+
+/// `draw` of a pose the platform cannot take.
+pub fn drew_refused(summary: &str, words: &str) -> String {
+    format!("{summary}\nthe platform cannot take this pose: {words}")
+}
