@@ -146,11 +146,11 @@ impl Link {
         Ok(())
     }
 
-    /// Writes bytes as they are.
+    /// Writes bytes as they are. (The port has no buffer of ours to flush; a serial port's
+    /// `flush` would wait until the bytes have left, which is not this call's business.)
     pub fn write(&mut self, bytes: &[u8]) -> Result<(), Problem> {
         self.writer
             .write_all(bytes)
-            .and_then(|()| self.writer.flush())
             .map_err(|e| self.problem(PortProblem::Io(e.to_string())))
     }
 
