@@ -36,6 +36,7 @@ use kinematics_core::LEGS;
 use toml::de::{DeTable, DeValue};
 
 use crate::messages::{KeyProblem, Problem};
+use crate::sizing::{Sizing, SIZING_TABLE};
 
 /// One `set` of a build file.
 #[derive(Debug, Clone, PartialEq)]
@@ -62,6 +63,9 @@ pub struct BuildFile {
     pub steps: Vec<Step>,
     /// The settings they make.
     pub settings: Settings,
+    /// The `[sizing]` table: the payload and the servos' rating, for the host's sizing tools
+    /// (not settings of the board, never sent to it).
+    pub sizing: Sizing,
 }
 
 /// Reads and checks a build file's text; `file` names it in errors.
@@ -92,8 +96,21 @@ pub fn parse(file: &str, text: &str) -> Result<BuildFile, Problem> {
         why,
     };
     let mut pending = Vec::new();
+    let mut sizing = Sizing::default();
     for (name, line, value) in found {
         let name = name.to_ascii_lowercase();
+        if let Some(key) = name.strip_prefix(SIZING_TABLE) {
+            let number = match value {
+                DeValue::Integer(_) | DeValue::Float(_) => {
+                    value_text(value).and_then(|t| t.parse::<f32>().ok())
+                }
+                _ => None,
+            };
+            sizing
+                .set(key, number)
+                .map_err(|why| problem(&name, line, KeyProblem::Sizing(why)))?;
+            continue;
+        }
         let refused = |e: control::Error| problem(&name, line, KeyProblem::Refused(Box::new(e)));
         let id = SettingId::parse(&name).ok_or_else(|| {
             refused(control::Error::from(ParseError::UnknownSetting {
@@ -143,7 +160,11 @@ pub fn parse(file: &str, text: &str) -> Result<BuildFile, Problem> {
             }
         }
     }
-    Ok(BuildFile { steps, settings })
+    Ok(BuildFile {
+        steps,
+        settings,
+        sizing,
+    })
 }
 
 /// Whether two settings set a common value (`servos.x` and `servoN.x`).
@@ -241,8 +262,8 @@ fn describe(id: SettingId) -> String {
     }
 }
 
-/// A commented build file of `settings`; `source` says where they come from.
-pub fn write(settings: &Settings, source: &str) -> String {
+/// A commented build file of `settings` and `sizing`; `source` says where they come from.
+pub fn write(settings: &Settings, sizing: &Sizing, source: &str) -> String {
     let mut out = crate::messages::build_file_header(source);
     let line = |out: &mut String, key: &str, id: SettingId| {
         if let Some(value) = settings.get(id) {
@@ -274,6 +295,14 @@ pub fn write(settings: &Settings, source: &str) -> String {
                 SettingId::Servo(ServoSel::One(servo), param),
             );
         }
+    }
+    out.push_str(crate::messages::SIZING_HEADER);
+    for (key, value) in sizing.entries() {
+        let text = format!("{key} = {value:?}");
+        out.push_str(&format!(
+            "{text:<32}# {}\n",
+            crate::messages::sizing_meaning(key)
+        ));
     }
     out
 }
@@ -377,13 +406,24 @@ mod tests {
 
     #[test]
     fn a_written_file_reads_back_as_the_same_settings() {
-        let defaults = ok(&write(&Settings::default(), "the default platform"));
+        let defaults = ok(&write(
+            &Settings::default(),
+            &Sizing::default(),
+            "the default platform",
+        ));
         assert_eq!(defaults.settings, Settings::default());
+        assert_eq!(defaults.sizing, Sizing::default());
         let custom = ok(
             "frame_hz = 200\nspeed_mm_s = \"off\"\nestop_pin = 15\n[servo4]\n\
                          dir = \"normal\"\ntrim_us = 1520.25\n[stream]\naxis1 = \"none\"\n",
         );
-        let again = ok(&write(&custom.settings, "a test"));
+        let sizing = ok("[sizing]\npayload_kg = 2.5\npayload_z_mm = -4\n").sizing;
+        assert_eq!(sizing.payload_kg, 2.5);
+        let again = ok(&write(&custom.settings, &sizing, "a test"));
         assert_eq!(again.settings, custom.settings);
+        assert_eq!(again.sizing, sizing);
+        assert!(err("[sizing]\npayload_kg = -1\n").starts_with("b.toml:2: sizing.payload_kg: "));
+        assert!(err("[sizing]\ncolour = 1\n").starts_with("b.toml:2: sizing.colour: "));
+        assert!(err("[sizing]\npayload_kg = \"heavy\"\n").contains("sizing.payload_kg"));
     }
 }

@@ -11,6 +11,7 @@ use crate::board;
 use crate::build_file::{self, BuildFile};
 use crate::link::{Link, Reply};
 use crate::messages::{self, Problem};
+use crate::sizing::Sizing;
 
 /// Reads a whole text file.
 pub fn read_text(path: &Path) -> Result<String, Problem> {
@@ -41,7 +42,11 @@ pub fn read_build_file(path: &Path) -> Result<BuildFile, Problem> {
 
 /// `init`: a commented build file of the default platform.
 pub fn init(path: &Path, force: bool) -> Result<String, Problem> {
-    let text = build_file::write(&Settings::default(), messages::DEFAULT_PLATFORM);
+    let text = build_file::write(
+        &Settings::default(),
+        &Sizing::default(),
+        messages::DEFAULT_PLATFORM,
+    );
     write_new(path, text.as_bytes(), force)?;
     let name = path.display().to_string();
     Ok(messages::wrote_build_file(
@@ -90,7 +95,7 @@ pub fn pull(link: &mut Link, path: &Path, force: bool) -> Result<String, Problem
     let source = messages::board_on(link.port());
     write_new(
         path,
-        build_file::write(&settings, &source).as_bytes(),
+        build_file::write(&settings, &Sizing::default(), &source).as_bytes(),
         force,
     )?;
     Ok(messages::wrote_build_file(

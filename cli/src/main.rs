@@ -11,7 +11,7 @@ use clap::{Args, Parser, Subcommand};
 use cli::link::Link;
 use cli::messages::Problem;
 use cli::trajectory::Mode;
-use cli::{configure, demo, draw, drive, flash_image, streamer};
+use cli::{configure, demo, draw, drive, flash_image, size, streamer};
 
 #[derive(Parser)]
 #[command(
@@ -62,6 +62,40 @@ enum Command {
     },
 
     // See and size it.
+    /// Describe a platform: geometry, reach from home, stiffness, holding torques against the
+    /// servos' rating
+    Describe {
+        /// The platform (a build file, with its [sizing] table); the default platform without it
+        #[arg(long)]
+        settings: Option<PathBuf>,
+    },
+    /// Plot the reachable workspace (SVG and PNG): x-y sections, vertical travel against roll
+    /// and pitch, reach along each axis
+    Workspace {
+        /// The platform (a build file); the default platform without it
+        #[arg(long)]
+        settings: Option<PathBuf>,
+        /// Where to write: FILE.svg and FILE.png
+        #[arg(short, long, default_value = "workspace")]
+        output: PathBuf,
+        #[command(flatten)]
+        formats: Formats,
+    },
+    /// Servo torques holding the payload over a grid of poses, or carrying it along a
+    /// trajectory (gravity and inertia); the worst named, a plot
+    Torque {
+        /// The platform (a build file, with its [sizing] table); the default platform without it
+        #[arg(long)]
+        settings: Option<PathBuf>,
+        /// A trajectory (CSV: time,x,y,z,roll,pitch,yaw) instead of the grid
+        #[arg(long)]
+        trajectory: Option<PathBuf>,
+        /// Where to write the plot: FILE.svg and FILE.png
+        #[arg(short, long, default_value = "torque")]
+        output: PathBuf,
+        #[command(flatten)]
+        formats: Formats,
+    },
     /// Draw the platform at a pose (SVG and PNG): top, front, side and perspective views
     Draw {
         /// The platform (a build file); the default platform without it
@@ -255,6 +289,29 @@ fn main() -> ExitCode {
             .link
             .open(&port.port)
             .and_then(|mut link| configure::pull(&mut link, &output, force)),
+        Command::Describe { settings } => size::describe_command(settings.as_deref()),
+        Command::Workspace {
+            settings,
+            output,
+            formats,
+        } => size::workspace_command(
+            settings.as_deref(),
+            &output,
+            !formats.png_only,
+            !formats.svg_only,
+        ),
+        Command::Torque {
+            settings,
+            trajectory,
+            output,
+            formats,
+        } => size::torque_command(
+            settings.as_deref(),
+            trajectory.as_deref(),
+            &output,
+            !formats.png_only,
+            !formats.svg_only,
+        ),
         Command::Draw {
             settings,
             pose,

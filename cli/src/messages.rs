@@ -120,6 +120,24 @@ pub enum KeyProblem {
     LinkSetting,
     /// A value that is not a number or a word (an array, a date, a table too deep).
     NotAValue,
+    /// A `[sizing]` key that is not one, or its value out of range: why.
+    Sizing(SizingProblem),
+}
+
+/// What is wrong with a `[sizing]` key.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SizingProblem {
+    /// Not one of the sizing keys.
+    Unknown,
+    /// Not a number in `min..=max` (of the key's unit).
+    Range {
+        /// Smallest.
+        min: f32,
+        /// Largest.
+        max: f32,
+        /// Unit.
+        unit: &'static str,
+    },
 }
 
 /// What went wrong with a serial port.
@@ -222,6 +240,14 @@ impl Display for Problem {
                         "{key}: belongs to the serial link, not the platform (it is not saved); \
                          a build file does not set it"
                     ),
+                    KeyProblem::Sizing(SizingProblem::Unknown) => write!(
+                        f,
+                        "{key}: not a sizing key; [sizing] takes {}",
+                        crate::sizing::KEYS.join(", ")
+                    ),
+                    KeyProblem::Sizing(SizingProblem::Range { min, max, unit }) => {
+                        write!(f, "{key}: must be a number {min}..{max} {unit}")
+                    }
                     KeyProblem::NotAValue => write!(
                         f,
                         "{key}: not a setting value (a setting takes a number or a word; \
@@ -587,4 +613,302 @@ pub const NOT_A_POSE: &str = "not six numbers x y z roll pitch yaw";
 /// `draw` of a pose the platform cannot take.
 pub fn drew_refused(summary: &str, words: &str) -> String {
     format!("{summary}\nthe platform cannot take this pose: {words}")
+}
+
+/// The `[sizing]` table's heading in a build file.
+pub const SIZING_HEADER: &str =
+    "\n# Host-only: the payload and the servos, for `describe` and `torque`. Not settings of the\n\
+# board: `apply` never sends them.\n[sizing]\n";
+
+/// What a `[sizing]` key is, for a build file's comments.
+pub fn sizing_meaning(key: &str) -> &'static str {
+    match key {
+        "payload_kg" => "payload mass (with the platform plate), kg",
+        "payload_x_mm" => "payload centre of mass, platform frame x, mm",
+        "payload_y_mm" => "payload centre of mass, platform frame y, mm",
+        "payload_z_mm" => "payload centre of mass, platform frame z (up), mm",
+        "servo_torque_kgcm" => "each servo's rated torque, kgf cm",
+        "servo_stiffness_nmm_rad" => "each servo's holding stiffness, N mm/rad",
+        _ => "",
+    }
+}
+
+// ----- describe, workspace, torque -----
+
+fn kgcm(nmm: f32) -> f32 {
+    nmm / kinematics_core::statics::N_MM_PER_KGF_CM
+}
+
+fn pose_words(pose: &kinematics_core::Pose) -> String {
+    let [x, y, z, roll, pitch, yaw] = pose.to_array();
+    format!(
+        "x={x:.1} y={y:.1} z={z:.1} mm, roll={:.1} pitch={:.1} yaw={:.1} degrees",
+        roll.to_degrees(),
+        pitch.to_degrees(),
+        yaw.to_degrees()
+    )
+}
+
+/// A toolkit error that is not the IK's (those are the board's words).
+pub fn kinematics_words(e: &kinematics_core::KinematicsError) -> String {
+    use kinematics_core::KinematicsError as K;
+    match e {
+        K::Ik(ik) => board_words(&(*ik).into()),
+        K::DeadCentre { leg } => {
+            format!("leg {leg}'s arm is at dead centre (it cannot move its rod)")
+        }
+        K::Singular { .. } => {
+            "the platform is at a singular pose (it cannot hold a load there)".into()
+        }
+        K::GimbalLock { .. } => "pitch at +-90 degrees: roll and yaw rates are undefined".into(),
+        other => other.to_string(),
+    }
+}
+
+/// What stops a search that found no limit.
+pub const SEARCH_RANGE: &str = "nothing within the search range (100 mm, 180 degrees)";
+
+/// `describe`'s text.
+pub fn description(d: &crate::size::Description) -> String {
+    use kinematics_core::pose::Axis;
+    let p = &d.platform;
+    let l = &p.settings.layout;
+    let g = p.solver.geometry();
+    let mut out = format!("Platform: {}\n", p.source);
+    out += &format!(
+        "  base: servo shafts on a {:.3} mm circle, pairs {:.3} degrees either side of 0, 120 and \
+         240 degrees\n  platform: joints on a {:.3} mm circle, {:.3} degrees either side of 60, \
+         180 and 300 degrees\n",
+        l.base_radius_mm, l.base_half_angle_deg, l.platform_radius_mm, l.platform_half_angle_deg
+    );
+    out += &format!(
+        "  arm a = {:.3} mm, rod s = {:.3} mm; home height h0 = {:.3} mm (eq. 10)\n",
+        g.arm_mm(),
+        g.rod_mm(),
+        g.home_height_mm()
+    );
+    out += "  leg  shaft b (mm)                 joint p (mm, platform frame)  beta (deg)  alpha0 (deg)  shaft to joint at home (mm)\n";
+    for i in 0..6 {
+        let leg = g.leg(i);
+        let v = |v: kinematics_core::Vec3| format!("({:8.3} {:8.3} {:6.3})", v.x, v.y, v.z);
+        out += &format!(
+            "  {}    {}  {}    {:9.3}  {:12.3}  {:10.3}\n",
+            i + 1,
+            v(leg.base_mm),
+            v(leg.platform_mm),
+            leg.beta_rad.to_degrees(),
+            p.solver.alpha0_rad(i).to_degrees(),
+            d.leg_lengths_mm[i]
+        );
+    }
+    out += "Reach from home, one axis at a time, within the servo limits:\n";
+    for (k, axis) in Axis::ALL.into_iter().enumerate() {
+        let (minus, plus) = (&d.reach[2 * k], &d.reach[2 * k + 1]);
+        let (unit, f): (&str, fn(f32) -> f32) = if axis.is_angle() {
+            ("degrees", f32::to_degrees)
+        } else {
+            ("mm", |v| v)
+        };
+        out += &format!(
+            "  {:<5} {:8.3} .. {:7.3} {unit}   (- {}; + {})\n",
+            axis.name(),
+            -f(minus.distance),
+            f(plus.distance),
+            crate::size::limit_words(&minus.limit),
+            crate::size::limit_words(&plus.limit)
+        );
+    }
+    let k = p.sizing.servo_stiffness_nmm_rad;
+    match d.stiffness_diagonal {
+        Some(s) => {
+            out += &format!(
+                "Stiffness at home, servos holding {k} N mm/rad each (K = J^T diag(k) J, diagonal):\n  x {:.2}, y {:.2}, z {:.2} N/mm; roll {:.0}, pitch {:.0}, yaw {:.0} N mm/rad\n",
+                s[0], s[1], s[2], s[3], s[4], s[5]
+            );
+        }
+        None => out += "Stiffness at home: none (a singular pose)\n",
+    }
+    let [cx, cy, cz] = p.sizing.payload_com_mm;
+    out += &format!(
+        "Payload {} kg at ({cx}, {cy}, {cz}) mm in the platform frame; servos rated {} kgf cm:\n",
+        p.sizing.payload_kg, p.sizing.servo_torque_kgcm
+    );
+    if let Some(sag) = &d.sag {
+        out += &format!(
+            "  its weight moves the platform at home by {:.3} mm down ({:.4} degrees of tilt)\n",
+            -sag.translation_mm.z,
+            sag.rotation_rad.norm().to_degrees()
+        );
+    }
+    if let Some(t) = d.home_torques_nmm {
+        let list: Vec<String> = t.iter().map(|v| format!("{:.3}", kgcm(*v))).collect();
+        out += &format!(
+            "  holding torque at home, servos 1-6: {} kgf cm\n",
+            list.join(" ")
+        );
+    }
+    let (reached, total) = d.grid_reached;
+    match &d.worst {
+        Some(w) => {
+            let t = kgcm(w.torque_nmm).abs();
+            let verdict = verdict(t, p.sizing.servo_torque_kgcm);
+            out += &format!(
+                "  worst over the workspace ({reached} reachable poses of a {total}-pose grid): \
+                 servo {} {:.3} kgf cm at {}: {verdict}",
+                w.servo,
+                t,
+                pose_words(&w.pose)
+            );
+        }
+        None => out += "  worst over the workspace: no reachable pose in the grid",
+    }
+    out
+}
+
+/// The workspace picture's title.
+pub fn workspace_title(source: &str) -> String {
+    format!("Workspace of {source}: reachable within the servo limits")
+}
+/// Plot titles and axis labels of `workspace`.
+pub const SECTIONS_TITLE: &str = "x-y sections, level, at heights z";
+/// See [`SECTIONS_TITLE`].
+pub const TRAVEL_TITLE: &str = "vertical travel at each roll and pitch (x = y = yaw = 0)";
+/// See [`SECTIONS_TITLE`].
+pub const TRAVEL_UNIT: &str = "z travel (mm); grey: none";
+/// See [`SECTIONS_TITLE`].
+pub const REACH_TITLE: &str = "reach from home along each axis";
+/// See [`SECTIONS_TITLE`].
+pub const REACH_UNIT: &str = "mm (x y z) or degrees (roll pitch yaw)";
+/// See [`SECTIONS_TITLE`].
+pub const TRANSLATIONS: &str = "translation (mm)";
+/// See [`SECTIONS_TITLE`].
+pub const ROTATIONS: &str = "rotation (degrees)";
+
+/// A section's legend entry.
+pub fn section_label(z_mm: f32, reachable: bool) -> String {
+    if reachable {
+        format!("z = {z_mm} mm")
+    } else {
+        format!("z = {z_mm} mm: not reachable")
+    }
+}
+
+/// An axis with its unit.
+pub fn axis_with_unit(axis: kinematics_core::pose::Axis) -> String {
+    let unit = if axis.is_angle() { "deg" } else { "mm" };
+    format!("{} ({unit})", axis.name())
+}
+
+/// A reach's span.
+pub fn reach_span(lo: f32, hi: f32) -> String {
+    format!("{lo:.1} .. {hi:.1}")
+}
+
+/// Torque plots' words.
+pub const SERVO_AXIS: &str = "servo";
+/// See [`SERVO_AXIS`].
+pub const TORQUE_AXIS: &str = "torque (kgf cm)";
+/// See [`SERVO_AXIS`].
+pub const TIME_AXIS: &str = "time (s)";
+/// See [`SERVO_AXIS`].
+pub const WORST_HOLDING: &str = "worst holding torque";
+/// See [`SERVO_AXIS`].
+pub const OVER_RATING: &str = "over the rating";
+
+/// The rating line's legend.
+pub fn rating_label(kgcm: f32) -> String {
+    format!("rating {kgcm} kgf cm")
+}
+
+/// A servo's legend entry.
+pub fn servo_label(servo: usize) -> String {
+    format!("servo {servo}")
+}
+
+/// The grid torque plot's title.
+pub fn grid_torque_title(source: &str, s: &crate::sizing::Sizing) -> String {
+    format!(
+        "{source}: holding {} kg over the workspace grid",
+        s.payload_kg
+    )
+}
+
+/// The trajectory torque plot's title.
+pub fn trajectory_torque_title(file: &str, s: &crate::sizing::Sizing) -> String {
+    format!(
+        "{file}: torques carrying {} kg (gravity and inertia)",
+        s.payload_kg
+    )
+}
+
+fn verdict(kgcm: f32, rating: f32) -> String {
+    if kgcm <= rating {
+        format!(
+            "within the rating of {rating} kgf cm ({:.0}%)",
+            100.0 * kgcm / rating
+        )
+    } else {
+        format!(
+            "OVER the rating of {rating} kgf cm ({:.0}%)",
+            100.0 * kgcm / rating
+        )
+    }
+}
+
+/// `torque` over the grid: each servo's worst, and the worst of all.
+pub fn grid_torque_report(
+    p: &crate::size::Platform,
+    worst: &[Option<crate::size::Worst>; 6],
+    reached: usize,
+    total: usize,
+) -> String {
+    let mut out = format!(
+        "{}: holding {} kg, centre of mass {:?} mm (platform frame), over {reached} reachable \
+         poses of a {total}-pose grid (9 steps along x, y, z and along roll, pitch, yaw):\n",
+        p.source, p.sizing.payload_kg, p.sizing.payload_com_mm
+    );
+    for w in worst.iter().flatten() {
+        out += &format!(
+            "  servo {}: {:.3} kgf cm at {}\n",
+            w.servo,
+            kgcm(w.torque_nmm).abs(),
+            pose_words(&w.pose)
+        );
+    }
+    match crate::size::overall(worst) {
+        Some(w) => {
+            let t = kgcm(w.torque_nmm).abs();
+            out += &format!(
+                "worst: servo {}, {t:.3} kgf cm, {}",
+                w.servo,
+                verdict(t, p.sizing.servo_torque_kgcm)
+            );
+        }
+        None => out += "worst: none (no reachable pose)",
+    }
+    out
+}
+
+/// `torque` along a trajectory: the worst.
+pub fn trajectory_torque_report(
+    file: &str,
+    p: &crate::size::Platform,
+    worst: Option<crate::size::Worst>,
+    rows: usize,
+) -> String {
+    match worst {
+        Some(w) => {
+            let t = kgcm(w.torque_nmm).abs();
+            let (time, line) = w.at.unwrap_or((0.0, 0));
+            format!(
+                "{file}: {rows} rows carrying {} kg (gravity and inertia): worst servo {}, \
+                 {t:.3} kgf cm at {time:.3} s (line {line}), {}; {}",
+                p.sizing.payload_kg,
+                w.servo,
+                pose_words(&w.pose),
+                verdict(t, p.sizing.servo_torque_kgcm)
+            )
+        }
+        None => format!("{file}: no rows"),
+    }
 }
