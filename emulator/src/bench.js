@@ -21,6 +21,7 @@ import {
   stackHighWaterBytes,
 } from './firmware-bench.js';
 import { benchPoses, profileIk, runIkBench, runKinematicsBench } from './ik-bench.js';
+import { highestFrameRate, measureFrameLatency, measureStreamCpu } from './stream-bench.js';
 
 const REPO = join(dirname(fileURLToPath(import.meta.url)), '..', '..');
 const CLOCK_HZ = 125e6;
@@ -99,6 +100,16 @@ const latencySmall = measureLatency(steps.slice(1), { from: steps[0] });
 const latencyJump = measureLatency(['5 0 0 0 0 0', '0 0 0 0 0 0', '0 0 5 0 0 0']);
 const latencySmallFast = measureLatency(steps.slice(1), { baud: STREAM_BAUD, from: steps[0] });
 
+// ---- stream frames ----
+log('stream frames ...');
+const frameCountsFor = (i) => [32768 + (i % 5) * 300 + 7, 32768 + i, 32768 + (i % 3) * 500, 32768, 32768 + (i % 2) * 200, 32768 + (i % 4) * 200];
+const frameSet = Array.from({ length: 40 }, (_, i) => frameCountsFor(i));
+const frameFastUs = measureFrameLatency(frameSet, { baud: STREAM_BAUD });
+const frameSlowUs = measureFrameLatency(frameSet, { baud: 115200 });
+const frameRate = highestFrameRate([1000, 2000, 3000, 3500, 4000, 4500, 5000, 5500, 5760]);
+const streamCpu100 = measureStreamCpu({ framesPerSecond: 100, seconds: 1 });
+const streamCpu333 = measureStreamCpu({ framesPerSecond: 333, seconds: 0.5 });
+
 // ---- sustained ----
 const lines = streamLines(Number(args.lines));
 const bytesPerLine = lines.reduce((n, line) => n + line.length + 1, 0) / lines.length;
@@ -160,6 +171,8 @@ const stat = (values) => {
   return { mean: sum / values.length, min: Math.min(...values), max: Math.max(...values) };
 };
 const small = stat(latencySmall);
+const frameFast = stat(frameFastUs);
+const frameSlow = stat(frameSlowUs);
 const smallFast = stat(latencySmallFast);
 const jump = stat(latencyJump);
 const rel = (path) => relative(REPO, path);
@@ -256,6 +269,36 @@ next PWM period start (at most one frame, 20 ms at 50 Hz, later; no pulse is cut
 
 Target: under 500 us. With a speed limit set, the first step of a move comes with the next
 servo frame instead (up to one frame later), so that no frame moves more than the limit.
+
+## Stream frames
+
+Binary frames (\`A5 5A\`, six 16-bit counts, \`0D 0A\`; README "Streaming from
+motion-simulator software"), echo off, all speed and acceleration limits off (pass-through):
+from the frame's last byte entering the UART to all six new compare values written.
+
+| binary frames | latency mean | min | max |
+|---|---:|---:|---:|
+| 40 frames of small steps at 921,600 baud | ${fmt(frameFast.mean)} us | ${fmt(frameFast.min)} us | ${fmt(frameFast.max)} us |
+| the same at 115,200 baud | ${fmt(frameSlow.mean)} us | ${fmt(frameSlow.min)} us | ${fmt(frameSlow.max)} us |
+
+Target: under 200 us at 921,600 baud.
+
+Frames sent evenly for 0.5 s at 921,600 baud (the wire carries 5,760 frames/s), pass-through:
+${frameRate.results.map((r) => `${fmt(r.framesPerSecond)}/s: ${r.applied}/${r.sent} applied`).join('; ')}.
+Highest rate tried with every frame applied: **${frameRate.best ? `${fmt(frameRate.best.framesPerSecond)} frames/s` : 'none'}**
+(above it the newest frame wins: frames arriving while one is applied are superseded, never
+queued).
+
+The whole stream pipeline with clamping active: \`frame_hz 333\`, the tracker on
+(200 mm/s, 2000 mm/s^2, 200 deg/s, 2000 deg/s^2), every frame's target beyond the workspace
+(so each is clamped by bisection: up to 7 IK solutions), the tracker stepping every 3 ms:
+
+| frames in | CPU busy | cycles per servo frame | frames applied / clamped | longest pass |
+|---|---:|---:|---:|---:|
+| 100/s | ${fmt(streamCpu100.cpuShare * 100, 1)} % | ${fmt(streamCpu100.cyclesPerServoFrame)} | ${streamCpu100.applied} / ${streamCpu100.clamped} | ${fmt(streamCpu100.longestPassCycles)} cycles = ${fmt(us(streamCpu100.longestPassCycles))} us |
+| 333/s | ${fmt(streamCpu333.cpuShare * 100, 1)} % | ${fmt(streamCpu333.cyclesPerServoFrame)} | ${streamCpu333.applied} / ${streamCpu333.clamped} | ${fmt(streamCpu333.longestPassCycles)} cycles = ${fmt(us(streamCpu333.longestPassCycles))} us |
+
+Target: under 30 % of the CPU at 333 Hz with clamping active.
 
 ## Sustained pose lines per second
 

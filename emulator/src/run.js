@@ -1,7 +1,8 @@
 #!/usr/bin/env node
 // Interactive runner: the firmware in the emulator, in (roughly) real time, with UART0 on
 // your terminal or on a pseudo-terminal, and the six measured servo pulse widths as a
-// status line. Usually started with `./dev run [--pty]`.
+// status line, plus the live 3D view's web server (view-server.js) unless --no-view.
+// Usually started with `./dev run [--pty]`.
 
 import { spawn } from 'node:child_process';
 import { dirname, join } from 'node:path';
@@ -10,8 +11,10 @@ import { fileURLToPath } from 'node:url';
 
 import { DEFAULT_ELF, EmulatedBoard } from './board.js';
 import { loadBootrom } from './bootrom.js';
+import { SharedInput } from './shared-input.js';
+import { DEFAULT_VIEW_PORT, startViewServer } from './view-server.js';
 
-const USAGE = `usage: ./dev run [--pty] [--local-echo] [--elf PATH]
+const USAGE = `usage: ./dev run [--pty] [--local-echo] [--no-view] [--view-port N] [--elf PATH]
 
 Runs the firmware in the emulator with UART0 on this terminal (raw mode, like picocom).
   Enter sends LF. The firmware echoes what you type; if its echo is off, --local-echo
@@ -19,6 +22,11 @@ Runs the firmware in the emulator with UART0 on this terminal (raw mode, like pi
   --pty      put UART0 on a pseudo-terminal instead and print its path, for picocom,
              screen or a host program (e.g. picocom -b 115200 --omap crlf /dev/pts/N).
              Ctrl-C quits.
+  --no-view  do not serve the live 3D view (by default its address is printed at start:
+             http://127.0.0.1:${DEFAULT_VIEW_PORT}/, or a free port if that one is taken).
+             The view sends whole lines on UART0 too (its page's, and \`geometry\` /
+             \`config\` to read the board's settings): use --no-view for a UART of your own.
+  --view-port N  the view's port (0: any free port)
   --elf PATH firmware ELF (default: ${DEFAULT_ELF})
 The status line (stderr) shows the six measured servo pulse widths in microseconds.`;
 
@@ -34,13 +42,15 @@ const STEP_NANOS = 10e6;
 /** If the emulator falls this far behind the wall clock, it stops trying to catch up. */
 const MAX_LAG_NANOS = 200e6;
 
-function main() {
+async function main() {
   let options;
   try {
     ({ values: options } = parseArgs({
       options: {
         pty: { type: 'boolean', default: false },
         'local-echo': { type: 'boolean', default: false },
+        'no-view': { type: 'boolean', default: false },
+        'view-port': { type: 'string', default: String(DEFAULT_VIEW_PORT) },
         elf: { type: 'string', default: DEFAULT_ELF },
         help: { type: 'boolean', short: 'h', default: false },
       },
@@ -59,16 +69,28 @@ function main() {
     bootrom: loadBootrom({ log: (message) => process.stderr.write(`${message}\n`) }),
   });
   const status = new StatusLine(process.stderr);
+  // With the view, the terminal's bytes and the page's lines share UART0 (shared-input.js).
+  const input = options['no-view'] ? null : new SharedInput(board);
+  const link = input
+    ? { sendBytes: (bytes) => input.typed(bytes), onOutput: (listener) => board.onOutput(listener) }
+    : board;
+  const view = input && (await startView(board, input, options, status));
   const connection = options.pty
-    ? new PtyConnection(board, status)
-    : new TerminalConnection(board, { echo: options['local-echo'] });
+    ? new PtyConnection(link, status)
+    : new TerminalConnection(link, { echo: options['local-echo'] });
 
-  const quit = (code, message) => {
+  let quitting = false;
+  const quit = async (code, message) => {
+    if (quitting) {
+      return;
+    }
+    quitting = true;
     connection.close();
     status.close();
     if (message) {
       process.stderr.write(`${message}\n`);
     }
+    await view?.close(message ? message.trim() : 'the runner was stopped (Ctrl-C, or its input ended)');
     process.exit(code);
   };
   connection.onQuit = () => quit(0);
@@ -78,6 +100,23 @@ function main() {
 
   board.onServoChange(() => status.update(board));
   runInRealTime(board, status, (error) => quit(1, `\n${error.message}`));
+}
+
+/** Starts the 3D view's server and prints its address; exits with a message if it cannot. */
+async function startView(board, input, options, status) {
+  const port = Number(options['view-port']);
+  if (!Number.isInteger(port) || port < 0 || port > 65535) {
+    console.error(`--view-port: not a port number: ${options['view-port']}\n\n${USAGE}`);
+    process.exit(2);
+  }
+  try {
+    const view = await startViewServer({ board, input, port, link: options.pty ? 'pty' : 'terminal' });
+    status.message(`3D view: ${view.url}  (open it in a browser; --no-view skips it)`);
+    return view;
+  } catch (error) {
+    console.error(`cannot start the 3D view on port ${port}: ${error.message} (--no-view skips it)`);
+    process.exit(1);
+  }
 }
 
 /**
@@ -287,4 +326,4 @@ class StatusLine {
   }
 }
 
-main();
+await main();

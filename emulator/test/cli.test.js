@@ -1,6 +1,7 @@
-// The host tool `hexapod` (cli/) against the real firmware, as a user runs it: `./dev run --pty`
-// (src/run.js) boots the firmware ELF in the emulator with UART0 on a pseudo-terminal, and the
-// tool talks to that terminal as to a board's serial port. `apply` a build file, read it back,
+// The host tool `hexapod` (cli/) against the real firmware, as a user runs it: `./dev run --pty
+// --no-view` (src/run.js) boots the firmware ELF in the emulator with UART0 on a pseudo-terminal
+// (and no live view, whose own lines would share it), and the tool talks to that terminal as to
+// a board's serial port. `apply` a build file, read it back,
 // stream a 10-second trajectory as binary frames and a shorter one as `pose` lines (every reply
 // checked), then the final pulse widths, as the firmware reports them and as the emulator
 // measures them on the pins, against the host build of the kinematics. And `uf2 --settings`:
@@ -75,7 +76,7 @@ before(async () => {
   firmwareBootrom(); // the ELF is built and the boot ROM cached before the runner needs them
   tool = buildTool();
   dir = mkdtempSync(join(tmpdir(), 'hexapod-cli-e2e-'));
-  runner = spawn(process.execPath, [RUNNER, '--pty', '--elf', DEFAULT_ELF], {
+  runner = spawn(process.execPath, [RUNNER, '--pty', '--no-view', '--elf', DEFAULT_ELF], {
     stdio: ['ignore', 'ignore', 'pipe'],
   });
   runner.stderr.setEncoding('utf8');

@@ -279,3 +279,26 @@ test('e-stop during a commanded move: the pins stop within a frame, moves refuse
   assert.equal(board.pinOutput(16), false);
   refused(board, 'home', 'e-stop');
 });
+
+test('a stream that is clamped on every frame keeps every main-loop pass under 1 ms and misses no frame', () => {
+  const board = trackingBoard({ hz: 333, speed: 200, accel: 2000 });
+  ok(board, 'set speed_deg_s 200');
+  ok(board, 'set accel_deg_s2 2000');
+  ok(board, 'set stream.z_mm 200');
+  board.loop.reset();
+  board.frames.reset();
+  // 300 frames/s, their targets alternately far above and far below reach: each clamped.
+  for (let k = 0; k < 90; k++) {
+    board.sendBytes(binaryFrame([32768 + (k % 7) * 200, 32768, k % 2 ? 0 : 65535, 32768, 32768, 32768]));
+    board.runMs(1000 / 300);
+  }
+  const { longestPassCycles } = board.loop;
+  assert.ok(longestPassCycles < 125_000, `a pass took ${longestPassCycles} cycles (bound: 1 ms)`);
+  assert.ok(board.frames.frames > 80, `${board.frames.frames} frames seen`);
+  assert.equal(board.frames.missed, 0, 'servo frames missed');
+  const s = status(board).stream;
+  assert.ok(s.clamped >= 80, `clamped ${s.clamped}`);
+  for (const servo of board.servos()) {
+    assert.ok(servo.widthUs >= 1100 - COUNT_US && servo.widthUs <= 1900 + COUNT_US);
+  }
+});
