@@ -233,3 +233,33 @@ fn a_missing_port_and_a_silent_board_are_named() {
         "{err}"
     );
 }
+
+#[test]
+fn lost_bytes_are_resynchronised_with_status_and_the_lost_line_is_an_error() {
+    let dir = scratch("lost");
+    // Lines received: 0 `set echo off`, 1 `status`, 2 `set frame_hz 100` (lost), 3 `status`.
+    let board = SimBoard::start_losing(2);
+    let send = hexapod(
+        &dir,
+        &[
+            "send",
+            "--port",
+            &board.path,
+            "status",
+            "set frame_hz 100",
+            "status",
+        ],
+    );
+    let (out, err) = text(&send);
+    assert!(!send.status.success(), "{out}{err}");
+    assert!(out.contains("# warning: receive queue overflowed"), "{out}");
+    assert!(
+        err.contains("the board refused 'set frame_hz 100': error:rx-overflow"),
+        "{err}"
+    );
+    let finished = board.finish();
+    assert_eq!(finished.settings.frame_hz, 50);
+    // After the warning the tool sent a line end and `status`, and nothing after the refusal.
+    let sent = String::from_utf8_lossy(&finished.received).into_owned();
+    assert!(sent.ends_with("set frame_hz 100\n\nstatus\n"), "{sent:?}");
+}

@@ -54,13 +54,37 @@ impl SimBoard {
 
     /// A board with this flash, that stops answering after `answer_lines` lines (if given).
     pub fn start_with(flash: RamFlash, answer_lines: Option<usize>) -> SimBoard {
+        SimBoard::start_full(flash, answer_lines, None)
+    }
+
+    /// A board that loses the bytes of line number `lost_line` (from 0, counting every line
+    /// received) as the firmware's receive queue loses bytes: a `# warning:` at once, and the
+    /// line the gap cuts refused (`error:rx-overflow`).
+    pub fn start_losing(lost_line: usize) -> SimBoard {
+        SimBoard::start_full(RamFlash::new(), None, Some(lost_line))
+    }
+
+    fn start_full(
+        flash: RamFlash,
+        answer_lines: Option<usize>,
+        lost_line: Option<usize>,
+    ) -> SimBoard {
         let (controller_side, terminal) = TTYPort::pair().expect("a pseudo-terminal pair");
         let path = terminal.name().expect("the pseudo-terminal's path");
         let stop = Arc::new(AtomicBool::new(false));
         let answered = Arc::new(AtomicUsize::new(0));
         let thread = {
             let (stop, answered) = (Arc::clone(&stop), Arc::clone(&answered));
-            thread::spawn(move || run(controller_side, flash, stop, answered, answer_lines))
+            thread::spawn(move || {
+                run(
+                    controller_side,
+                    flash,
+                    stop,
+                    answered,
+                    answer_lines,
+                    lost_line,
+                )
+            })
         };
         SimBoard {
             path,
@@ -88,6 +112,12 @@ impl Drop for SimBoard {
     }
 }
 
+/// What the board's receive queue holds: a byte, or the place where bytes were lost.
+enum Input {
+    Byte(u8),
+    Gap(u32),
+}
+
 /// The board's main loop (see firmware/src/main.rs and control/README.md).
 fn run(
     mut port: TTYPort,
@@ -95,13 +125,17 @@ fn run(
     stop: Arc<AtomicBool>,
     answered: Arc<AtomicUsize>,
     answer_lines: Option<usize>,
+    lost_line: Option<usize>,
 ) -> Finished {
     port.set_timeout(Duration::from_millis(1)).expect("timeout");
     let mut ctl: Controller = Controller::power_up(Store::load(&mut flash));
     let mut session = Session::new();
     let mut out = String::new();
     let mut received = Vec::new();
-    let mut waiting: VecDeque<u8> = VecDeque::new();
+    // Bytes waiting to be fed, and where bytes were lost (the firmware's receive queue).
+    let mut waiting: VecDeque<Input> = VecDeque::new();
+    let mut lines_received = 0usize;
+    let mut dropped = 0u32;
     let mut pulses_us = ctl.pulses_us();
     ctl.banner(&mut session, &mut out);
     let mut next_frame = Instant::now();
@@ -111,17 +145,39 @@ fn run(
         let silent = answer_lines.is_some_and(|n| lines >= n);
         if let Ok(n) = port.read(&mut buffer) {
             received.extend_from_slice(&buffer[..n]);
-            if !silent {
-                waiting.extend(&buffer[..n]);
+            for &byte in &buffer[..n] {
+                if lost_line == Some(lines_received) {
+                    dropped += 1;
+                    if byte == b'\n' {
+                        ctl.on_input_lost(&mut session, dropped, false, &mut out);
+                        waiting.push_back(Input::Gap(dropped));
+                    }
+                } else if !silent {
+                    waiting.push_back(Input::Byte(byte));
+                }
+                if byte == b'\n' {
+                    lines_received += 1;
+                }
             }
         }
         if ctl.is_busy() {
             ctl.work(&mut session, &mut out);
         } else {
-            while let Some(byte) = waiting.pop_front() {
-                if ctl.on_byte(&mut session, byte, &mut out) == Fed::LineEnded {
-                    lines += 1;
-                    break;
+            while let Some(input) = waiting.pop_front() {
+                match input {
+                    Input::Byte(byte) => {
+                        if ctl.on_byte(&mut session, byte, &mut out) == Fed::LineEnded {
+                            lines += 1;
+                            break;
+                        }
+                    }
+                    Input::Gap(bytes) => ctl.on_rx_overflow(
+                        &mut session,
+                        control::protocol::Lost {
+                            bytes,
+                            in_uart: false,
+                        },
+                    ),
                 }
             }
             ctl.apply_stream();
