@@ -38,6 +38,17 @@ pub const NOTICE_PREFIXES: [&str; 4] = [
     "# emergency stop:",
 ];
 
+/// What the board's warnings about lost input say (README, "Command reference": `# warning:
+/// receive queue overflowed, input lost ...`, `# warning: UART receive error, input lost ...`):
+/// after one, the link is resynchronised. Other warnings (e.g. about the settings found in
+/// flash at power-up) need nothing.
+pub const INPUT_LOST: &str = "input lost";
+
+/// Whether a line is the board's warning that input was lost.
+pub fn is_input_lost(line: &str) -> bool {
+    line.starts_with("# warning:") && line.contains(INPUT_LOST)
+}
+
 /// Whether a line is a final reply.
 pub fn is_final(line: &str) -> bool {
     line == "ok" || line.starts_with("error:")
@@ -207,7 +218,7 @@ impl Link {
                 return Ok(reply);
             }
             if is_notice(&text) {
-                let lost = text.starts_with("# warning:");
+                let lost = is_input_lost(&text);
                 reply.notices.push(text);
                 if lost {
                     return self.resynchronise(line, reply);
@@ -346,5 +357,32 @@ fn read_lines(
                 return;
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use control::report::{write_notice, Notice};
+
+    #[test]
+    fn the_board_s_lost_input_warnings_are_recognised_and_nothing_else() {
+        for in_uart in [false, true] {
+            let mut text = String::new();
+            write_notice(
+                &mut text,
+                &Notice::InputLost {
+                    at_least: 7,
+                    in_uart,
+                },
+            );
+            let line = text.trim_end();
+            assert!(is_notice(line) && is_input_lost(line), "{line}");
+        }
+        let mut text = String::new();
+        write_notice(&mut text, &Notice::NoSavedSettings(None));
+        let line = text.trim_end();
+        assert!(is_notice(line) && !is_input_lost(line), "{line}");
+        assert!(is_final("ok") && is_final("error:busy x") && !is_final("# ok"));
     }
 }

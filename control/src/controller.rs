@@ -485,8 +485,9 @@ impl<M: Math> Controller<M> {
 
     // ----- what the board calls -----
 
-    /// Writes the start-up banner (and any notice, e.g. refused settings), then the prompt, to
-    /// one link.
+    /// Writes the banner (and the notices this link has not shown, e.g. refused settings), then
+    /// the prompt, to one link: at power-up, and when a link opens (a USB host opening its
+    /// port, after [`Session::reopen`]).
     pub fn banner(&self, session: &mut Session, out: &mut impl Write) {
         report::write_banner(out);
         self.flush_notices(session, out);
@@ -1642,6 +1643,42 @@ mod tests {
             to_program,
             "s\r\n# warning: receive queue overflowed, input lost (at least 9 bytes so far)\r\n> s"
         );
+    }
+
+    #[test]
+    fn a_reopened_link_starts_afresh_and_shows_only_what_came_while_it_was_closed() {
+        let mut c = quiet();
+        let mut usb = program();
+        let mut out = std::string::String::new();
+        c.on_input_lost(&mut usb, 3, false, &mut out);
+        for &b in b"pose 1" {
+            c.on_byte(&mut usb, b, &mut out);
+        }
+        // Closed (the host dropped DTR); a notice comes meanwhile, then the host opens again.
+        c.notify(Notice::InputLost {
+            at_least: 7,
+            in_uart: true,
+        });
+        usb.reopen();
+        assert!(usb.echo(), "a new terminal: echo on");
+        assert_eq!(usb.typed(), "", "the partial line is abandoned");
+        out.clear();
+        c.banner(&mut usb, &mut out);
+        assert_eq!(
+            out,
+            std::format!(
+                "# hexapod control {}: poses in mm and degrees; type help\r\n\
+                 # warning: UART receive error, input lost (at least 7 bytes)\r\n> ",
+                report::VERSION
+            )
+        );
+        // The new terminal's first line is a line of its own.
+        out.clear();
+        for &b in b"home\r" {
+            c.on_byte(&mut usb, b, &mut out);
+        }
+        finish(&mut c, &mut usb, &mut out);
+        assert_eq!(out, "home\r\nok\r\n> ");
     }
 
     #[test]

@@ -66,24 +66,27 @@ const CONTENT_TYPES = {
  * another port that is taken falls back to any free one when `fallback` is set.
  * @param {object} options
  * @param {import('./board.js').EmulatedBoard} options.board
+ * @param {object} [options.serial] the serial link the page and the terminal share (one with
+ *   `onOutput(listener)`: `board.usb`, `board.uart`; default the board, UART0)
  * @param {import('./shared-input.js').SharedInput} options.input
  * @param {string} [options.link] what the terminal side is, for the page ('terminal', 'pty')
  */
 export async function startViewServer({
   board,
+  serial = board,
   input,
   port = DEFAULT_VIEW_PORT,
   fallback = true,
   link = 'terminal',
   wasm = VIEW_WASM,
 }) {
-  const view = new ViewServer({ board, input, link, wasm });
+  const view = new ViewServer({ board, serial, input, link, wasm });
   await view.listen(port, fallback);
   return view;
 }
 
 export class ViewServer {
-  constructor({ board, input, link, wasm }) {
+  constructor({ board, serial = board, input, link, wasm }) {
     this.board = board;
     this.input = input;
     this.link = link;
@@ -100,7 +103,7 @@ export class ViewServer {
     this.timer = null;
     this.stopped = null;
 
-    board.onOutput((byte) => this.output(byte));
+    serial.onOutput((byte) => this.output(byte));
     input.onLine((text, source) => this.lineSent(text, source));
   }
 
