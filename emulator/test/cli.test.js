@@ -216,6 +216,25 @@ test('a 10-second binary stream arrives whole; the pins end where the host IK pu
   });
 });
 
+test('a text stream: a row the board refuses is reported, and the rows after it still go', async () => {
+  // With speed limits (the board checks the straight path of each move): from the first pose
+  // the path to the second leaves the workspace (README, "Error codes", path-blocked); each pose
+  // alone is reachable, so the host's check passes them and the board refuses the second.
+  const limits = await hexapod(['send', '--port', port, '--timeout-s', '30', 'set speed_mm_s 50', 'set speed_deg_s 60']);
+  assert.equal(limits.status, 0, limits.stderr);
+  writeFileSync(
+    join(dir, 'blocked.csv'),
+    'time,x,y,z,roll,pitch,yaw\n0,-28,19,-2.5,11,2,-20\n3,30,-12,-13.5,5,-13,28\n3.1,0,0,2,0,0,0\n',
+  );
+  const stream = await hexapod(['stream', 'blocked.csv', '--text', '--port', port, '--timeout-s', '30']);
+  assert.notEqual(stream.status, 0);
+  assert.match(stream.stderr, /line 3: the board refused 'pose 30\.000 -12\.000 -13\.500 5\.000 -13\.000 28\.000': error:path-blocked /);
+  assert.match(stream.stdout, /lines sent: 3, ok: 2, refused: 1/);
+  assert.match(stream.stderr, /blocked\.csv: the stream did not go through whole: 1 lines refused/);
+  const status = await hexapod(['send', '--port', port, '--timeout-s', '30', 'status']);
+  assert.match(status.stdout, /# target: x=0\.000 y=0\.000 z=2\.000 roll=0\.000 pitch=0\.000 yaw=0\.000/);
+});
+
 test('uf2 --settings: the chip booted from the file starts with the build file saved', () => {
   writeFileSync(join(dir, 'build.toml'), BUILD);
   execFileSync(tool, ['uf2', DEFAULT_ELF, '-o', 'fw.uf2', '--settings', 'build.toml'], { cwd: dir });
