@@ -338,7 +338,9 @@ impl Display for Problem {
                 refused_frames,
             } => write!(
                 f,
-                "{file}: the stream did not go through whole: {refused} lines refused,                  {lost_frames} frames damaged or lost, {refused_frames} frames refused,                  {notices} notices from the board (see above)"
+                "{file}: the stream did not go through whole: {refused} lines refused, \
+                 {lost_frames} frames damaged or lost, {refused_frames} frames refused, \
+                 {notices} notices from the board (see above)"
             ),
         }
     }
@@ -422,8 +424,9 @@ pub const SHELL_PROMPT: &str = "hexapod> ";
 pub fn build_file_header(source: &str) -> String {
     format!(
         "# hexapod build file: the settings of {source}.\n\
-         # Keys are the firmware's `set` names (README, \"Settings\"): `[servo3] trim_us = 1512` is\n\
-         # `set servo3.trim_us 1512`. Lengths in mm, angles in degrees, pulses in microseconds.\n\
+         # Keys are the firmware's `set` names (README, \"Settings\"):\n\
+         # `[servo3] trim_us = 1512` is `set servo3.trim_us 1512`.\n\
+         # Lengths in mm, angles in degrees, pulses in microseconds.\n\
          # A key left out is the firmware's default. `hexapod apply FILE` (no port) checks it;\n\
          # `hexapod apply FILE --port PORT` sends `defaults`, every `set`, then `save`.\n\n"
     )
@@ -687,7 +690,10 @@ pub fn description(d: &crate::size::Description) -> String {
         g.rod_mm(),
         g.home_height_mm()
     );
-    out += "  leg  shaft b (mm)                 joint p (mm, platform frame)  beta (deg)  alpha0 (deg)  shaft to joint at home (mm)\n";
+    out += concat!(
+        "  leg  shaft b (mm)                 joint p (mm, platform frame)  beta (deg)",
+        "  alpha0 (deg)  shaft to joint at home (mm)\n"
+    );
     for i in 0..6 {
         let leg = g.leg(i);
         let v = |v: kinematics_core::Vec3| format!("({:8.3} {:8.3} {:6.3})", v.x, v.y, v.z);
@@ -722,7 +728,9 @@ pub fn description(d: &crate::size::Description) -> String {
     match d.stiffness_diagonal {
         Some(s) => {
             out += &format!(
-                "Stiffness at home, servos holding {k} N mm/rad each (K = J^T diag(k) J, diagonal):\n  x {:.2}, y {:.2}, z {:.2} N/mm; roll {:.0}, pitch {:.0}, yaw {:.0} N mm/rad\n",
+                "Stiffness at home, servos holding {k} N mm/rad each (K = J^T diag(k) J, \
+                 diagonal):\n  x {:.2}, y {:.2}, z {:.2} N/mm; roll {:.0}, pitch {:.0}, yaw {:.0} \
+                 N mm/rad\n",
                 s[0], s[1], s[2], s[3], s[4], s[5]
             );
         }

@@ -181,7 +181,8 @@ impl Scene {
         let mut out = format!(
             "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" \
              viewBox=\"0 0 {w} {h}\" font-family=\"{FONT}\">\n\
-             <rect class=\"background\" x=\"0\" y=\"0\" width=\"{w}\" height=\"{h}\" fill=\"#fff\"/>\n"
+             <rect class=\"background\" x=\"0\" y=\"0\" width=\"{w}\" height=\"{h}\" \
+             fill=\"#fff\"/>\n"
         );
         for item in &self.items {
             let mut attributes = format!(" class=\"{}\"", item.class);
@@ -213,7 +214,8 @@ impl Scene {
                 Shape::Line(a, b) => {
                     let _ = writeln!(
                         out,
-                        "<line{attributes} x1=\"{:.2}\" y1=\"{:.2}\" x2=\"{:.2}\" y2=\"{:.2}\"{paint} stroke-linecap=\"round\"/>",
+                        "<line{attributes} x1=\"{:.2}\" y1=\"{:.2}\" x2=\"{:.2}\" \
+                         y2=\"{:.2}\"{paint} stroke-linecap=\"round\"/>",
                         a[0], a[1], b[0], b[1]
                     );
                 }

@@ -359,7 +359,8 @@ mod tests {
     fn the_first_row_the_board_would_refuse_is_named_before_anything_is_sent() {
         let rows = parse(
             "t.csv",
-            "time,x,y,z,roll,pitch,yaw\n0,0,0,0,0,0,0\n1,0,0,5,0,0,0\n2,0,0,80,0,0,0\n3,0,0,90,0,0,0\n",
+            "time,x,y,z,roll,pitch,yaw\n0,0,0,0,0,0,0\n1,0,0,5,0,0,0\n2,0,0,80,0,0,0\n\
+             3,0,0,90,0,0,0\n",
         )
         .unwrap();
         let text = prepare("t.csv", &rows, &Settings::default(), Mode::Text).unwrap_err();
