@@ -456,6 +456,7 @@ pub fn setting_meaning(id: control::settings::SettingId) -> &'static str {
         S::Servo(_, P::Dir) => "direction",
         S::Servo(_, P::MinUs) => "lowest pulse",
         S::Servo(_, P::MaxUs) => "highest pulse",
+        S::Servo(_, P::TorqueKgcm) => "rated torque",
         S::StreamScale(Axis::X | Axis::Y | Axis::Z) => "stream full scale of the axis",
         S::StreamScale(_) => "stream full scale of the axis",
         S::StreamBits => "bits of a text frame's counts",
@@ -463,6 +464,10 @@ pub fn setting_meaning(id: control::settings::SettingId) -> &'static str {
         S::EstopPin => "emergency-stop input",
         S::EstopAction => "what an open e-stop does",
         S::PowerPin => "servo-power enable output",
+        S::PayloadG => "mass the platform carries (0: none)",
+        S::PayloadCom(0) => "payload centre of mass, platform frame x",
+        S::PayloadCom(1) => "payload centre of mass, platform frame y",
+        S::PayloadCom(_) => "payload centre of mass, platform frame z (up)",
     }
 }
 
