@@ -670,21 +670,27 @@ impl<M: Math> Controller<M> {
     /// or the tracker's goal, if it can be taken; else it is clamped. One IK solution here; a
     /// clamp (the target out of reach, or with torque ratings, a target whose holding torques
     /// are to be checked) is the controller's own job ([`Controller::work`], a slice per pass).
-    /// The board calls it after feeding the bytes waiting.
+    /// The board calls it after feeding the bytes waiting. If those bytes ended with a command
+    /// whose work is running (the host's `status` after its last frame), a frame that needs a
+    /// job of its own waits, still fresh, for the first call after that work is done.
     pub fn apply_stream(&mut self) {
         let Some(mut stream) = self.stream.filter(|s| s.fresh) else {
             return;
         };
+        let solved = self
+            .solver
+            .solve::<M>(&self.settings.servos, &stream.target);
+        let needs_job = solved.is_err() || self.settings.payload.checked();
+        if needs_job && self.job.is_some() {
+            return;
+        }
         stream.fresh = false;
         self.stream = Some(stream);
         self.stream_counts.applied = self.stream_counts.applied.wrapping_add(1);
         self.servo_power = true;
         self.fault = None;
         let from = *self.motion.pose();
-        match self
-            .solver
-            .solve::<M>(&self.settings.servos, &stream.target)
-        {
+        match solved {
             Ok(solution) if !self.settings.payload.checked() => {
                 self.reach_stream_goal(stream.target, Some(solution))
             }
@@ -1230,8 +1236,9 @@ impl<M: Math> Controller<M> {
 
     /// Starts clamping a stream target as the controller's own job: `to` cannot be reached
     /// (`unchecked: None`), or can, with this solution, but its holding torques are to be
-    /// checked against the ratings first. (One job at a time: a job already running means this
-    /// frame came through a transport that feeds while busy; then the goal stays where it was.)
+    /// checked against the ratings first. ([`Controller::apply_stream`] waits for a command's
+    /// work to end first; a job still running here means this frame came through a transport
+    /// that feeds while busy: then the goal stays where it was.)
     fn start_clamp(&mut self, from: Pose, to: Pose, unchecked: Option<Solution>) {
         if self.job.is_none() {
             self.job = Some(Job::Clamp(Bisection {

@@ -439,3 +439,72 @@ fn a_clamp_is_the_controllers_own_work_a_slice_at_a_time() {
     assert!(s.ctl.pose().z_mm > 0.0);
     assert!(s.ctl.take_new_pulses().is_some());
 }
+
+/// Feeds bytes as the board's main loop does in one pass: up to the end of a line, or until a
+/// command's work begins; then applies the newest stream frame. Returns what was written.
+fn one_pass(s: &mut Host, bytes: &[u8]) -> String {
+    let mut out = String::new();
+    for &b in bytes {
+        s.ctl.on_byte(&mut s.link, b, &mut out);
+        if s.ctl.is_busy() {
+            break;
+        }
+    }
+    s.ctl.apply_stream();
+    out
+}
+
+/// Then the passes until the work in progress is done, one with no input, and the passes of
+/// the work that one may start.
+fn passes_until_idle(s: &mut Host) -> String {
+    let work = |s: &mut Host, out: &mut String| {
+        while s.ctl.is_busy() {
+            s.ctl.work(&mut s.link, out);
+        }
+    };
+    let mut out = String::new();
+    work(s, &mut out);
+    out += &one_pass(s, b"");
+    work(s, &mut out);
+    out
+}
+
+#[test]
+fn a_frame_fed_with_a_command_in_the_same_pass_is_applied_after_the_command_s_work() {
+    // The stream's last frame and the host's `status` after it, in one pass: the frame is
+    // applied once the listing is done, whatever its target needs first (a torque check, a
+    // clamp), never dropped.
+    // (case, with torque ratings, z as a fraction of its full scale of 15 mm, the least z the
+    // platform must reach, mm)
+    let cases = [
+        ("reachable, no ratings", false, 0.2, 3.0),
+        ("reachable, torque-checked", true, 0.2, 3.0),
+        ("beyond reach, clamped", false, 1.0, 13.5),
+    ];
+    for (case, rated, z, at_least_mm) in cases {
+        let mut s = pass_through();
+        if rated {
+            s.ok("set payload_g 1000");
+            s.ok("set servos.torque_kgcm 20");
+        }
+        let mut bytes = binary([
+            count(0.0),
+            count(0.0),
+            count(z),
+            count(0.0),
+            count(0.0),
+            count(0.0),
+        ]);
+        bytes.extend_from_slice(b"status\r\n");
+        one_pass(&mut s, &bytes);
+        let out = passes_until_idle(&mut s);
+        assert!(out.ends_with("ok\r\n"), "{case}: {out:?}");
+        let c = s.ctl.stream_counts();
+        assert_eq!((c.frames, c.applied), (1, 1), "{case}");
+        let zmm = s.ctl.pose().z_mm;
+        assert!(
+            zmm >= at_least_mm - 1e-3 && zmm <= z * 15.0 + 1e-3,
+            "{case}: z = {zmm} mm"
+        );
+    }
+}
