@@ -17,12 +17,20 @@
 //! settings start from the firmware's defaults (as after `defaults`), so the file says the
 //! whole platform: what it leaves out is the default.
 //!
+//! The payload and the servos' torque ratings are settings like the others (`payload_g = 500`,
+//! `payload_com_z_mm = 20`, `[servo3] torque_kgcm = 1.8` or `servos.torque_kgcm = 1.8`). The
+//! board also refuses a payload or rating that its servos could not hold where the platform is:
+//! here, at home (where a board is after `defaults` from power-up), with the board's own torque
+//! check (`control::payload::PayloadSettings::check`).
+//!
 //! The board checks each `set` on its own, so each step must leave valid settings (e.g.
 //! `servo1.min_us = 1600` is refused while `servo1.trim_us` is still 1500). The file's keys
 //! are therefore put in an order in which every step is accepted ([`BuildFile::steps`]),
 //! keeping the file's order where it can and never reordering two keys that set the same
 //! value (`servos.trim_us` then `servo3.trim_us`). If no order works, the first key that
 //! cannot be applied is the error, in the board's words, with its file, line and key.
+//!
+//! The `[sizing]` table holds what the board has no setting for (`crate::sizing`).
 //!
 //! Values: numbers as typed (TOML's `1_000` and `0x10` are the numbers they mean), words as
 //! strings (`dir = "reversed"`, `speed_mm_s = "off"`). Units are those of the names (`_mm`,
@@ -32,7 +40,7 @@ use control::command::ParseError;
 use control::report::ValueText;
 use control::settings::{Kind, ServoParam, ServoSel, SettingId, SettingValue, Settings};
 use control::word::word;
-use kinematics_core::LEGS;
+use kinematics_core::{Libm, Pose, LEGS};
 use toml::de::{DeTable, DeValue};
 
 use crate::messages::{KeyProblem, Problem};
@@ -63,8 +71,8 @@ pub struct BuildFile {
     pub steps: Vec<Step>,
     /// The settings they make.
     pub settings: Settings,
-    /// The `[sizing]` table: the payload and the servos' rating, for the host's sizing tools
-    /// (not settings of the board, never sent to it).
+    /// The `[sizing]` table: the servos' stiffness, for the host's sizing tools (not a setting
+    /// of the board, never sent to it).
     pub sizing: Sizing,
 }
 
@@ -135,7 +143,7 @@ pub fn parse(file: &str, text: &str) -> Result<BuildFile, Problem> {
             let blocked = pending[..i]
                 .iter()
                 .any(|(earlier, _)| overlap(earlier.id, step.id));
-            !blocked && settings.with(step.id, *value).validate().is_ok()
+            !blocked && accepted(&settings.with(step.id, *value)).is_ok()
         });
         match next {
             Some(i) => {
@@ -145,18 +153,11 @@ pub fn parse(file: &str, text: &str) -> Result<BuildFile, Problem> {
             }
             None => {
                 let (step, value) = &pending[0];
-                let error = settings
-                    .with(step.id, *value)
-                    .validate()
+                let why = accepted(&settings.with(step.id, *value))
                     .err()
-                    .map(control::Error::from)
-                    // The first key is never blocked, so it failed validation.
-                    .unwrap_or(control::Error::Busy);
-                return Err(problem(
-                    &step.id.to_string(),
-                    step.line,
-                    KeyProblem::Refused(Box::new(error)),
-                ));
+                    // The first key is never blocked, so it was refused.
+                    .unwrap_or(KeyProblem::Refused(Box::new(control::Error::Busy)));
+                return Err(problem(&step.id.to_string(), step.line, why));
             }
         }
     }
@@ -165,6 +166,24 @@ pub fn parse(file: &str, text: &str) -> Result<BuildFile, Problem> {
         settings,
         sizing,
     })
+}
+
+/// Whether the board, holding home, accepts these settings: valid ([`Settings::validate`]),
+/// and with a payload and ratings, every servo within its rating at home.
+fn accepted(settings: &Settings) -> Result<(), KeyProblem> {
+    let solver = settings
+        .validate()
+        .map_err(|e| KeyProblem::Refused(Box::new(e.into())))?;
+    if settings.payload.checked() {
+        // Valid settings reach home (their trims are within their limits).
+        if let Ok(home) = solver.solve::<Libm>(&settings.servos, &Pose::HOME) {
+            settings
+                .payload
+                .check::<Libm>(&solver, &Pose::HOME, &home.arm_rad)
+                .map_err(KeyProblem::OverloadedAtHome)?;
+        }
+    }
+    Ok(())
 }
 
 /// Whether two settings set a common value (`servos.x` and `servoN.x`).
@@ -262,13 +281,19 @@ fn describe(id: SettingId) -> String {
     }
 }
 
+/// A key and its value, the comment after them (in a column, at least a space away).
+fn commented(text: &str, comment: &str) -> String {
+    format!("{text:<31} # {comment}\n")
+}
+
 /// A commented build file of `settings` and `sizing`; `source` says where they come from.
+/// Without a payload, commented lines show how to give one.
 pub fn write(settings: &Settings, sizing: &Sizing, source: &str) -> String {
     let mut out = crate::messages::build_file_header(source);
     let line = |out: &mut String, key: &str, id: SettingId| {
         if let Some(value) = settings.get(id) {
             let text = format!("{key} = {}", toml_value(id, value));
-            out.push_str(&format!("{text:<32}# {}\n", describe(id)));
+            out.push_str(&commented(&text, &describe(id)));
         }
     };
     let mut stream = Vec::new();
@@ -281,6 +306,9 @@ pub fn write(settings: &Settings, sizing: &Sizing, source: &str) -> String {
             Some(short) => stream.push((short.to_string(), id)),
             None => line(&mut out, &name, id),
         }
+    }
+    if !settings.payload.carried() {
+        out.push_str(crate::messages::PAYLOAD_EXAMPLE);
     }
     out.push_str("\n[stream]\n");
     for (short, id) in stream {
@@ -299,10 +327,7 @@ pub fn write(settings: &Settings, sizing: &Sizing, source: &str) -> String {
     out.push_str(crate::messages::SIZING_HEADER);
     for (key, value) in sizing.entries() {
         let text = format!("{key} = {value:?}");
-        out.push_str(&format!(
-            "{text:<32}# {}\n",
-            crate::messages::sizing_meaning(key)
-        ));
+        out.push_str(&commented(&text, crate::messages::sizing_meaning(key)));
     }
     out
 }
@@ -406,24 +431,133 @@ mod tests {
 
     #[test]
     fn a_written_file_reads_back_as_the_same_settings() {
-        let defaults = ok(&write(
+        let written = write(
             &Settings::default(),
             &Sizing::default(),
             "the default platform",
-        ));
+        );
+        let defaults = ok(&written);
         assert_eq!(defaults.settings, Settings::default());
         assert_eq!(defaults.sizing, Sizing::default());
-        let custom = ok(
-            "frame_hz = 200\nspeed_mm_s = \"off\"\nestop_pin = 15\n[servo4]\n\
-                         dir = \"normal\"\ntrim_us = 1520.25\n[stream]\naxis1 = \"none\"\n",
+        // Every key's comment is at least a space away, even after the longest key.
+        assert!(
+            written.contains("servo_stiffness_nmm_rad = 5000.0 # "),
+            "{written}"
         );
-        let sizing = ok("[sizing]\npayload_kg = 2.5\npayload_z_mm = -4\n").sizing;
-        assert_eq!(sizing.payload_kg, 2.5);
-        let again = ok(&write(&custom.settings, &sizing, "a test"));
+        let custom = ok(
+            "frame_hz = 200\nspeed_mm_s = \"off\"\nestop_pin = 15\npayload_g = 1250.5\n\
+             payload_com_z_mm = -4\n[servo4]\ndir = \"normal\"\ntrim_us = 1520.25\n\
+             torque_kgcm = 2.5\n[stream]\naxis1 = \"none\"\n[sizing]\n\
+             servo_stiffness_nmm_rad = 8000\n",
+        );
+        assert_eq!(custom.sizing.servo_stiffness_nmm_rad, 8000.0);
+        let again = ok(&write(&custom.settings, &custom.sizing, "a test"));
         assert_eq!(again.settings, custom.settings);
-        assert_eq!(again.sizing, sizing);
-        assert!(err("[sizing]\npayload_kg = -1\n").starts_with("b.toml:2: sizing.payload_kg: "));
+        assert_eq!(again.sizing, custom.sizing);
+        assert!(err("[sizing]\nservo_stiffness_nmm_rad = 0\n")
+            .starts_with("b.toml:2: sizing.servo_stiffness_nmm_rad: must be a number"));
         assert!(err("[sizing]\ncolour = 1\n").starts_with("b.toml:2: sizing.colour: "));
-        assert!(err("[sizing]\npayload_kg = \"heavy\"\n").contains("sizing.payload_kg"));
+    }
+
+    #[test]
+    fn the_payload_and_ratings_are_the_board_s_settings() {
+        let file = ok(
+            "payload_g = 1500\npayload_com_z_mm = 25\nservos.torque_kgcm = 10\n\
+                       [servo3]\ntorque_kgcm = 12.345\n",
+        );
+        let p = &file.settings.payload;
+        assert_eq!(p.mass_g, 1500.0);
+        assert_eq!(p.com_mm, [0.0, 0.0, 25.0]);
+        // Kept to hundredths, as by the board.
+        assert_eq!(p.torque_kgcm, [10.0, 10.0, 12.35, 10.0, 10.0, 10.0]);
+        let commands: Vec<String> = file.steps.iter().map(Step::command).collect();
+        assert_eq!(
+            commands,
+            [
+                "set payload_g 1500",
+                "set payload_com_z_mm 25",
+                "set servos.torque_kgcm 10",
+                "set servo3.torque_kgcm 12.345"
+            ]
+        );
+        // The board's ranges and words.
+        assert_eq!(
+            err("payload_g = 100001\n"),
+            "b.toml:1: payload_g: error:out-of-range payload_g 100001 is outside 0..100000 g"
+        );
+        assert!(err("[servo2]\ntorque_kgcm = 601\n")
+            .starts_with("b.toml:2: servo2.torque_kgcm: error:out-of-range"));
+        // Written with the settings, in [servoN] as `config` lists them; the example of a
+        // payload only where there is none.
+        let written = write(&file.settings, &Sizing::default(), "a test");
+        assert!(written.contains("\npayload_g = 1500.0 "), "{written}");
+        assert!(written.contains("\n[servo3]\n"), "{written}");
+        assert!(written.contains("\ntorque_kgcm = 12.35 "), "{written}");
+        assert!(!written.contains("No payload"), "{written}");
+        let default = write(&Settings::default(), &Sizing::default(), "a test");
+        assert!(default.contains("\npayload_g = 0.0 "), "{default}");
+        assert!(default.contains("\ntorque_kgcm = \"off\" "), "{default}");
+        assert!(
+            default.contains(crate::messages::PAYLOAD_EXAMPLE),
+            "{default}"
+        );
+        // The example, uncommented, is a file the board takes.
+        let example: String = crate::messages::PAYLOAD_EXAMPLE
+            .lines()
+            .filter_map(|l| l.strip_prefix("#   "))
+            .filter(|l| {
+                l.split_once(" = ")
+                    .is_some_and(|(key, _)| !key.contains(' '))
+            })
+            .map(|l| format!("{l}\n"))
+            .collect();
+        assert_eq!(ok(&example).settings.payload.mass_g, 500.0);
+    }
+
+    #[test]
+    fn a_payload_a_servo_cannot_hold_at_home_is_refused_as_the_board_refuses_it() {
+        // 5 kg centred: about 1.67 kgf cm per servo at home (1.2 kg gives 0.4, control's
+        // payload tests), over a 1 kgf cm rating, whichever key comes last.
+        let expected = "servo 1 would need 1.667 kgf cm to hold the payload, over its rating \
+                        1.00 kgf cm; the board, holding home, refuses this setting \
+                        (error:pose-conflict)";
+        assert_eq!(
+            err("payload_g = 5000\nservos.torque_kgcm = 1\n"),
+            format!("b.toml:2: servos.torque_kgcm: at home {expected}")
+        );
+        assert_eq!(
+            err("servos.torque_kgcm = 1\npayload_g = 5000\n"),
+            format!("b.toml:2: payload_g: at home {expected}")
+        );
+        // A rating the payload needs less than, or no payload: accepted.
+        ok("payload_g = 5000\nservos.torque_kgcm = 1.7\n");
+        ok("servos.torque_kgcm = 0.01\n");
+    }
+
+    #[test]
+    fn the_old_sizing_keys_name_the_setting_that_replaced_them() {
+        assert_eq!(
+            err("frame_hz = 50\n[sizing]\npayload_kg = 2.5\n"),
+            "b.toml:3: sizing.payload_kg: now the board's setting payload_g (g): write \
+             `payload_g = 2500` above the file's first [table] instead"
+        );
+        assert_eq!(
+            err("[sizing]\npayload_x_mm = -3\n"),
+            "b.toml:2: sizing.payload_x_mm: now the board's setting payload_com_x_mm (mm): \
+             write `payload_com_x_mm = -3` above the file's first [table] instead"
+        );
+        assert!(err("[sizing]\npayload_y_mm = 1\n").contains("`payload_com_y_mm = 1`"));
+        assert!(err("[sizing]\npayload_z_mm = 20\n").contains("`payload_com_z_mm = 20`"));
+        assert_eq!(
+            err("[sizing]\nservo_torque_kgcm = 1.8\n"),
+            "b.toml:2: sizing.servo_torque_kgcm: now the board's setting servos.torque_kgcm \
+             (kgf cm): write `servos.torque_kgcm = 1.8` above the file's first [table] (or \
+             `torque_kgcm = 1.8` in a [servos] table) instead"
+        );
+        // Not a number: the setting all the same.
+        assert!(err("[sizing]\npayload_kg = \"heavy\"\n").contains(
+            "sizing.payload_kg: now the board's setting payload_g (g): write \
+                       `payload_g` above"
+        ));
     }
 }

@@ -62,10 +62,11 @@ enum Command {
     },
 
     // See and size it.
-    /// Describe a platform: geometry, reach from home, stiffness, holding torques against the
-    /// servos' rating
+    /// Describe a platform: geometry, reach from home, stiffness, and with a payload its holding
+    /// torques, against the servos' ratings where they have one
     Describe {
-        /// The platform (a build file, with its [sizing] table); the default platform without it
+        /// The platform (a build file: payload_g, payload_com_*_mm, torque_kgcm and the rest,
+        /// the servos' stiffness in [sizing]); the default platform (no payload) without it
         #[arg(long)]
         settings: Option<PathBuf>,
     },
@@ -81,10 +82,11 @@ enum Command {
         #[command(flatten)]
         formats: Formats,
     },
-    /// Servo torques holding the payload over a grid of poses, or carrying it along a
-    /// trajectory (gravity and inertia); the worst named, a plot
+    /// Servo torques holding the payload (payload_g) over a grid of poses, or carrying it along
+    /// a trajectory (gravity and inertia); the worst named, each against its servo's rating
+    /// (torque_kgcm) where it has one; a plot
     Torque {
-        /// The platform (a build file, with its [sizing] table); the default platform without it
+        /// The platform (a build file with a payload: payload_g above 0, payload_com_*_mm)
         #[arg(long)]
         settings: Option<PathBuf>,
         /// A trajectory (CSV: time,x,y,z,roll,pitch,yaw) instead of the grid

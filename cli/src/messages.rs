@@ -2,7 +2,7 @@
 //! The board's words are not here: a refusal is quoted as the board wrote it, or, for what the
 //! tool checks before sending (a build file, a trajectory), worded by `control::report` exactly
 //! as the board would word it ([`board_words`]). Units are part of the wording: mm, degrees,
-//! seconds, milliseconds, microseconds, kg and N·m, written out in each message.
+//! seconds, milliseconds, microseconds, grams and kgf cm, written out in each message.
 
 use std::fmt::{self, Display, Formatter};
 use std::io;
@@ -108,6 +108,11 @@ pub enum Problem {
         /// The board's words.
         why: String,
     },
+    /// `torque` of a platform that carries nothing (`payload_g` 0).
+    NoPayload {
+        /// The platform (a build file, or the default platform).
+        source: String,
+    },
 }
 
 /// What is wrong with a key of a build file.
@@ -122,6 +127,9 @@ pub enum KeyProblem {
     NotAValue,
     /// A `[sizing]` key that is not one, or its value out of range: why.
     Sizing(SizingProblem),
+    /// With the payload and ratings so far, a servo would need more than its rating to hold
+    /// the platform at home: the board, holding home, refuses the setting (`pose-conflict`).
+    OverloadedAtHome(control::payload::TorqueError),
 }
 
 /// What is wrong with a `[sizing]` key.
@@ -129,6 +137,13 @@ pub enum KeyProblem {
 pub enum SizingProblem {
     /// Not one of the sizing keys.
     Unknown,
+    /// A key the table once had, now a setting of the board.
+    Moved {
+        /// The setting to write instead.
+        setting: control::settings::SettingId,
+        /// The key's value in the setting's unit, if it was a number.
+        value: Option<f32>,
+    },
     /// Not a number in `min..=max` (of the key's unit).
     Range {
         /// Smallest.
@@ -248,6 +263,20 @@ impl Display for Problem {
                     KeyProblem::Sizing(SizingProblem::Range { min, max, unit }) => {
                         write!(f, "{key}: must be a number {min}..{max} {unit}")
                     }
+                    KeyProblem::Sizing(SizingProblem::Moved { setting, value }) => {
+                        write!(
+                            f,
+                            "{key}: now the board's setting {setting} ({}): write {} instead",
+                            setting_unit(*setting),
+                            setting_placement(*setting, *value)
+                        )
+                    }
+                    KeyProblem::OverloadedAtHome(cause) => write!(
+                        f,
+                        "{key}: at home {}; the board, holding home, refuses this setting \
+                         (error:pose-conflict)",
+                        torque_words(cause)
+                    ),
                     KeyProblem::NotAValue => write!(
                         f,
                         "{key}: not a setting value (a setting takes a number or a word; \
@@ -330,6 +359,12 @@ impl Display for Problem {
             Problem::Elf { path, why } => write!(f, "{path}: {why}"),
             Problem::Option { option, why } => write!(f, "{option}: {why}"),
             Problem::Pose { pose, why } => write!(f, "pose {pose}: {why}"),
+            Problem::NoPayload { source } => write!(
+                f,
+                "{source}: no payload (payload_g = 0): the servos hold nothing, so every torque \
+                 is 0; give payload_g (g) and payload_com_x_mm, payload_com_y_mm, \
+                 payload_com_z_mm (mm, platform frame) in the build file (--settings)"
+            ),
             Problem::StreamTrouble {
                 file,
                 refused,
@@ -347,6 +382,38 @@ impl Display for Problem {
 }
 
 impl std::error::Error for Problem {}
+
+/// The unit of a setting, from the firmware's own [`Kind`](control::settings::Kind).
+fn setting_unit(id: control::settings::SettingId) -> &'static str {
+    match id.kind() {
+        control::settings::Kind::Number { unit, .. } => unit,
+        _ => "",
+    }
+}
+
+/// Where and how a build file says a setting: `payload_g = 2500` above the first table, and
+/// for a name with a dot (`servos.torque_kgcm`) either the dotted key or the table.
+fn setting_placement(id: control::settings::SettingId, value: Option<f32>) -> String {
+    let name = id.to_string();
+    let value = value.map_or_else(String::new, |v| {
+        // To a thousandth: the unit changed (2.5 kg is 2500 g), not the number's precision.
+        format!(" = {}", (v * 1000.0).round() / 1000.0)
+    });
+    let above = format!("`{name}{value}` above the file's first [table]");
+    match name.split_once('.') {
+        Some((table, key)) => format!("{above} (or `{key}{value}` in a [{table}] table)"),
+        None => above,
+    }
+}
+
+/// A torque refusal in the board's words, without its code.
+fn torque_words(cause: &control::payload::TorqueError) -> String {
+    let words = board_words(&control::Error::Torque(*cause));
+    match words.split_once(' ') {
+        Some((_, message)) => message.to_string(),
+        None => words,
+    }
+}
 
 /// `init`, `pull`: a build file was written.
 pub fn wrote_build_file(path: &str, source: &str) -> String {
@@ -623,29 +690,30 @@ pub fn drew_refused(summary: &str, words: &str) -> String {
     format!("{summary}\nthe platform cannot take this pose: {words}")
 }
 
+/// A build file without a payload: how to give one (commented, so the file still says the
+/// board's defaults).
+pub const PAYLOAD_EXAMPLE: &str = "\
+# No payload: the board shows and checks no holding torques. To give one, e.g. 500 g whose\n\
+# centre of mass is 20 mm above the platform, on micro servos rated 1.8 kgf cm (an SG90):\n\
+#   payload_g = 500\n\
+#   payload_com_z_mm = 20\n\
+#   and torque_kgcm = 1.8 in each [servoN] below\n";
+
 /// The `[sizing]` table's heading in a build file.
-pub const SIZING_HEADER: &str =
-    "\n# Host-only: the payload and the servos, for `describe` and `torque`. Not settings of the\n\
-# board: `apply` never sends them.\n[sizing]\n";
+pub const SIZING_HEADER: &str = "\n\
+# Host-only: the servos' holding stiffness, for `describe` (the platform's stiffness, how far\n\
+# the payload's weight moves it). The board has no such setting: `apply` never sends it.\n\
+[sizing]\n";
 
 /// What a `[sizing]` key is, for a build file's comments.
 pub fn sizing_meaning(key: &str) -> &'static str {
     match key {
-        "payload_kg" => "payload mass (with the platform plate), kg",
-        "payload_x_mm" => "payload centre of mass, platform frame x, mm",
-        "payload_y_mm" => "payload centre of mass, platform frame y, mm",
-        "payload_z_mm" => "payload centre of mass, platform frame z (up), mm",
-        "servo_torque_kgcm" => "each servo's rated torque, kgf cm",
         "servo_stiffness_nmm_rad" => "each servo's holding stiffness, N mm/rad",
         _ => "",
     }
 }
 
 // ----- describe, workspace, torque -----
-
-fn kgcm(nmm: f32) -> f32 {
-    nmm / kinematics_core::statics::N_MM_PER_KGF_CM
-}
 
 fn pose_words(pose: &kinematics_core::Pose) -> String {
     let [x, y, z, roll, pitch, yaw] = pose.to_array();
@@ -741,40 +809,47 @@ pub fn description(d: &crate::size::Description) -> String {
         }
         None => out += "Stiffness at home: none (a singular pose)\n",
     }
-    let [cx, cy, cz] = p.sizing.payload_com_mm;
-    out += &format!(
-        "Payload {} kg at ({cx}, {cy}, {cz}) mm in the platform frame; servos rated {} kgf cm:\n",
-        p.sizing.payload_kg, p.sizing.servo_torque_kgcm
-    );
-    if let Some(sag) = &d.sag {
+    match &d.holding {
+        None => {
+            out += "Payload: none (payload_g = 0): no holding torques; give payload_g and \
+                        payload_com_x_mm, payload_com_y_mm, payload_com_z_mm to size the servos"
+        }
+        Some(h) => out += &holding_words(p, h),
+    }
+    out
+}
+
+/// `describe`'s payload section.
+fn holding_words(p: &crate::size::Platform, h: &crate::size::Holding) -> String {
+    let mut out = format!("Payload {}:\n", payload_words(p.payload()));
+    if let Some(sag) = &h.sag {
         out += &format!(
             "  its weight moves the platform at home by {:.3} mm down ({:.4} degrees of tilt)\n",
             -sag.translation_mm.z,
             sag.rotation_rad.norm().to_degrees()
         );
     }
-    if let Some(t) = d.home_torques_nmm {
-        let list: Vec<String> = t.iter().map(|v| format!("{:.3}", kgcm(*v))).collect();
+    if let Some(t) = h.home_kgcm {
+        let list: Vec<String> = t.iter().map(|v| format!("{v:.3}")).collect();
         out += &format!(
             "  holding torque at home, servos 1-6: {} kgf cm\n",
             list.join(" ")
         );
     }
-    let (reached, total) = d.grid_reached;
-    match &d.worst {
+    let (reached, total) = h.grid_reached;
+    match crate::size::overall(&h.per_servo) {
         Some(w) => {
-            let t = kgcm(w.torque_nmm).abs();
-            let verdict = verdict(t, p.sizing.servo_torque_kgcm);
             out += &format!(
                 "  worst over the workspace ({reached} reachable poses of a {total}-pose grid): \
-                 servo {} {:.3} kgf cm at {}: {verdict}",
+                 servo {} {:.3} kgf cm at {}\n",
                 w.servo,
-                t,
+                w.torque_kgcm.abs(),
                 pose_words(&w.pose)
             );
         }
-        None => out += "  worst over the workspace: no reachable pose in the grid",
+        None => out += "  worst over the workspace: no reachable pose in the grid\n",
     }
+    out += &format!("  {}", ratings_summary(p, &h.per_servo));
     out
 }
 
@@ -828,47 +903,134 @@ pub const WORST_HOLDING: &str = "worst holding torque";
 /// See [`SERVO_AXIS`].
 pub const OVER_RATING: &str = "over the rating";
 
-/// The rating line's legend.
-pub fn rating_label(kgcm: f32) -> String {
-    format!("rating {kgcm} kgf cm")
+/// Servos `1, 2, 4` as words: `servo 2`, `servos 1, 2, 4`, `servos 1-6`.
+fn servo_list(servos: &[usize]) -> String {
+    match servos {
+        [one] => format!("servo {one}"),
+        [1, 2, 3, 4, 5, 6] => "servos 1-6".to_string(),
+        _ => {
+            let numbers: Vec<String> = servos.iter().map(ToString::to_string).collect();
+            format!("servos {}", numbers.join(", "))
+        }
+    }
 }
+
+/// A rating's legend entry: the rating and its servos.
+pub fn rating_label(kgcm: f32, servos: &[usize]) -> String {
+    format!("rating {kgcm} kgf cm ({})", servo_list(servos))
+}
+
+/// The legend of a torque plot without ratings.
+pub const NOT_RATED: &str = "servos not rated (torque_kgcm off)";
 
 /// A servo's legend entry.
 pub fn servo_label(servo: usize) -> String {
     format!("servo {servo}")
 }
 
-/// The grid torque plot's title.
-pub fn grid_torque_title(source: &str, s: &crate::sizing::Sizing) -> String {
+/// The payload: its mass and centre of mass.
+fn payload_words(payload: &control::payload::PayloadSettings) -> String {
+    let [x, y, z] = payload.com_mm;
     format!(
-        "{source}: holding {} kg over the workspace grid",
-        s.payload_kg
+        "{} g at ({x}, {y}, {z}) mm in the platform frame",
+        payload.mass_g
+    )
+}
+
+/// The grid torque plot's title.
+pub fn grid_torque_title(source: &str, payload: &control::payload::PayloadSettings) -> String {
+    format!(
+        "{source}: holding {} g over the workspace grid",
+        payload.mass_g
     )
 }
 
 /// The trajectory torque plot's title.
-pub fn trajectory_torque_title(file: &str, s: &crate::sizing::Sizing) -> String {
+pub fn trajectory_torque_title(file: &str, payload: &control::payload::PayloadSettings) -> String {
     format!(
-        "{file}: torques carrying {} kg (gravity and inertia)",
-        s.payload_kg
+        "{file}: torques carrying {} g (gravity and inertia)",
+        payload.mass_g
     )
 }
 
-fn verdict(kgcm: f32, rating: f32) -> String {
-    if kgcm <= rating {
-        format!(
-            "within the rating of {rating} kgf cm ({:.0}%)",
-            100.0 * kgcm / rating
-        )
-    } else {
-        format!(
-            "OVER the rating of {rating} kgf cm ({:.0}%)",
-            100.0 * kgcm / rating
-        )
+/// A servo's torque against its rating.
+fn verdict_words(v: crate::size::Verdict) -> String {
+    use crate::size::Verdict;
+    match v {
+        Verdict::NotRated => "not rated".to_string(),
+        Verdict::Within {
+            rating_kgcm,
+            percent,
+        } => format!("within its rating of {rating_kgcm} kgf cm ({percent:.0}%)"),
+        Verdict::Over {
+            rating_kgcm,
+            percent,
+        } => format!("OVER its rating of {rating_kgcm} kgf cm ({percent:.0}%)"),
     }
 }
 
-/// `torque` over the grid: each servo's worst, and the worst of all.
+/// Every servo's worst torque against its rating, in a line: which are over, or the one
+/// nearest its rating; the servos without one.
+pub fn ratings_summary(
+    p: &crate::size::Platform,
+    per_servo: &[Option<crate::size::Worst>; 6],
+) -> String {
+    use crate::size::Verdict;
+    let head = "ratings (servoN.torque_kgcm):";
+    let unrated: Vec<usize> = (1..=6)
+        .filter(|&n| p.payload().torque_kgcm[n - 1] <= 0.0)
+        .collect();
+    if unrated.len() == 6 {
+        return format!("{head} the servos are not rated: torques without a verdict");
+    }
+    let judged: Vec<(u8, f32, Verdict)> = per_servo
+        .iter()
+        .flatten()
+        .map(|w| {
+            let t = w.torque_kgcm.abs();
+            (w.servo, t, p.verdict(w.servo, t))
+        })
+        .collect();
+    let over: Vec<String> = judged
+        .iter()
+        .filter_map(|&(servo, t, v)| match v {
+            Verdict::Over {
+                rating_kgcm,
+                percent,
+            } => Some(format!(
+                "servo {servo} needs {t:.3} kgf cm, rated {rating_kgcm} ({percent:.0}%)"
+            )),
+            _ => None,
+        })
+        .collect();
+    let mut out = if !over.is_empty() {
+        format!("{head} OVER: {}", over.join("; "))
+    } else {
+        let nearest = judged
+            .iter()
+            .filter_map(|&(servo, t, v)| match v {
+                Verdict::Within {
+                    rating_kgcm,
+                    percent,
+                } => Some((servo, t, rating_kgcm, percent)),
+                _ => None,
+            })
+            .max_by(|a, b| a.3.total_cmp(&b.3));
+        match nearest {
+            Some((servo, t, rating, percent)) => format!(
+                "{head} all within: servo {servo} nearest its rating, {t:.3} of {rating} kgf cm \
+                 ({percent:.0}%)"
+            ),
+            None => format!("{head} no torque to judge (no reachable pose)"),
+        }
+    };
+    if !unrated.is_empty() {
+        out += &format!("; {} not rated", servo_list(&unrated));
+    }
+    out
+}
+
+/// `torque` over the grid: each servo's worst, and the worst of all, against the ratings.
 pub fn grid_torque_report(
     p: &crate::size::Platform,
     worst: &[Option<crate::size::Worst>; 6],
@@ -876,50 +1038,53 @@ pub fn grid_torque_report(
     total: usize,
 ) -> String {
     let mut out = format!(
-        "{}: holding {} kg, centre of mass {:?} mm (platform frame), over {reached} reachable \
-         poses of a {total}-pose grid (9 steps along x, y, z and along roll, pitch, yaw):\n",
-        p.source, p.sizing.payload_kg, p.sizing.payload_com_mm
+        "{}: holding {}, over {reached} reachable poses of a {total}-pose grid (9 steps along \
+         x, y, z and along roll, pitch, yaw):\n",
+        p.source,
+        payload_words(p.payload())
     );
     for w in worst.iter().flatten() {
+        let t = w.torque_kgcm.abs();
         out += &format!(
-            "  servo {}: {:.3} kgf cm at {}\n",
+            "  servo {}: {t:.3} kgf cm at {}; {}\n",
             w.servo,
-            kgcm(w.torque_nmm).abs(),
-            pose_words(&w.pose)
+            pose_words(&w.pose),
+            verdict_words(p.verdict(w.servo, t))
         );
     }
     match crate::size::overall(worst) {
         Some(w) => {
-            let t = kgcm(w.torque_nmm).abs();
+            let t = w.torque_kgcm.abs();
             out += &format!(
-                "worst: servo {}, {t:.3} kgf cm, {}",
+                "worst: servo {}, {t:.3} kgf cm, {}\n",
                 w.servo,
-                verdict(t, p.sizing.servo_torque_kgcm)
+                verdict_words(p.verdict(w.servo, t))
             );
         }
-        None => out += "worst: none (no reachable pose)",
+        None => out += "worst: none (no reachable pose)\n",
     }
-    out
+    out + &ratings_summary(p, worst)
 }
 
-/// `torque` along a trajectory: the worst.
+/// `torque` along a trajectory: the worst, and each servo's worst against its rating.
 pub fn trajectory_torque_report(
     file: &str,
     p: &crate::size::Platform,
-    worst: Option<crate::size::Worst>,
+    worst: &[Option<crate::size::Worst>; 6],
     rows: usize,
 ) -> String {
-    match worst {
+    match crate::size::overall(worst) {
         Some(w) => {
-            let t = kgcm(w.torque_nmm).abs();
+            let t = w.torque_kgcm.abs();
             let (time, line) = w.at.unwrap_or((0.0, 0));
             format!(
-                "{file}: {rows} rows carrying {} kg (gravity and inertia): worst servo {}, \
-                 {t:.3} kgf cm at {time:.3} s (line {line}), {}; {}",
-                p.sizing.payload_kg,
+                "{file}: {rows} rows carrying {} (gravity and inertia): worst servo {}, \
+                 {t:.3} kgf cm at {time:.3} s (line {line}), {}; {}\n{}",
+                payload_words(p.payload()),
                 w.servo,
                 pose_words(&w.pose),
-                verdict(t, p.sizing.servo_torque_kgcm)
+                verdict_words(p.verdict(w.servo, t)),
+                ratings_summary(p, worst)
             )
         }
         None => format!("{file}: no rows"),

@@ -4,20 +4,27 @@
 //! the holding torques of a payload, `dynamics::actuation` for the torques along a trajectory
 //! (inertia included). Nothing here re-derives the kinematics.
 //!
-//! Units: mm, degrees for what users read (rad inside), s; torques N mm inside and kgf cm
-//! (`statics::N_MM_PER_KGF_CM`) in reports, like servo ratings.
+//! The payload and the servos' torque ratings are the board's settings (`payload_g`,
+//! `payload_com_*_mm`, `servoN.torque_kgcm`), and so are the holding torques: computed by the
+//! board's own code (`control::payload::PayloadSettings`), judged against a rating by the
+//! board's rule (over when the torque's magnitude exceeds it; a servo without a rating is never
+//! over). Only the servos' stiffness is the host's (`[sizing]`).
+//!
+//! Units: mm, degrees for what users read (rad inside), s; torques in kgf cm
+//! (`statics::N_MM_PER_KGF_CM`), like servo ratings.
 
 use std::path::Path;
 
+use control::payload::PayloadSettings;
 use control::settings::Settings;
 use kinematics_core::dynamics::{actuation, Acceleration};
 use kinematics_core::ik::{IkError, Solver};
 use kinematics_core::jacobian::Jacobian;
 use kinematics_core::pose::Axis;
 use kinematics_core::rates::Twist;
-use kinematics_core::statics::{self, servo_holding_torques, N_MM_PER_KGF_CM};
+use kinematics_core::statics::{self, N_MM_PER_KGF_CM};
 use kinematics_core::workspace::{self, Grid, Limit, Limits, Reach};
-use kinematics_core::{Libm, Pose, Vec3, LEGS};
+use kinematics_core::{Libm, Pose, LEGS};
 
 use crate::configure::read_build_file;
 use crate::draw::write_scene;
@@ -27,14 +34,15 @@ use crate::plot::{self, Axes, PALETTE};
 use crate::sizing::Sizing;
 use crate::trajectory::{self, Mode, Row};
 
-/// A platform to size: its settings (the board's) and sizing (the host's).
+/// A platform to size: its settings (the board's, payload and ratings included) and sizing
+/// (the host's).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Platform {
     /// Where it comes from (a file, or the default platform).
     pub source: String,
     /// The board's settings.
     pub settings: Settings,
-    /// Payload and servo rating.
+    /// The servos' stiffness.
     pub sizing: Sizing,
     /// The IK of its geometry.
     pub solver: Solver,
@@ -76,11 +84,64 @@ impl Platform {
             .map(|s| s.arm_rad)
     }
 
-    /// The holding torques of the payload at a pose, N mm (positive lifting the arm).
-    pub fn holding_nmm(&self, pose: &Pose) -> Option<[f32; LEGS]> {
-        let arm_rad = self.reachable(pose).ok()?;
-        servo_holding_torques::<Libm>(&self.solver, pose, &arm_rad, &self.sizing.payload()).ok()
+    /// The payload and the ratings (the board's settings).
+    pub fn payload(&self) -> &PayloadSettings {
+        &self.settings.payload
     }
+
+    /// The holding torques of the payload at a pose, kgf cm (positive lifting the arm), as the
+    /// board computes them for `check` and `status`.
+    pub fn holding_kgcm(&self, pose: &Pose) -> Option<[f32; LEGS]> {
+        let arm_rad = self.reachable(pose).ok()?;
+        self.payload()
+            .holding_torques_kgcm::<Libm>(&self.solver, pose, &arm_rad)
+            .ok()
+    }
+
+    /// A servo's torque (kgf cm) against its rating.
+    pub fn verdict(&self, servo: u8, torque_kgcm: f32) -> Verdict {
+        let i = usize::from(servo - 1);
+        let rating_kgcm = self.payload().torque_kgcm[i];
+        if rating_kgcm <= 0.0 {
+            return Verdict::NotRated;
+        }
+        let percent = 100.0 * torque_kgcm.abs() / rating_kgcm;
+        // The board's rule, for this servo alone (the others need nothing).
+        let mut alone = [0.0; LEGS];
+        alone[i] = torque_kgcm;
+        if self.payload().within_ratings(&alone).is_ok() {
+            Verdict::Within {
+                rating_kgcm,
+                percent,
+            }
+        } else {
+            Verdict::Over {
+                rating_kgcm,
+                percent,
+            }
+        }
+    }
+}
+
+/// A servo's torque against its rating.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Verdict {
+    /// The servo has no rating (`servoN.torque_kgcm` off): the board checks nothing.
+    NotRated,
+    /// Within the rating: the torque is this many percent of it.
+    Within {
+        /// The rating, kgf cm.
+        rating_kgcm: f32,
+        /// The torque's magnitude, percent of the rating.
+        percent: f32,
+    },
+    /// Over the rating: the board refuses such a pose.
+    Over {
+        /// The rating, kgf cm.
+        rating_kgcm: f32,
+        /// The torque's magnitude, percent of the rating.
+        percent: f32,
+    },
 }
 
 /// The reach along the twelve axis-directions from home (x-, x+, ..., yaw-, yaw+).
@@ -98,8 +159,8 @@ pub fn reach_from_home(platform: &Platform) -> [Reach<IkError>; 12] {
 pub struct Worst {
     /// Servo 1..=6.
     pub servo: u8,
-    /// The torque, N mm (signed).
-    pub torque_nmm: f32,
+    /// The torque, kgf cm (signed).
+    pub torque_kgcm: f32,
     /// Where.
     pub pose: Pose,
     /// When (along a trajectory), s; and the row's line.
@@ -130,15 +191,15 @@ pub fn worst_per_servo(platform: &Platform, poses: &[Pose]) -> ([Option<Worst>; 
     let mut worst: [Option<Worst>; LEGS] = [None; LEGS];
     let mut reached = 0;
     for pose in poses {
-        let Some(torques) = platform.holding_nmm(pose) else {
+        let Some(torques) = platform.holding_kgcm(pose) else {
             continue;
         };
         reached += 1;
         for (i, &t) in torques.iter().enumerate() {
-            if worst[i].is_none_or(|w| t.abs() > w.torque_nmm.abs()) {
+            if worst[i].is_none_or(|w| t.abs() > w.torque_kgcm.abs()) {
                 worst[i] = Some(Worst {
                     servo: i as u8 + 1,
-                    torque_nmm: t,
+                    torque_kgcm: t,
                     pose: *pose,
                     at: None,
                 });
@@ -154,7 +215,7 @@ pub fn overall(worst: &[Option<Worst>]) -> Option<Worst> {
         .iter()
         .flatten()
         .copied()
-        .max_by(|a, b| a.torque_nmm.abs().total_cmp(&b.torque_nmm.abs()))
+        .max_by(|a, b| a.torque_kgcm.abs().total_cmp(&b.torque_kgcm.abs()))
 }
 
 /// Everything `describe` says, computed.
@@ -168,13 +229,19 @@ pub struct Description {
     pub reach: [Reach<IkError>; 12],
     /// The stiffness's diagonal at home: x, y, z in N/mm, roll, pitch, yaw in N mm/rad.
     pub stiffness_diagonal: Option<[f32; 6]>,
+    /// What the payload needs (`None` without one: `payload_g` 0).
+    pub holding: Option<Holding>,
+}
+
+/// What holding the payload takes: `describe`'s payload section.
+#[derive(Debug, Clone)]
+pub struct Holding {
     /// How far the payload's weight moves the platform at home: mm, and rad.
     pub sag: Option<statics::Displacement>,
-    /// Holding torques at home, N mm.
-    pub home_torques_nmm: Option<[f32; LEGS]>,
-    /// The worst holding torque over the sizing grid, and how many of its poses are reachable
-    /// out of how many.
-    pub worst: Option<Worst>,
+    /// Holding torques at home, kgf cm.
+    pub home_kgcm: Option<[f32; LEGS]>,
+    /// Each servo's worst holding torque over the sizing grid.
+    pub per_servo: [Option<Worst>; LEGS],
     /// Poses of the grid reached, and in it.
     pub grid_reached: (usize, usize),
 }
@@ -190,21 +257,26 @@ pub fn describe(platform: Platform) -> Description {
         .and_then(|j| statics::stiffness(&j, &k))
         .ok();
     let stiffness_diagonal = stiffness.map(|s| core::array::from_fn(|i| s[(i, i)]));
-    let payload = platform.sizing.payload();
-    let weight = payload.gravity_wrench::<Libm>(&home, anchors.rotation_centre_mm);
-    let sag =
-        statics::displacement::<Libm, Solver>(&platform.solver, &Pose::HOME, &k, &weight).ok();
-    let home_torques_nmm = platform.holding_nmm(&Pose::HOME);
-    let grid = sizing_grid(&reach);
-    let (per_servo, reached) = worst_per_servo(&platform, &grid);
+    let holding = platform.payload().carried().then(|| {
+        let weight = platform
+            .payload()
+            .payload()
+            .gravity_wrench::<Libm>(&home, anchors.rotation_centre_mm);
+        let grid = sizing_grid(&reach);
+        let (per_servo, reached) = worst_per_servo(&platform, &grid);
+        Holding {
+            sag: statics::displacement::<Libm, Solver>(&platform.solver, &Pose::HOME, &k, &weight)
+                .ok(),
+            home_kgcm: platform.holding_kgcm(&Pose::HOME),
+            per_servo,
+            grid_reached: (reached, grid.len()),
+        }
+    });
     Description {
         leg_lengths_mm,
         reach,
         stiffness_diagonal,
-        sag,
-        home_torques_nmm,
-        worst: overall(&per_servo),
-        grid_reached: (reached, grid.len()),
+        holding,
         platform,
     }
 }
@@ -509,7 +581,7 @@ pub fn workspace_command(
 
 // ----- torque -----
 
-/// The torques along a trajectory: per row, each servo's torque (N mm), gravity and inertia.
+/// The torques along a trajectory: per row, each servo's torque (kgf cm), gravity and inertia.
 pub fn trajectory_torques(
     platform: &Platform,
     rows: &[Row],
@@ -535,7 +607,7 @@ pub fn trajectory_torques(
     let twists: Vec<Twist> = (0..n)
         .map(|i| Twist::from_pose_rate::<Libm>(&poses[i], &rate(i)))
         .collect();
-    let payload = platform.sizing.payload();
+    let payload = platform.payload().payload();
     (0..n)
         .map(|i| {
             let (a, b) = (i.saturating_sub(1), (i + 1).min(n - 1));
@@ -555,12 +627,33 @@ pub fn trajectory_torques(
                 &twists[i],
                 &acceleration,
             )
+            .map(|t| t.map(|nmm| nmm / N_MM_PER_KGF_CM))
             .map_err(|e| (rows[i].line, messages::kinematics_words(&e)))
         })
         .collect()
 }
 
-/// `hexapod torque`: over the sizing grid, or along a trajectory.
+/// Each servo's largest torque (by magnitude) along a trajectory.
+fn worst_along(rows: &[Row], torques: &[[f32; LEGS]]) -> [Option<Worst>; LEGS] {
+    let mut worst: [Option<Worst>; LEGS] = [None; LEGS];
+    for (row, t) in rows.iter().zip(torques) {
+        for (i, &v) in t.iter().enumerate() {
+            if worst[i].is_none_or(|w| v.abs() > w.torque_kgcm.abs()) {
+                let [x, y, z, roll, pitch, yaw] = row.pose.map(|v| v as f32);
+                worst[i] = Some(Worst {
+                    servo: i as u8 + 1,
+                    torque_kgcm: v,
+                    pose: Pose::from_degrees(x, y, z, roll, pitch, yaw),
+                    at: Some((row.time_s, row.line)),
+                });
+            }
+        }
+    }
+    worst
+}
+
+/// `hexapod torque`: over the sizing grid, or along a trajectory. Needs a payload
+/// (`payload_g` above 0): without one every torque is 0 and nothing is plotted.
 pub fn torque_command(
     build: Option<&Path>,
     trajectory_file: Option<&Path>,
@@ -569,6 +662,11 @@ pub fn torque_command(
     png: bool,
 ) -> Result<String, Problem> {
     let platform = Platform::load(build)?;
+    if !platform.payload().carried() {
+        return Err(Problem::NoPayload {
+            source: platform.source,
+        });
+    }
     let (scene, report) = match trajectory_file {
         None => {
             let reach = reach_from_home(&platform);
@@ -588,21 +686,8 @@ pub fn torque_command(
                     field: None,
                     why: messages::RowProblem::Refused(why),
                 })?;
-            let mut worst: Option<Worst> = None;
-            for (row, t) in rows.iter().zip(&torques) {
-                for (i, &v) in t.iter().enumerate() {
-                    if worst.is_none_or(|w| v.abs() > w.torque_nmm.abs()) {
-                        let [x, y, z, roll, pitch, yaw] = row.pose.map(|v| v as f32);
-                        worst = Some(Worst {
-                            servo: i as u8 + 1,
-                            torque_nmm: v,
-                            pose: Pose::from_degrees(x, y, z, roll, pitch, yaw),
-                            at: Some((row.time_s, row.line)),
-                        });
-                    }
-                }
-            }
-            let report = messages::trajectory_torque_report(&file, &platform, worst, rows.len());
+            let worst = worst_along(&rows, &torques);
+            let report = messages::trajectory_torque_report(&file, &platform, &worst, rows.len());
             (
                 trajectory_torque_scene(&platform, &file, &rows, &torques),
                 report,
@@ -613,19 +698,33 @@ pub fn torque_command(
     Ok(format!("{report}\n{}", messages::wrote_pictures(&written)))
 }
 
-fn kgcm(nmm: f32) -> f64 {
-    f64::from(nmm / N_MM_PER_KGF_CM)
+/// The servos that have a rating, grouped by rating (kgf cm), in servo order: each rating with
+/// its servos (1..=6).
+pub fn ratings(platform: &Platform) -> Vec<(f32, Vec<usize>)> {
+    let mut groups: Vec<(f32, Vec<usize>)> = Vec::new();
+    for (i, &rating) in platform.payload().torque_kgcm.iter().enumerate() {
+        if rating <= 0.0 {
+            continue;
+        }
+        match groups.iter_mut().find(|(r, _)| *r == rating) {
+            Some((_, servos)) => servos.push(i + 1),
+            None => groups.push((rating, vec![i + 1])),
+        }
+    }
+    groups
 }
 
-/// Bars: each servo's worst holding torque over the grid, against the rating.
+/// Bars: each servo's worst holding torque over the grid, each against its own rating (a
+/// dashed mark over its bar; none where it has no rating).
 fn grid_torque_scene(platform: &Platform, worst: &[Option<Worst>; LEGS]) -> Scene {
-    let mut scene = Scene::new(760.0, 480.0);
-    let rating = f64::from(platform.sizing.servo_torque_kgcm);
+    let mut scene = Scene::new(860.0, 480.0);
+    let rated = platform.payload().torque_kgcm.map(f64::from);
     let top = worst
         .iter()
         .flatten()
-        .map(|w| kgcm(w.torque_nmm).abs())
-        .fold(rating, f64::max);
+        .map(|w| f64::from(w.torque_kgcm.abs()))
+        .chain(rated)
+        .fold(0.01, f64::max);
     let axes = Axes {
         left: 90.0,
         top: 60.0,
@@ -637,16 +736,16 @@ fn grid_torque_scene(platform: &Platform, worst: &[Option<Worst>; LEGS]) -> Scen
     };
     axes.draw(
         &mut scene,
-        &messages::grid_torque_title(&platform.source, &platform.sizing),
+        &messages::grid_torque_title(&platform.source, platform.payload()),
         messages::SERVO_AXIS,
         messages::TORQUE_AXIS,
     );
     for (i, w) in worst.iter().enumerate() {
         let x = i as f64 + 1.0;
-        let value = w.map_or(0.0, |w| kgcm(w.torque_nmm).abs());
-        let a = axes.px(x - 0.3, value);
+        let value = w.map_or(0.0, |w| w.torque_kgcm.abs());
+        let a = axes.px(x - 0.3, f64::from(value));
         let b = axes.px(x + 0.3, 0.0);
-        let over = value > rating;
+        let over = matches!(platform.verdict(i as u8 + 1, value), Verdict::Over { .. });
         let item = scene.add(
             "torque-bar",
             Shape::Path {
@@ -666,43 +765,55 @@ fn grid_torque_scene(platform: &Platform, worst: &[Option<Worst>; LEGS]) -> Scen
             11.0,
             Anchor::Middle,
         );
+        if rated[i] > 0.0 {
+            let left = axes.px(x - 0.45, rated[i]);
+            let right = axes.px(x + 0.45, rated[i]);
+            let item = scene.add(
+                "rating",
+                Shape::Line(left, right),
+                Style::stroke("#d00000", 2.0).dashed(),
+            );
+            item.data.extend([
+                ("servo".to_string(), (i + 1).to_string()),
+                ("kgf-cm".to_string(), format!("{:.2}", rated[i])),
+            ]);
+        }
     }
-    let y = axes.px(0.0, rating)[1];
-    scene.add(
-        "rating",
-        Shape::Line([axes.left, y], [axes.left + axes.width, y]),
-        Style::stroke("#d00000", 2.0).dashed(),
-    );
+    let mut entries = vec![(PALETTE[0], messages::WORST_HOLDING.to_string(), false)];
+    let groups = ratings(platform);
+    if groups.is_empty() {
+        entries.push(("#bbbbbb", messages::NOT_RATED.to_string(), false));
+    } else {
+        entries.push(("#d55e00", messages::OVER_RATING.to_string(), false));
+        entries.extend(
+            groups
+                .into_iter()
+                .map(|(r, servos)| ("#d00000", messages::rating_label(r, &servos), true)),
+        );
+    }
     plot::legend(
         &mut scene,
         [axes.left + axes.width + 20.0, axes.top + 10.0],
-        &[
-            (PALETTE[0], messages::WORST_HOLDING.to_string(), false),
-            ("#d55e00", messages::OVER_RATING.to_string(), false),
-            (
-                "#d00000",
-                messages::rating_label(platform.sizing.servo_torque_kgcm),
-                true,
-            ),
-        ],
+        &entries,
     );
     scene
 }
 
-/// Lines: each servo's torque against time along a trajectory, and the rating either way.
+/// Lines: each servo's torque against time along a trajectory, and each rating either way.
 fn trajectory_torque_scene(
     platform: &Platform,
     file: &str,
     rows: &[Row],
     torques: &[[f32; LEGS]],
 ) -> Scene {
-    let mut scene = Scene::new(900.0, 480.0);
-    let rating = f64::from(platform.sizing.servo_torque_kgcm);
+    let mut scene = Scene::new(990.0, 480.0);
+    let groups = ratings(platform);
     let top = torques
         .iter()
         .flatten()
-        .map(|t| kgcm(*t).abs())
-        .fold(rating, f64::max)
+        .map(|t| f64::from(t.abs()))
+        .chain(groups.iter().map(|(r, _)| f64::from(*r)))
+        .fold(0.01, f64::max)
         * 1.1;
     let (t0, t1) = (
         rows[0].time_s,
@@ -719,7 +830,7 @@ fn trajectory_torque_scene(
     };
     axes.draw(
         &mut scene,
-        &messages::trajectory_torque_title(file, &platform.sizing),
+        &messages::trajectory_torque_title(file, platform.payload()),
         messages::TIME_AXIS,
         messages::TORQUE_AXIS,
     );
@@ -728,7 +839,7 @@ fn trajectory_torque_scene(
         let points: Vec<[f64; 2]> = rows
             .iter()
             .zip(torques)
-            .map(|(r, t)| [r.time_s, kgcm(t[i])])
+            .map(|(r, t)| [r.time_s, f64::from(t[i])])
             .collect();
         axes.line(
             &mut scene,
@@ -738,19 +849,24 @@ fn trajectory_torque_scene(
         );
         entries.push((PALETTE[i], messages::servo_label(i + 1), false));
     }
-    for sign in [1.0, -1.0] {
-        let y = axes.px(0.0, sign * rating)[1];
-        scene.add(
-            "rating",
-            Shape::Line([axes.left, y], [axes.left + axes.width, y]),
-            Style::stroke("#d00000", 1.5).dashed(),
-        );
+    for (rating, servos) in &groups {
+        for sign in [1.0, -1.0] {
+            let y = axes.px(0.0, sign * f64::from(*rating))[1];
+            let item = scene.add(
+                "rating",
+                Shape::Line([axes.left, y], [axes.left + axes.width, y]),
+                Style::stroke("#d00000", 1.5).dashed(),
+            );
+            item.data.push((
+                "kgf-cm".to_string(),
+                format!("{:.2}", sign * f64::from(*rating)),
+            ));
+        }
+        entries.push(("#d00000", messages::rating_label(*rating, servos), true));
     }
-    entries.push((
-        "#d00000",
-        messages::rating_label(platform.sizing.servo_torque_kgcm),
-        true,
-    ));
+    if groups.is_empty() {
+        entries.push(("#bbbbbb", messages::NOT_RATED.to_string(), false));
+    }
     plot::legend(
         &mut scene,
         [axes.left + axes.width + 20.0, axes.top + 10.0],
@@ -762,14 +878,4 @@ fn trajectory_torque_scene(
 /// The platform's joints' height at home, for tests: h0, mm.
 pub fn home_height_mm(platform: &Platform) -> f32 {
     platform.solver.geometry().home_height_mm()
-}
-
-/// The centre of mass at home, base frame, mm (for the report).
-pub fn payload_at_home(platform: &Platform) -> Vec3 {
-    let anchors = platform.solver.anchors();
-    let placement = anchors.place::<Libm>(&Pose::HOME);
-    platform
-        .sizing
-        .payload()
-        .centre_of_mass_at::<Libm>(&placement, anchors.rotation_centre_mm)
 }

@@ -1,10 +1,14 @@
-//! The `[sizing]` table of a build file: what the host's sizing tools (`describe`, `torque`)
-//! need beyond the board's settings: the payload (mass in kg, centre of mass in the platform
-//! frame in mm) and the servos (rated torque in kgf cm, holding stiffness in N mm/rad). Not
-//! settings of the board: `apply` never sends them.
+//! The `[sizing]` table of a build file: what the host's sizing tools need that the board has
+//! no setting for: each servo's holding stiffness (N mm/rad), for `describe`'s stiffness and
+//! how far the payload's weight moves the platform. Not a setting of the board: `apply` never
+//! sends it.
+//!
+//! The payload and the servos' torque ratings are the board's own settings (`payload_g`,
+//! `payload_com_x_mm` .. `payload_com_z_mm`, `servoN.torque_kgcm`): they were keys of this
+//! table once, and a file that still has them is refused with the setting to write instead
+//! ([`moved`]).
 
-use kinematics_core::statics::Payload;
-use kinematics_core::Vec3;
+use control::settings::{ServoParam, ServoSel, SettingId};
 
 use crate::messages::SizingProblem;
 
@@ -12,53 +16,52 @@ use crate::messages::SizingProblem;
 pub const SIZING_TABLE: &str = "sizing.";
 
 /// Its keys, in file order.
-pub const KEYS: [&str; 6] = [
-    "payload_kg",
-    "payload_x_mm",
-    "payload_y_mm",
-    "payload_z_mm",
-    "servo_torque_kgcm",
-    "servo_stiffness_nmm_rad",
-];
+pub const KEYS: [&str; 1] = ["servo_stiffness_nmm_rad"];
 
-/// The payload and the servos' rating.
+/// The host-only numbers of a platform.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sizing {
-    /// Payload mass, kg.
-    pub payload_kg: f32,
-    /// Payload centre of mass, platform frame, mm.
-    pub payload_com_mm: [f32; 3],
-    /// Each servo's rated torque, kgf cm.
-    pub servo_torque_kgcm: f32,
     /// Each servo's holding stiffness, N mm/rad.
     pub servo_stiffness_nmm_rad: f32,
 }
 
 impl Default for Sizing {
-    /// 1 kg, 20 mm above the platform's centre, on micro servos (1.8 kgf cm, e.g. an SG90),
-    /// holding 5000 N mm/rad (about 1.8 kgf cm per 2 degrees).
+    /// A micro servo's: about 5000 N mm/rad (1.8 kgf cm per 2 degrees).
     fn default() -> Sizing {
         Sizing {
-            payload_kg: 1.0,
-            payload_com_mm: [0.0, 0.0, 20.0],
-            servo_torque_kgcm: 1.8,
             servo_stiffness_nmm_rad: 5000.0,
         }
     }
 }
 
+/// The board setting that replaced a key this table once had, and the factor from the old
+/// key's unit to the setting's (`payload_kg` 2.5 is `payload_g` 2500).
+pub fn moved(key: &str) -> Option<(SettingId, f32)> {
+    Some(match key {
+        "payload_kg" => (SettingId::PayloadG, 1000.0),
+        "payload_x_mm" => (SettingId::PayloadCom(0), 1.0),
+        "payload_y_mm" => (SettingId::PayloadCom(1), 1.0),
+        "payload_z_mm" => (SettingId::PayloadCom(2), 1.0),
+        "servo_torque_kgcm" => (SettingId::Servo(ServoSel::All, ServoParam::TorqueKgcm), 1.0),
+        _ => return None,
+    })
+}
+
 impl Sizing {
-    /// Sets one key (without `sizing.`) to a number, refusing unknown keys and values out of
-    /// range.
+    /// Sets one key (without `sizing.`) to a number, refusing unknown keys, keys that are the
+    /// board's settings now, and values out of range.
     pub fn set(&mut self, key: &str, value: Option<f32>) -> Result<(), SizingProblem> {
         let (slot, min, max, unit) = match key {
-            "payload_kg" => (&mut self.payload_kg, 0.0, 1000.0, "kg"),
-            "payload_x_mm" => (&mut self.payload_com_mm[0], -2000.0, 2000.0, "mm"),
-            "payload_y_mm" => (&mut self.payload_com_mm[1], -2000.0, 2000.0, "mm"),
-            "payload_z_mm" => (&mut self.payload_com_mm[2], -2000.0, 2000.0, "mm"),
-            "servo_torque_kgcm" => (&mut self.servo_torque_kgcm, 0.01, 1000.0, "kgf cm"),
             "servo_stiffness_nmm_rad" => (&mut self.servo_stiffness_nmm_rad, 1.0, 1e9, "N mm/rad"),
-            _ => return Err(SizingProblem::Unknown),
+            _ => {
+                return Err(match moved(key) {
+                    Some((setting, factor)) => SizingProblem::Moved {
+                        setting,
+                        value: value.map(|v| v * factor),
+                    },
+                    None => SizingProblem::Unknown,
+                })
+            }
         };
         match value {
             Some(v) if (min..=max).contains(&v) => {
@@ -70,21 +73,7 @@ impl Sizing {
     }
 
     /// Every key with its value, in [`KEYS`] order.
-    pub fn entries(&self) -> [(&'static str, f32); 6] {
-        let [x, y, z] = self.payload_com_mm;
-        [
-            (KEYS[0], self.payload_kg),
-            (KEYS[1], x),
-            (KEYS[2], y),
-            (KEYS[3], z),
-            (KEYS[4], self.servo_torque_kgcm),
-            (KEYS[5], self.servo_stiffness_nmm_rad),
-        ]
-    }
-
-    /// The payload as the toolkit takes it (a point mass).
-    pub fn payload(&self) -> Payload {
-        let [x, y, z] = self.payload_com_mm;
-        Payload::point(self.payload_kg, Vec3::new(x, y, z))
+    pub fn entries(&self) -> [(&'static str, f32); 1] {
+        [(KEYS[0], self.servo_stiffness_nmm_rad)]
     }
 }

@@ -13,12 +13,23 @@ fn init_then_apply_leaves_the_board_with_the_file_s_settings_saved() {
     let dir = scratch("apply");
     let init = hexapod(&dir, &["init", "build.toml"]);
     assert!(init.status.success(), "{:?}", text(&init));
-    // Edit it as a user would: a trim, a rod, the speeds off.
+    // Edit it as a user would: a trim, a rod, the speeds off, a payload on rated servos.
     let file = std::fs::read_to_string(dir.join("build.toml")).unwrap();
+    // The payload and ratings are there as the board's defaults, with how to give one.
+    assert!(file.contains("\npayload_g = 0.0 "), "{file}");
+    assert!(file.contains("#   payload_g = 500\n"), "{file}");
+    assert_eq!(
+        file.matches("\ntorque_kgcm = \"off\" ").count(),
+        6,
+        "{file}"
+    );
     let file = file
         .replace("rod_mm = 120.0", "rod_mm = 125.0")
         .replace("speed_mm_s = 50.0", "speed_mm_s = \"off\"")
-        .replacen("trim_us = 1500.0", "trim_us = 1512.5", 3);
+        .replacen("trim_us = 1500.0", "trim_us = 1512.5", 3)
+        .replace("payload_g = 0.0", "payload_g = 1500.0")
+        .replace("payload_com_z_mm = 0.0", "payload_com_z_mm = 25.0")
+        .replace("torque_kgcm = \"off\"", "torque_kgcm = 2.5");
     std::fs::write(dir.join("build.toml"), &file).unwrap();
     // Refuses to overwrite.
     let again = hexapod(&dir, &["init", "build.toml"]);
@@ -36,6 +47,9 @@ fn init_then_apply_leaves_the_board_with_the_file_s_settings_saved() {
     assert_eq!(s.speed_mm_s, 0.0);
     let trims: Vec<f32> = s.servos.0.iter().map(|c| c.home_us).collect();
     assert_eq!(trims, [1512.5, 1512.5, 1512.5, 1500.0, 1500.0, 1500.0]);
+    assert_eq!(s.payload.mass_g, 1500.0);
+    assert_eq!(s.payload.com_mm, [0.0, 0.0, 25.0]);
+    assert_eq!(s.payload.torque_kgcm, [2.5; 6]);
     // What power-up would load: the same settings, saved once.
     let mut flash = finished.flash;
     let loaded = Store::load(&mut flash);
@@ -51,6 +65,53 @@ fn init_then_apply_leaves_the_board_with_the_file_s_settings_saved() {
     assert_eq!(lines[1], "defaults");
     assert_eq!(*lines.last().unwrap(), "save");
     assert!(lines.contains(&"set rod_mm 125.0"), "{lines:?}");
+    assert!(lines.contains(&"set payload_g 1500.0"), "{lines:?}");
+    assert!(lines.contains(&"set payload_com_z_mm 25.0"), "{lines:?}");
+    assert!(lines.contains(&"set servo6.torque_kgcm 2.5"), "{lines:?}");
+    // Nothing of [sizing] went.
+    assert!(!sent.contains("stiffness"), "{sent}");
+}
+
+#[test]
+fn a_payload_the_servos_cannot_hold_at_home_is_refused_before_anything_is_sent() {
+    let dir = scratch("overloaded");
+    std::fs::write(
+        dir.join("build.toml"),
+        "payload_g = 5000\n[servos]\ntorque_kgcm = 1\n",
+    )
+    .unwrap();
+    let board = SimBoard::start();
+    let apply = hexapod(&dir, &["apply", "build.toml", "--port", &board.path]);
+    assert!(!apply.status.success());
+    assert_eq!(
+        text(&apply).1.trim_end(),
+        "hexapod: build.toml:3: servos.torque_kgcm: at home servo 1 would need 1.667 kgf cm to \
+         hold the payload, over its rating 1.00 kgf cm; the board, holding home, refuses this \
+         setting (error:pose-conflict)"
+    );
+    assert!(board.finish().received.is_empty());
+    // What the board says to the same two settings, at home: refused, as the tool said.
+    let board = SimBoard::start();
+    let send = hexapod(
+        &dir,
+        &[
+            "send",
+            "--port",
+            &board.path,
+            "set payload_g 5000",
+            "set servos.torque_kgcm 1",
+        ],
+    );
+    let err = text(&send).1;
+    assert!(
+        err.contains(
+            "'set servos.torque_kgcm 1': error:pose-conflict with that setting the current pose \
+             could not be held: servo 1 would need 1.667 kgf cm to hold the payload, over its \
+             rating 1.00 kgf cm"
+        ),
+        "{err}"
+    );
+    assert_eq!(board.finish().settings.payload.torque_kgcm, [0.0; 6]);
 }
 
 #[test]
@@ -102,6 +163,10 @@ fn pull_writes_the_board_s_config_as_a_build_file_that_applies_back() {
             "set servo4.trim_us 1490",
             "set stream.z_mm 12",
             "set frame_hz 100",
+            "set payload_g 750",
+            "set payload_com_x_mm -12.5",
+            "set servos.torque_kgcm 3",
+            "set servo2.torque_kgcm 4.25",
         ],
     );
     assert!(send.status.success(), "{:?}", text(&send));
@@ -113,6 +178,15 @@ fn pull_writes_the_board_s_config_as_a_build_file_that_applies_back() {
         !file.contains("saved"),
         "the # saved: line is not a setting:\n{file}"
     );
+    assert!(file.contains("\npayload_g = 750.0 "), "{file}");
+    assert!(file.contains("\npayload_com_x_mm = -12.5 "), "{file}");
+    assert!(
+        file.contains("[servo2]\n") && file.contains("\ntorque_kgcm = 4.25 "),
+        "{file}"
+    );
+    assert_eq!(file.matches("\ntorque_kgcm = 3.0 ").count(), 5, "{file}");
+    // A payload: no example of one.
+    assert!(!file.contains("No payload"), "{file}");
     let read = cli::build_file::parse("pulled.toml", &file).unwrap();
     // `config` lists the rate with 3 decimals (509.296 for 1600/pi): the file has what the
     // board lists; everything else is exact.

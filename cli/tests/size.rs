@@ -1,17 +1,22 @@
 //! `hexapod describe`, `workspace` and `torque` as a user runs them, checked against what
 //! they claim: a reach is the last pose the firmware's controller accepts (`check`), the
-//! holding torque at home is what virtual work gives from the IK's arm angles alone, the plots
-//! show the numbers the reports give, a still trajectory needs exactly the holding torques.
+//! holding torque at home of the build file's payload (`payload_g`, `payload_com_*_mm`) is what
+//! virtual work gives from the IK's arm angles alone and what `kinematics_core::statics` gives,
+//! and what the board itself reports (`check`); ratings (`servoN.torque_kgcm`) judged as the
+//! board judges them, none without a rating; the plots show the numbers the reports give, a
+//! still trajectory needs exactly the holding torques; no payload, no torques.
 
 mod support;
 
 use control::{Controller, Session};
-use kinematics_core::{Libm, Pose};
+use kinematics_core::statics::{servo_holding_torques, Payload, N_MM_PER_KGF_CM};
+use kinematics_core::{Libm, Pose, Vec3};
 use support::{hexapod, scratch, text};
 
-/// `check x y z roll pitch yaw` on the firmware's own controller: accepted?
-fn board_accepts(pose: [f32; 6]) -> bool {
-    let mut ctl: Controller = Controller::new(control::Settings::default());
+/// `check x y z roll pitch yaw` on the firmware's own controller with these settings: its
+/// reply's lines, if accepted.
+fn board_check(settings: control::Settings, pose: [f32; 6]) -> Option<String> {
+    let mut ctl: Controller = Controller::new(settings);
     let mut session = Session::new();
     let mut out = String::new();
     let [x, y, z, r, p, w] = pose;
@@ -21,7 +26,24 @@ fn board_accepts(pose: [f32; 6]) -> bool {
         &mut out,
     );
     // (Echo is on: a prompt follows the reply.)
-    out.lines().any(|l| l == "ok")
+    out.lines().any(|l| l == "ok").then_some(out)
+}
+
+/// `check` on the default platform: accepted?
+fn board_accepts(pose: [f32; 6]) -> bool {
+    board_check(control::Settings::default(), pose).is_some()
+}
+
+/// The numbers after `key` in a line of `text` that contains it.
+fn numbers_on_line(text: &str, key: &str) -> Vec<f64> {
+    let line = text
+        .lines()
+        .find(|l| l.contains(key))
+        .unwrap_or_else(|| panic!("{key} in {text}"));
+    line[line.find(key).unwrap() + key.len()..]
+        .split_whitespace()
+        .filter_map(|w| w.parse().ok())
+        .collect()
 }
 
 /// A number following `key` in `text`.
@@ -67,8 +89,29 @@ fn describe_gives_the_geometry_reaches_the_board_agrees_with_and_torques_virtual
     assert!(board_accepts([0.0, 0.0, 0.0, roll - 0.001, 0.0, 0.0]));
     assert!(!board_accepts([0.0, 0.0, 0.0, roll + 0.02, 0.0, 0.0]));
 
-    // Holding 1 kg at home (the default sizing, centred): by virtual work the six equal
-    // torques t satisfy m g dz = 6 t dalpha, dalpha from the IK's arm angles at z = +-h.
+    // The default platform carries nothing (payload_g 0, the board's default).
+    assert!(
+        stdout.contains("Payload: none (payload_g = 0): no holding torques"),
+        "{stdout}"
+    );
+    assert!(!stdout.contains("holding torque at home"), "{stdout}");
+    assert!(!stdout.contains("ratings"), "{stdout}");
+
+    // 1 kg, 20 mm above the platform's centre, from the build file's settings.
+    std::fs::write(
+        dir.join("b.toml"),
+        "payload_g = 1000\npayload_com_z_mm = 20\n",
+    )
+    .unwrap();
+    let out = hexapod(&dir, &["describe", "--settings", "b.toml"]);
+    let (stdout, stderr) = text(&out);
+    assert!(out.status.success(), "{stderr}");
+    assert!(
+        stdout.contains("Payload 1000 g at (0, 0, 20) mm in the platform frame:"),
+        "{stdout}"
+    );
+    // Holding it at home: by virtual work the six equal torques t satisfy m g dz = 6 t
+    // dalpha, dalpha from the IK's arm angles at z = +-h.
     let solver = control::Settings::default().validate().unwrap();
     let h = 0.01f32;
     let up = solver
@@ -85,25 +128,77 @@ fn describe_gives_the_geometry_reaches_the_board_agrees_with_and_torques_virtual
         / 6.0;
     let weight_n = 1.0 * 9.806_65;
     let torque_kgf_cm = weight_n * f64::from(2.0 * h) / (6.0 * dalpha) / 98.066_5;
-    let line = stdout
-        .lines()
-        .find(|l| l.contains("holding torque at home"))
-        .unwrap();
-    let values: Vec<f64> = line
-        .split(':')
-        .nth(1)
-        .unwrap()
-        .split_whitespace()
-        .filter_map(|w| w.parse().ok())
-        .collect();
-    assert_eq!(values.len(), 6, "{line}");
-    for v in values {
+    let values = numbers_on_line(&stdout, "holding torque at home, servos 1-6:");
+    assert_eq!(values.len(), 6, "{stdout}");
+    for &v in &values {
         assert!(
             (v - torque_kgf_cm).abs() < 0.01 * torque_kgf_cm,
             "{v} vs {torque_kgf_cm}"
         );
     }
+    // And exactly (to the 3 decimals printed) the toolkit's statics for that payload.
+    let arm_rad = solver.arm_angles::<Libm>(&Pose::HOME).unwrap();
+    let payload = Payload::point(1.0, Vec3::new(0.0, 0.0, 20.0));
+    let statics = servo_holding_torques::<Libm>(&solver, &Pose::HOME, &arm_rad, &payload).unwrap();
+    for (v, t) in values.iter().zip(statics) {
+        assert!(
+            (v - f64::from(t / N_MM_PER_KGF_CM)).abs() <= 0.0005,
+            "{v} vs {t} N mm"
+        );
+    }
     assert!(stdout.contains("worst over the workspace"), "{stdout}");
+    // No rating set (the board's default): no verdict.
+    assert!(
+        stdout.contains(
+            "ratings (servoN.torque_kgcm): the servos are not rated: torques without a verdict"
+        ),
+        "{stdout}"
+    );
+    assert!(
+        !stdout.contains("OVER") && !stdout.contains("its rating"),
+        "{stdout}"
+    );
+}
+
+#[test]
+fn an_off_centre_payload_loads_the_servos_as_the_board_reports_it() {
+    let dir = scratch("off-centre");
+    std::fs::write(
+        dir.join("b.toml"),
+        "payload_g = 2000\npayload_com_x_mm = 15\npayload_com_y_mm = -10\n\
+         payload_com_z_mm = 30\n",
+    )
+    .unwrap();
+    let out = hexapod(&dir, &["describe", "--settings", "b.toml"]);
+    let (stdout, stderr) = text(&out);
+    assert!(out.status.success(), "{stderr}");
+    let described = numbers_on_line(&stdout, "holding torque at home, servos 1-6:");
+    // The firmware's controller with the same settings: `check`'s torque_kgcm line at home.
+    let settings = cli::build_file::parse(
+        "b.toml",
+        &std::fs::read_to_string(dir.join("b.toml")).unwrap(),
+    )
+    .unwrap()
+    .settings;
+    let reply = board_check(settings, [0.0; 6]).expect("home is accepted");
+    let reported = numbers_on_line(&reply, "# torque_kgcm:");
+    assert_eq!(described, reported, "{stdout}\n{reply}");
+    // An off-centre load: not all alike.
+    assert!(
+        described.iter().any(|&t| (t - described[0]).abs() > 0.01),
+        "{described:?}"
+    );
+    // The toolkit's statics, independently: a 2 kg point mass there.
+    let solver = settings.validate().unwrap();
+    let arm_rad = solver.arm_angles::<Libm>(&Pose::HOME).unwrap();
+    let payload = Payload::point(2.0, Vec3::new(15.0, -10.0, 30.0));
+    let statics = servo_holding_torques::<Libm>(&solver, &Pose::HOME, &arm_rad, &payload).unwrap();
+    for (v, t) in described.iter().zip(statics) {
+        assert!(
+            (v - f64::from(t / N_MM_PER_KGF_CM)).abs() <= 0.0005,
+            "{v} vs {t} N mm"
+        );
+    }
 }
 
 #[test]
@@ -165,18 +260,25 @@ fn torque_over_the_grid_and_along_a_trajectory() {
     let dir = scratch("torque");
     std::fs::write(
         dir.join("b.toml"),
-        "[sizing]\npayload_kg = 0.5\nservo_torque_kgcm = 10\n",
+        "payload_g = 500\nservos.torque_kgcm = 10\n",
     )
     .unwrap();
     let out = hexapod(&dir, &["torque", "--settings", "b.toml", "-o", "grid"]);
     let (stdout, stderr) = text(&out);
     assert!(out.status.success(), "{stderr}");
-    assert!(stdout.contains("holding 0.5 kg"), "{stdout}");
+    assert!(
+        stdout.contains("holding 500 g at (0, 0, 0) mm in the platform frame"),
+        "{stdout}"
+    );
     let worst = stdout
         .lines()
         .find(|l| l.starts_with("worst: servo"))
         .unwrap();
-    assert!(worst.contains("within the rating of 10 kgf cm"), "{worst}");
+    assert!(worst.contains("within its rating of 10 kgf cm"), "{worst}");
+    assert!(
+        stdout.contains("ratings (servoN.torque_kgcm): all within: servo "),
+        "{stdout}"
+    );
     let svg = std::fs::read_to_string(dir.join("grid.svg")).unwrap();
     let doc = roxmltree::Document::parse(&svg).unwrap();
     let bars: Vec<f64> = doc
@@ -190,6 +292,22 @@ fn torque_over_the_grid_and_along_a_trajectory() {
         (largest - number_after(worst, ",")).abs() < 1e-3,
         "{bars:?} {worst}"
     );
+    // Each servo's rating over its bar.
+    let ratings: Vec<(&str, &str)> = doc
+        .descendants()
+        .filter(|n| n.attribute("class") == Some("rating"))
+        .map(|n| {
+            (
+                n.attribute("data-servo").unwrap(),
+                n.attribute("data-kgf-cm").unwrap(),
+            )
+        })
+        .collect();
+    assert_eq!(
+        ratings,
+        ["1", "2", "3", "4", "5", "6"].map(|servo| (servo, "10.00"))
+    );
+    assert!(svg.contains("rating 10 kgf cm (servos 1-6)"), "{svg}");
 
     // Still at home for a second: no inertia, the holding torques exactly.
     let mut csv = String::from("time,x,y,z,roll,pitch,yaw\n");
@@ -237,7 +355,10 @@ fn torque_over_the_grid_and_along_a_trajectory() {
         "time,x,y,z,roll,pitch,yaw\n0,0,0,0,0,0,0\n1,0,0,60,0,0,0\n",
     )
     .unwrap();
-    let out = hexapod(&dir, &["torque", "--trajectory", "bad.csv"]);
+    let out = hexapod(
+        &dir,
+        &["torque", "--settings", "b.toml", "--trajectory", "bad.csv"],
+    );
     assert!(!out.status.success());
     assert!(
         text(&out)
@@ -249,17 +370,147 @@ fn torque_over_the_grid_and_along_a_trajectory() {
 }
 
 #[test]
-fn bad_sizing_keys_are_named() {
+fn ratings_judge_each_servo_as_the_board_does_and_none_without_a_rating() {
+    let dir = scratch("ratings");
+    // Micro servos but servo 2 a stronger one and servo 3 not rated.
+    std::fs::write(
+        dir.join("mixed.toml"),
+        "payload_g = 1000\npayload_com_z_mm = 20\nservos.torque_kgcm = 1.8\n[servo2]\n\
+         torque_kgcm = 10\n[servo3]\ntorque_kgcm = \"off\"\n",
+    )
+    .unwrap();
+    let out = hexapod(&dir, &["torque", "--settings", "mixed.toml", "-o", "mixed"]);
+    let (stdout, stderr) = text(&out);
+    assert!(out.status.success(), "{stderr}");
+    let servo = |n: u8| {
+        stdout
+            .lines()
+            .find(|l| l.starts_with(&format!("  servo {n}: ")))
+            .unwrap_or_else(|| panic!("servo {n} in {stdout}"))
+    };
+    // The percentages are the torques over the ratings.
+    for n in [1, 4, 5, 6] {
+        let line = servo(n);
+        let t = number_after(line, ":");
+        let percent = number_after(line, "1.8 kgf cm (");
+        assert!(line.contains("; OVER its rating of 1.8 kgf cm ("), "{line}");
+        assert!((percent - 100.0 * t / 1.8).abs() <= 0.5, "{line}");
+    }
+    assert!(
+        servo(2).contains("; within its rating of 10 kgf cm ("),
+        "{}",
+        servo(2)
+    );
+    assert!(servo(3).ends_with("; not rated"), "{}", servo(3));
+    let summary = stdout.lines().find(|l| l.starts_with("ratings")).unwrap();
+    assert!(
+        summary.starts_with("ratings (servoN.torque_kgcm): OVER: servo 1 needs "),
+        "{summary}"
+    );
+    assert!(summary.ends_with("; servo 3 not rated"), "{summary}");
+    assert!(!summary.contains("servo 2"), "{summary}");
+    let svg = std::fs::read_to_string(dir.join("mixed.svg")).unwrap();
+    let doc = roxmltree::Document::parse(&svg).unwrap();
+    let over: Vec<&str> = doc
+        .descendants()
+        .filter(|n| n.attribute("class") == Some("torque-bar"))
+        .filter(|n| n.attribute("fill") == Some("#d55e00"))
+        .map(|n| n.attribute("data-servo").unwrap())
+        .collect();
+    assert_eq!(over, ["1", "4", "5", "6"]);
+    let rated: Vec<&str> = doc
+        .descendants()
+        .filter(|n| n.attribute("class") == Some("rating"))
+        .map(|n| n.attribute("data-servo").unwrap())
+        .collect();
+    assert_eq!(rated, ["1", "2", "4", "5", "6"]);
+    assert!(
+        svg.contains("rating 1.8 kgf cm (servos 1, 4, 5, 6)"),
+        "{svg}"
+    );
+    assert!(svg.contains("rating 10 kgf cm (servo 2)"), "{svg}");
+
+    // A payload, no ratings (the board's default): torques, no verdict, no rating drawn.
+    std::fs::write(dir.join("unrated.toml"), "payload_g = 1000\n").unwrap();
+    let out = hexapod(
+        &dir,
+        &["torque", "--settings", "unrated.toml", "-o", "unrated"],
+    );
+    let (stdout, stderr) = text(&out);
+    assert!(out.status.success(), "{stderr}");
+    assert!(
+        stdout.contains(
+            "ratings (servoN.torque_kgcm): the servos are not rated: torques without a verdict"
+        ),
+        "{stdout}"
+    );
+    assert!(
+        stdout
+            .lines()
+            .filter(|l| l.ends_with("; not rated"))
+            .count()
+            == 6,
+        "{stdout}"
+    );
+    assert!(stdout.contains("\nworst: servo "), "{stdout}");
+    let svg = std::fs::read_to_string(dir.join("unrated.svg")).unwrap();
+    assert!(!svg.contains("class=\"rating\""), "{svg}");
+    assert!(svg.contains("servos not rated"), "{svg}");
+}
+
+#[test]
+fn no_payload_no_torques() {
+    let dir = scratch("no-payload");
+    // The default platform, and a build file that rates its servos but carries nothing.
+    std::fs::write(dir.join("b.toml"), "servos.torque_kgcm = 10\n").unwrap();
+    for (args, source) in [
+        (vec!["torque"], "the default platform"),
+        (vec!["torque", "--settings", "b.toml"], "b.toml"),
+    ] {
+        let out = hexapod(&dir, &args);
+        assert!(!out.status.success());
+        assert_eq!(
+            text(&out).1.trim_end(),
+            format!(
+                "hexapod: {source}: no payload (payload_g = 0): the servos hold nothing, so \
+                 every torque is 0; give payload_g (g) and payload_com_x_mm, payload_com_y_mm, \
+                 payload_com_z_mm (mm, platform frame) in the build file (--settings)"
+            )
+        );
+    }
+    assert!(!dir.join("torque.svg").exists());
+    let describe = text(&hexapod(&dir, &["describe", "--settings", "b.toml"])).0;
+    assert!(
+        describe.contains("Payload: none (payload_g = 0)"),
+        "{describe}"
+    );
+    assert!(describe.contains("Stiffness at home"), "{describe}");
+}
+
+#[test]
+fn the_old_sizing_keys_are_named_with_the_setting_to_write() {
     let dir = scratch("sizing");
     std::fs::write(
         dir.join("b.toml"),
-        "frame_hz = 50\n[sizing]\npayload_kg = -2\n",
+        "frame_hz = 50\n[sizing]\npayload_kg = 2\nservo_stiffness_nmm_rad = 6000\n",
     )
     .unwrap();
     let out = hexapod(&dir, &["describe", "--settings", "b.toml"]);
     assert!(!out.status.success());
     assert_eq!(
         text(&out).1.trim_end(),
-        "hexapod: b.toml:3: sizing.payload_kg: must be a number 0..1000 kg"
+        "hexapod: b.toml:3: sizing.payload_kg: now the board's setting payload_g (g): write \
+         `payload_g = 2000` above the file's first [table] instead"
+    );
+    std::fs::write(
+        dir.join("b.toml"),
+        "frame_hz = 50\n[sizing]\nservo_stiffness_nmm_rad = -1\n",
+    )
+    .unwrap();
+    let out = hexapod(&dir, &["describe", "--settings", "b.toml"]);
+    assert_eq!(
+        text(&out).1.trim_end(),
+        "hexapod: b.toml:3: sizing.servo_stiffness_nmm_rad: must be a number 1..1000000000 \
+         N mm/rad"
     );
 }

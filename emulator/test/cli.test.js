@@ -1,7 +1,8 @@
 // The host tool `hexapod` (cli/) against the real firmware, as a user runs it: `./dev run --pty
 // --no-view` (src/run.js) boots the firmware ELF in the emulator with UART0 on a pseudo-terminal
 // (and no live view, whose own lines would share it), and the tool talks to that terminal as to
-// a board's serial port. `apply` a build file, read it back,
+// a board's serial port. `apply` a build file (a payload and torque ratings among its
+// settings), read it back, the board's holding torques against the tool's `describe`,
 // stream a 10-second trajectory as binary frames and a shorter one as `pose` lines (every reply
 // checked), then the final pulse widths, as the firmware reports them and as the emulator
 // measures them on the pins, against the host build of the kinematics. And `uf2 --settings`:
@@ -24,10 +25,15 @@ const RUNNER = join(REPO, 'emulator', 'src', 'run.js');
 
 // The build file: speed limits off (stream frames pass straight through), stream full scales
 // that make the trajectory's last row exact in counts (32 mm / 32768 counts: 1/1024 mm), one
-// servo trimmed. The same settings for the host reference.
+// servo trimmed; 1.5 kg 20 mm above the platform on servos rated 20 kgf cm (servo 3: 25), three
+// times the worst holding torque over the workspace, so the board checks every target and
+// clamps none. The same geometry and servos for the host reference (the payload moves no pulse).
 const BUILD = `# a test build
 speed_mm_s = "off"
 speed_deg_s = "off"
+payload_g = 1500
+payload_com_z_mm = 20
+servos.torque_kgcm = 20
 [stream]
 x_mm = 32
 y_mm = 32
@@ -37,6 +43,7 @@ pitch_deg = 16
 yaw_deg = 32
 [servo3]
 trim_us = 1510
+torque_kgcm = 25
 `;
 const END = [5, -3, 4, 2, -1.5, 6];
 
@@ -154,8 +161,13 @@ test('apply a build file through the pty: every setting on the board, saved', as
     '# speed_mm_s: off',
     '# stream.x_mm: 32.000',
     '# stream.yaw_deg: 32.000',
-    '# servo3: trim_us=1510.00 rate_us_rad=509.296 dir=reversed min_us=1100.00 max_us=1900.00',
-    '# servo4: trim_us=1500.00 rate_us_rad=509.296 dir=normal min_us=1100.00 max_us=1900.00',
+    '# payload_g: 1500.0',
+    '# payload_com_x_mm: 0.000',
+    '# payload_com_z_mm: 20.000',
+    '# servo3: trim_us=1510.00 rate_us_rad=509.296 dir=reversed min_us=1100.00 max_us=1900.00 '
+      + 'torque_kgcm=25.00',
+    '# servo4: trim_us=1500.00 rate_us_rad=509.296 dir=normal min_us=1100.00 max_us=1900.00 '
+      + 'torque_kgcm=20.00',
     '# saved: yes (these settings are the ones saved in flash)',
   ]) {
     assert.ok(config.stdout.split('\n').includes(line), `${line} in ${config.stdout}`);
@@ -165,7 +177,28 @@ test('apply a build file through the pty: every setting on the board, saved', as
   const pulled = readFileSync(join(dir, 'pulled.toml'), 'utf8');
   assert.match(pulled, /\[servo3\]\ntrim_us = 1510\.0 /);
   assert.match(pulled, /\nz_mm = 16\.0 /);
+  assert.match(pulled, /\npayload_g = 1500\.0 /);
+  assert.match(pulled, /\npayload_com_z_mm = 20\.0 /);
+  assert.match(pulled, /\[servo3\]\n(?:[^[].*\n)*torque_kgcm = 25\.0 /);
+  assert.equal(pulled.match(/\ntorque_kgcm = 20\.0 /g)?.length, 5, pulled);
   assert.doesNotMatch(pulled, /saved/);
+  assert.doesNotMatch(pulled, /No payload/);
+});
+
+test('the board\'s holding torques at home are those describe gives for the file', async () => {
+  const check = await hexapod(['send', ...onPort(), 'check 0 0 0 0 0 0']);
+  assert.equal(check.status, 0, check.stderr);
+  const board = numbersIn(check.stdout.split('\n').find((l) => l.startsWith('# torque_kgcm:')));
+  const describe = await hexapod(['describe', '--settings', 'build.toml']);
+  assert.equal(describe.status, 0, describe.stderr);
+  const line = describe.stdout.split('\n').find((l) => l.includes('holding torque at home'));
+  const host = numbersIn(line.slice(line.indexOf(':') + 1));
+  assert.equal(host.length, 6, line);
+  // The same code: on the chip with the boot ROM's float routines, on the host with libm.
+  board.forEach((t, i) => {
+    assert.ok(Math.abs(t - host[i]) <= 0.002, `servo ${i + 1}: board ${t}, describe ${host[i]}`);
+  });
+  assert.match(describe.stdout, /ratings \(servoN\.torque_kgcm\): all within: servo \d/);
 });
 
 test('a text stream: a pose line per row, every reply ok', async () => {
@@ -276,7 +309,9 @@ test('uf2 --settings: the chip booted from the file starts with the build file s
   for (const line of [
     'speed_deg_s: off',
     'stream.z_mm: 16.000',
-    'servo3: trim_us=1510.00 rate_us_rad=509.296 dir=reversed min_us=1100.00 max_us=1900.00',
+    'payload_g: 1500.0',
+    'servo3: trim_us=1510.00 rate_us_rad=509.296 dir=reversed min_us=1100.00 max_us=1900.00 '
+      + 'torque_kgcm=25.00',
     'saved: yes (these settings are the ones saved in flash)',
   ]) {
     assert.ok(config.includes(line), `${line} in ${JSON.stringify(config)}`);
