@@ -678,7 +678,10 @@ pub fn torque_command(
         Some(path) => {
             let file = path.display().to_string();
             let rows = trajectory::read(path)?;
-            trajectory::prepare(&file, &rows, &platform.settings, Mode::Text)?;
+            // Every row within reach; the ratings are what this reports on, not a refusal.
+            let mut unrated = platform.settings;
+            unrated.payload.torque_kgcm = [0.0; LEGS];
+            trajectory::prepare(&file, &rows, &unrated, Mode::Text)?;
             let torques =
                 trajectory_torques(&platform, &rows).map_err(|(line, why)| Problem::Row {
                     file: file.clone(),

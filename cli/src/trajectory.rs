@@ -7,7 +7,9 @@
 //! frame's counts, or a `pose` line with 3 decimals) and that is checked with the firmware's
 //! own code: the counts decoded by `control::stream::StreamSettings::to_pose`, the line's
 //! numbers read by `control::number::parse_f32`, the pose solved by the IK with the board's
-//! geometry and servo limits. The first row that would not be driven as written is the error.
+//! geometry and servo limits, and with the board's payload and torque ratings, its holding
+//! torques checked as the board checks a target (`control::payload::PayloadSettings::check`).
+//! The first row that would not be driven as written is the error.
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -279,9 +281,14 @@ pub fn prepare(
                 Mode::Text => Message::Line(pose_line(&row.pose)),
             };
             let pose = board_pose(settings, &message).unwrap_or(Pose::HOME);
-            solver
+            let refused = |e: control::Error| problem(None, RowProblem::Refused(board_words(&e)));
+            let solution = solver
                 .solve::<Libm>(&settings.servos, &pose)
-                .map_err(|e| problem(None, RowProblem::Refused(board_words(&e.into()))))?;
+                .map_err(|e| refused(e.into()))?;
+            settings
+                .payload
+                .check::<Libm>(&solver, &pose, &solution.arm_rad)
+                .map_err(|e| refused(control::Error::Torque(e)))?;
             Ok(message)
         })
         .collect()

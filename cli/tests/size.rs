@@ -430,6 +430,36 @@ fn ratings_judge_each_servo_as_the_board_does_and_none_without_a_rating() {
     );
     assert!(svg.contains("rating 10 kgf cm (servo 2)"), "{svg}");
 
+    // A trajectory through poses the board would refuse for their torques: reported, not
+    // refused (the ratings are what `torque` judges).
+    std::fs::write(
+        dir.join("far.csv"),
+        "time,x,y,z,roll,pitch,yaw\n0,0,0,0,0,0,0\n1,-20,-30,-10,0,0,0\n2,-20,-30,-10,0,0,0\n",
+    )
+    .unwrap();
+    let out = hexapod(
+        &dir,
+        &[
+            "torque",
+            "--settings",
+            "mixed.toml",
+            "--trajectory",
+            "far.csv",
+            "-o",
+            "far",
+        ],
+    );
+    let (stdout, stderr) = text(&out);
+    assert!(out.status.success(), "{stderr}");
+    assert!(
+        stdout.contains("; OVER its rating of 1.8 kgf cm ("),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("\nratings (servoN.torque_kgcm): OVER: servo "),
+        "{stdout}"
+    );
+
     // A payload, no ratings (the board's default): torques, no verdict, no rating drawn.
     std::fs::write(dir.join("unrated.toml"), "payload_g = 1000\n").unwrap();
     let out = hexapod(

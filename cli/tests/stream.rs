@@ -149,6 +149,55 @@ fn an_unreachable_row_is_named_before_anything_is_sent() {
 }
 
 #[test]
+fn a_row_a_rated_servo_cannot_hold_is_named_in_the_board_s_words_before_anything_is_sent() {
+    let dir = scratch("overloaded-row");
+    // 2 kg, 30 mm up, on servos rated 1 kgf cm: home holds (about 0.7 each), 5 mm along x
+    // (the first row beyond home) does not.
+    std::fs::write(
+        dir.join("t.csv"),
+        "time,x,y,z,roll,pitch,yaw\n0,0,0,0,0,0,0\n0.1,5,0,0,0,0,0\n0.2,10,0,0,0,0,0\n",
+    )
+    .unwrap();
+    for mode in [None, Some("--text")] {
+        let board = SimBoard::start();
+        let check = hexapod(
+            &dir,
+            &[
+                "send",
+                "--port",
+                &board.path,
+                "set payload_g 2000",
+                "set payload_com_z_mm 30",
+                "set servos.torque_kgcm 1",
+                "check 5 0 0 0 0 0",
+            ],
+        );
+        // The board's own refusal of that pose.
+        let (out, _) = text(&check);
+        let words = out
+            .lines()
+            .find(|l| l.starts_with("error:torque-limit "))
+            .unwrap_or_else(|| panic!("{out}"))
+            .to_string();
+        let mut args = vec!["stream", "t.csv", "--port", &board.path];
+        args.extend(mode);
+        let stream = hexapod(&dir, &args);
+        assert!(!stream.status.success());
+        let err = text(&stream).1;
+        assert_eq!(
+            err.trim_end(),
+            format!(
+                "hexapod: t.csv:3: the board would refuse this pose: {words}; nothing was sent"
+            )
+        );
+        let received = board.finish().received;
+        assert!(!received.contains(&0xA5), "no frame was sent");
+        let sent = String::from_utf8_lossy(&received).into_owned();
+        assert!(!sent.contains("pose"), "{sent}");
+    }
+}
+
+#[test]
 fn a_row_the_board_refuses_is_reported_and_the_rest_still_goes() {
     let dir = scratch("refused-row");
     // README, "Error codes": from the first pose the straight path to the second leaves the
