@@ -50,7 +50,8 @@ test('the board\'s geometry and config listings are read as the README documents
   const [config] = read(board.request('config', { timeoutMs: 2000 }).lines);
   assert.equal(config.kind, 'config');
   assert.equal(config.config.settings.frame_hz, '50');
-  // README, "Settings": trim 1500 us, 509.296 us/rad, even normal, odd reversed, 1100..1900.
+  // README, "Settings": trim 1500 us, 509.296 us/rad, even normal, odd reversed, 1100..1900,
+  // not rated.
   config.config.servos.forEach((servo, i) => {
     assert.deepEqual(servo, {
       servo: i + 1,
@@ -59,8 +60,15 @@ test('the board\'s geometry and config listings are read as the README documents
       dir: (i + 1) % 2 === 0 ? 'normal' : 'reversed',
       minUs: 1100,
       maxUs: 1900,
+      torqueKgcm: null,
     });
   });
+  board.request('set servo2.torque_kgcm 2.5', { timeoutMs: 2000 });
+  const [rated] = read(board.request('config', { timeoutMs: 2000 }).lines);
+  assert.deepEqual(
+    rated.config.servos.map((servo) => servo.torqueKgcm),
+    [null, 2.5, null, null, null, null],
+  );
 
   // A changed setting shows in the next listing.
   board.request('set arm_mm 21', { timeoutMs: 2000 });
@@ -183,7 +191,11 @@ function events(port) {
   };
 }
 
-test('the view server streams pins and listings, takes typed lines, and refuses strangers', async (t) => {
+// (Each wait for an event loops until it comes: a listing the server never sends fails here,
+// after a generous minute, instead of hanging the run.)
+const STREAM_TEST = { timeout: 60_000 };
+
+test('the view server streams pins and listings, takes typed lines, and refuses strangers', STREAM_TEST, async (t) => {
   const board = new EmulatedBoard({ bootrom });
   const input = new SharedInput(board);
   const view = await startViewServer({ board, input, port: 0 });
