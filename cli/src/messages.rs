@@ -408,11 +408,7 @@ fn setting_placement(id: control::settings::SettingId, value: Option<f32>) -> St
 
 /// A torque refusal in the board's words, without its code.
 fn torque_words(cause: &control::payload::TorqueError) -> String {
-    let words = board_words(&control::Error::Torque(*cause));
-    match words.split_once(' ') {
-        Some((_, message)) => message.to_string(),
-        None => words,
-    }
+    control::Error::Torque(*cause).to_string()
 }
 
 /// `init`, `pull`: a build file was written.
@@ -978,7 +974,7 @@ pub fn ratings_summary(
     use crate::size::Verdict;
     let head = "ratings (servoN.torque_kgcm):";
     let unrated: Vec<usize> = (1..=6)
-        .filter(|&n| p.payload().torque_kgcm[n - 1] <= 0.0)
+        .filter(|&n| p.verdict(n as u8, 0.0) == Verdict::NotRated)
         .collect();
     if unrated.len() == 6 {
         return format!("{head} the servos are not rated: torques without a verdict");
