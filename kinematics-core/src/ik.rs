@@ -433,8 +433,15 @@ impl Solver {
             c.platform_q = [0, 1].map(|k| to_fixed(c.platform_mm[k], MM_FRAC));
             c.offset_q = [0, 1, 2].map(|k| to_fixed(c.offset_mm[k], MM_FRAC));
             if fixed_lengths {
-                // |n_x|, |n_y| <= 2a: within `to_fixed`'s range.
-                c.n_q = [c.n_x_mm, c.n_y_mm].map(|v| to_fixed(v, MM_FRAC));
+                // 2a (cos(beta), sin(beta)) from `M`'s fixed-point sine and cosine, exactly
+                // rounded to 2^-20 mm (|n| <= 2a: within range): the same bits on every
+                // machine, like the rest of the fixed-point path.
+                let (sin_q, cos_q) = M::sin_cos_fixed(leg.beta_rad);
+                let round = |v: i64| ((v + (1 << (ROT_FRAC - 1))) >> ROT_FRAC) as i32;
+                c.n_q = [
+                    round(wide_mul(solver.two_arm_q, cos_q)),
+                    round(wide_mul(solver.two_arm_q, sin_q)),
+                ];
             }
         }
         solver.fixed_point = solver.planar_platform

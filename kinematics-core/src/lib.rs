@@ -29,8 +29,10 @@
 //! - [`forward`]: forward kinematics, approximate and by Newton's method, a step at a time.
 //! - [`workspace`]: the reach along each axis, a test at a time, and sampled grids.
 //! - [`linalg`]: the 6x6 linear algebra; [`error`]: [`KinematicsError`].
-//! - [`math`]: the few transcendental functions the IK needs, behind a trait so the firmware can
-//!   supply the RP2040 boot ROM's fast routines while the host uses `libm`.
+//! - [`math`]: the few transcendental functions the kinematics need, behind a trait so the
+//!   firmware can supply the RP2040 boot ROM's fast routines while the host uses `libm`; and
+//!   their fixed-point forms for the IK's hot loop (by default [`fixed`]'s, the same bits
+//!   everywhere).
 //! - [`fixed`]: the fixed-point arithmetic of the IK's hot loop (integer instructions for a chip
 //!   without an FPU): its sine and cosine, square root and arc tangent, each with its method
 //!   and error bound (the defaults of [`Math`]'s fixed-point functions).

@@ -1,4 +1,4 @@
-//! The transcendental functions the IK needs, behind a trait.
+//! The transcendental functions the kinematics need, behind a trait.
 //!
 //! The core is generic over [`Math`] so that the same algorithm runs with `libm` on the host (and
 //! in host tests) and with the RP2040 boot ROM's faster float routines in the firmware. All

@@ -312,6 +312,35 @@ mod tests {
     use super::*;
 
     #[test]
+    fn allows_is_ieee_within_the_limits() {
+        let values = [
+            f32::NEG_INFINITY,
+            -1500.0,
+            -0.0,
+            0.0,
+            1e-45,
+            1100.0,
+            1500.0,
+            1900.0,
+            f32::INFINITY,
+            f32::NAN,
+        ];
+        for min_us in values {
+            for max_us in values {
+                let servo = ServoConfig {
+                    min_us,
+                    max_us,
+                    ..ServoConfig::default_for(1)
+                };
+                for pulse in values {
+                    let ieee = min_us <= pulse && pulse <= max_us;
+                    assert_eq!(servo.allows(pulse), ieee, "{min_us} <= {pulse} <= {max_us}");
+                }
+            }
+        }
+    }
+
+    #[test]
     fn defaults_follow_the_source_document() {
         let set = ServoSet::default();
         set.validate().unwrap();

@@ -59,6 +59,7 @@ pub(crate) const MAX_ROTATION_ENTRY: i32 = (1 << ROT_FRAC) + (1 << (ROT_FRAC - 4
 
 /// `x * 2^frac` rounded to the nearest integer (halves away from zero), in integer
 /// instructions. `|x| * 2^frac` must be below 2^31 (the callers bound `x` first).
+#[inline]
 pub(crate) fn to_fixed(x: f32, frac: u32) -> i32 {
     let bits = x.to_bits();
     let exponent = ((bits >> 23) & 0xff) as i32;
