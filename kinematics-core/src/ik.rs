@@ -28,6 +28,13 @@
 //! pose gives exactly the home pulses) and holds what it needs on every pose: per-leg
 //! constants (mm, rad), in `f32` and, where the build allows, in fixed point (module `fixed`).
 //! Build it once per geometry.
+//!
+//! Two paths compute the same equations. Every usual build (a planar platform within the
+//! bounds of module `fixed`) and pose takes the fixed-point path: integer instructions only,
+//! from the rotation to the pulses, with `M`'s fixed-point sine and cosine, square root and arc
+//! tangent (by default the core's own: then the host and the chip compute the same bits). Other
+//! builds and poses take the float path, `f32` arithmetic through `M`. Each has its own home
+//! angles, so each gives exactly the home pulses at home.
 
 use core::f32::consts::PI;
 use core::fmt;
