@@ -1,6 +1,7 @@
 //! The load segments of a 32-bit little-endian ARM ELF file (what `cargo fw` builds), at their
 //! load (physical) addresses: where a programmer writes them. `.data`'s initial values, run in
-//! RAM, are stored in flash after the code: their load address is in flash.
+//! RAM, are stored in flash after the code: their load address is in flash. And the value of
+//! a symbol (e.g. `_settings_start`, which `memory.x` defines), from the symbol table.
 
 use std::fmt;
 
@@ -83,4 +84,43 @@ pub fn load_segments(file: &[u8]) -> Result<Vec<Segment>, ElfError> {
         segments.push(Segment { address, bytes });
     }
     Ok(segments)
+}
+
+const SHT_SYMTAB: u32 = 2;
+const SYMBOL_BYTES: usize = 16;
+
+/// The value of the symbol `name` (an address, for the linker script's symbols), if the file's
+/// symbol table has it.
+pub fn symbol(file: &[u8], name: &str) -> Result<Option<u32>, ElfError> {
+    load_segments(file)?; // the same checks of the file
+    let table = u32_at(file, 0x20)? as usize;
+    let entry_size = usize::from(u16_at(file, 0x2e)?);
+    let count = usize::from(u16_at(file, 0x30)?);
+    let section = |i: usize, at: usize| {
+        u32_at(
+            file,
+            table
+                .saturating_add(i.saturating_mul(entry_size))
+                .saturating_add(at),
+        )
+    };
+    for i in 0..count {
+        if section(i, 4)? != SHT_SYMTAB {
+            continue;
+        }
+        let (offset, size) = (section(i, 16)? as usize, section(i, 20)? as usize);
+        let strings = section(section(i, 24)? as usize, 16)? as usize;
+        for entry in (offset..offset.saturating_add(size)).step_by(SYMBOL_BYTES) {
+            let name_at = strings.saturating_add(u32_at(file, entry)? as usize);
+            let rest = file.get(name_at..).ok_or(ElfError::Truncated)?;
+            let end = rest
+                .iter()
+                .position(|&b| b == 0)
+                .ok_or(ElfError::Truncated)?;
+            if &rest[..end] == name.as_bytes() {
+                return Ok(Some(u32_at(file, entry + 4)?));
+            }
+        }
+    }
+    Ok(None)
 }

@@ -55,10 +55,12 @@
 //! frame wins (the board feeds every waiting byte, then calls [`Controller::apply_stream`],
 //! which applies only the newest frame). An unreachable target is clamped: the last reachable
 //! pose on the straight line from the current pose to it, found by bisection
-//! ([`CLAMP_STEPS`] IK solutions), and counted. With every speed and acceleration limit off
+//! ([`CLAMP_STEPS`] IK solutions, as a job a slice per pass: so a clamped frame takes effect
+//! a few passes, well under a millisecond, later), and counted. With every speed and acceleration limit off
 //! the pose is applied at once (pass-through, like a jump: [`Controller::take_new_pulses`]);
 //! otherwise each axis follows it at the servo frame rate within the limits
-//! ([`crate::tracker`]), and a step that would leave the workspace is clamped too. An accepted
+//! ([`crate::tracker`]); a step that would leave the workspace (the axes' own paths to a
+//! reachable goal can) stops the tracker where it is, counted as a clamp too. An accepted
 //! move (`pose`, `move`, `nudge`, `home`) or `stop` ends the stream (while a move's path is
 //! checked the stream holds, as a move in progress does; a refused one lets it go on); the
 //! next frame starts it again from wherever the platform is.
@@ -96,8 +98,9 @@ pub const LINK_LOSS_SPEED_DEG_S: f32 = 15.0;
 /// RP2040 one takes about 0.09 ms, so a slice stays well under half a millisecond.
 pub const CHECKS_PER_SLICE: u32 = 3;
 
-/// IK solutions of a clamp's bisection: the clamped pose is within 1/64 of the way from the
-/// last reachable pose to the target (on the RP2040 a clamp costs up to 7 IK solutions).
+/// Halvings of a clamp's bisection: the clamped pose is within 1/64 of the way from the
+/// current pose to the target (a clamp costs 1 + 6 IK solutions, the 6 as the controller's
+/// own job, [`CHECKS_PER_SLICE`] per pass).
 pub const CLAMP_STEPS: u32 = 6;
 
 /// Notices kept for links that have not shown them yet (the latest ones).
@@ -160,6 +163,24 @@ enum Job {
     Rebuild { candidate: Settings, stage: Rebuild },
     /// `save`: the flash write the board performs, and its outcome.
     Save(SaveStep),
+    /// An unreachable stream target being clamped, a few IK solutions per slice (the
+    /// controller's own work: no reply).
+    Clamp(Bisection),
+}
+
+/// A clamp in progress: bisection on the straight line from `from` (which can be driven) to
+/// `to` (which cannot), [`CLAMP_STEPS`] halvings in all.
+#[derive(Debug, Clone, Copy)]
+struct Bisection {
+    from: Pose,
+    to: Pose,
+    /// Fractions of the way known to be drivable and not.
+    reachable: f32,
+    unreachable: f32,
+    /// The furthest drivable pose found and its solution (`None`: only `from`).
+    best: Option<(Pose, Solution)>,
+    /// Halvings done.
+    steps: u32,
 }
 
 /// How far a [`Job::Save`] has got.
@@ -464,8 +485,9 @@ impl<M: Math> Controller<M> {
 
     // ----- what the board calls -----
 
-    /// Writes the start-up banner (and any notice, e.g. refused settings), then the prompt, to
-    /// one link.
+    /// Writes the banner (and the notices this link has not shown, e.g. refused settings), then
+    /// the prompt, to one link: at power-up, and when a link opens (a USB host opening its
+    /// port, after [`Session::reopen`]).
     pub fn banner(&self, session: &mut Session, out: &mut impl Write) {
         report::write_banner(out);
         self.flush_notices(session, out);
@@ -523,21 +545,34 @@ impl<M: Math> Controller<M> {
             return;
         };
         stream.fresh = false;
-        self.stream_counts.applied = self.stream_counts.applied.wrapping_add(1);
-        let from = *self.motion.pose();
-        let (pose, solution) = self.clamp(&from, &stream.target);
-        if self.track_limits() == TrackLimits::OFF {
-            if let Some(solution) = solution {
-                self.motion = Motion::new(pose);
-                self.solution = solution;
-                self.new_pulses = true;
-            }
-            stream.tracker.hold_at(&pose);
-        }
-        stream.goal = pose;
         self.stream = Some(stream);
+        self.stream_counts.applied = self.stream_counts.applied.wrapping_add(1);
         self.servo_power = true;
         self.fault = None;
+        match self
+            .solver
+            .solve::<M>(&self.settings.servos, &stream.target)
+        {
+            Ok(solution) => self.reach_stream_goal(stream.target, Some(solution)),
+            Err(_) => {
+                // Unreachable: clamped by a bisection that runs as the controller's own job,
+                // a slice per pass (so no pass grows by its IK solutions); the platform goes
+                // on towards the previous goal meanwhile. (One job at a time: a job already
+                // running means this frame came through a transport that feeds while busy;
+                // then the goal stays where it was.)
+                self.stream_counts.clamped = self.stream_counts.clamped.wrapping_add(1);
+                if self.job.is_none() {
+                    self.job = Some(Job::Clamp(Bisection {
+                        from: *self.motion.pose(),
+                        to: stream.target,
+                        reachable: 0.0,
+                        unreachable: 1.0,
+                        best: None,
+                        steps: 0,
+                    }));
+                }
+            }
+        }
     }
 
     /// The emergency-stop input, as the board reads it (`open`: the pin is high; call it every
@@ -574,10 +609,12 @@ impl<M: Math> Controller<M> {
     pub fn work(&mut self, session: &mut Session, out: &mut impl Write) {
         let commanded = !matches!(
             self.job,
-            Some(Job::Path {
-                purpose: Purpose::ReturnHome | Purpose::EstopHome,
-                ..
-            })
+            Some(
+                Job::Path {
+                    purpose: Purpose::ReturnHome | Purpose::EstopHome,
+                    ..
+                } | Job::Clamp(_)
+            )
         );
         if commanded && !session.awaits_reply() {
             return;
@@ -627,6 +664,17 @@ impl<M: Math> Controller<M> {
                 // The board has not written yet.
                 self.job = Some(Job::Save(step));
                 return;
+            }
+            Job::Clamp(mut bisection) => {
+                if !self.bisect_slice(&mut bisection) {
+                    self.job = Some(Job::Clamp(bisection));
+                    return;
+                }
+                let (pose, solution) = bisection
+                    .best
+                    .map_or((bisection.from, None), |(p, s)| (p, Some(s)));
+                self.reach_stream_goal(pose, solution);
+                Done::Quiet
             }
         };
         self.holding = false;
@@ -964,43 +1012,60 @@ impl<M: Math> Controller<M> {
                 stream.tracker = next;
             }
             Err(_) => {
-                let from = *self.motion.pose();
-                let (pose, solution) = self.clamp(&from, &next.pose());
-                if let Some(solution) = solution {
-                    self.motion = Motion::new(pose);
-                    self.solution = solution;
-                }
-                stream.tracker.hold_at(&pose);
-                stream.goal = pose;
+                // The goal can be driven (it was clamped), but the axes' own paths to it
+                // leave the workspace here: stop where the last step was, a step (at most one
+                // frame's travel) short of the edge, rather than spend a bisection in this
+                // pass (which also holds a clamp of the goal: the pass must stay short).
+                let here = *self.motion.pose();
+                stream.tracker.hold_at(&here);
+                stream.goal = here;
+                self.stream_counts.clamped = self.stream_counts.clamped.wrapping_add(1);
             }
         }
         self.stream = Some(stream);
     }
 
-    /// The last pose on the straight line from `from` (which can be driven) to `to` that can
-    /// be driven, within 1/2^[`CLAMP_STEPS`] of the way, and its solution (`None` when that is
-    /// `from` itself, whose solution is the current one). Counts a clamp if `to` cannot be
-    /// driven.
-    fn clamp(&mut self, from: &Pose, to: &Pose) -> (Pose, Option<Solution>) {
-        let servos = &self.settings.servos;
-        if let Ok(solution) = self.solver.solve::<M>(servos, to) {
-            return (*to, Some(solution));
-        }
-        self.stream_counts.clamped = self.stream_counts.clamped.wrapping_add(1);
-        let (mut reachable, mut unreachable) = (0.0f32, 1.0f32);
-        let mut best = (*from, None);
-        for _ in 0..CLAMP_STEPS {
-            let t = 0.5 * (reachable + unreachable);
-            let pose = lerp(from, to, t);
-            match self.solver.solve::<M>(servos, &pose) {
+    /// Up to [`CHECKS_PER_SLICE`] more halvings of a clamp's bisection; `true` when it is done
+    /// (its `best` is then the last drivable pose on the line from `from` to `to`, within
+    /// 1/2^[`CLAMP_STEPS`] of the way).
+    fn bisect_slice(&self, b: &mut Bisection) -> bool {
+        for _ in 0..CHECKS_PER_SLICE {
+            if b.steps >= CLAMP_STEPS {
+                break;
+            }
+            b.steps += 1;
+            let t = 0.5 * (b.reachable + b.unreachable);
+            let pose = lerp(&b.from, &b.to, t);
+            match self.solver.solve::<M>(&self.settings.servos, &pose) {
                 Ok(solution) => {
-                    reachable = t;
-                    best = (pose, Some(solution));
+                    b.reachable = t;
+                    b.best = Some((pose, solution));
                 }
-                Err(_) => unreachable = t,
+                Err(_) => b.unreachable = t,
             }
         }
-        best
+        b.steps >= CLAMP_STEPS
+    }
+
+    /// A stream target, or what it was clamped to, is the goal: in pass-through the pose now
+    /// (`solution`: its IK; `None` to stay where the platform is), else the tracker's goal.
+    /// Nothing if the stream has ended meanwhile (a clamp's job outlived it).
+    fn reach_stream_goal(&mut self, pose: Pose, solution: Option<Solution>) {
+        let Some(mut stream) = self.stream else {
+            return;
+        };
+        if self.track_limits() == TrackLimits::OFF {
+            if let Some(solution) = solution {
+                self.motion = Motion::new(pose);
+                self.solution = solution;
+                self.new_pulses = true;
+            }
+            stream.tracker.hold_at(self.motion.pose());
+            stream.goal = *self.motion.pose();
+        } else {
+            stream.goal = pose;
+        }
+        self.stream = Some(stream);
     }
 
     /// Ends the stream (the platform holds where it is).
@@ -1578,6 +1643,42 @@ mod tests {
             to_program,
             "s\r\n# warning: receive queue overflowed, input lost (at least 9 bytes so far)\r\n> s"
         );
+    }
+
+    #[test]
+    fn a_reopened_link_starts_afresh_and_shows_only_what_came_while_it_was_closed() {
+        let mut c = quiet();
+        let mut usb = program();
+        let mut out = std::string::String::new();
+        c.on_input_lost(&mut usb, 3, false, &mut out);
+        for &b in b"pose 1" {
+            c.on_byte(&mut usb, b, &mut out);
+        }
+        // Closed (the host dropped DTR); a notice comes meanwhile, then the host opens again.
+        c.notify(Notice::InputLost {
+            at_least: 7,
+            in_uart: true,
+        });
+        usb.reopen();
+        assert!(usb.echo(), "a new terminal: echo on");
+        assert_eq!(usb.typed(), "", "the partial line is abandoned");
+        out.clear();
+        c.banner(&mut usb, &mut out);
+        assert_eq!(
+            out,
+            std::format!(
+                "# hexapod control {}: poses in mm and degrees; type help\r\n\
+                 # warning: UART receive error, input lost (at least 7 bytes)\r\n> ",
+                report::VERSION
+            )
+        );
+        // The new terminal's first line is a line of its own.
+        out.clear();
+        for &b in b"home\r" {
+            c.on_byte(&mut usb, b, &mut out);
+        }
+        finish(&mut c, &mut usb, &mut out);
+        assert_eq!(out, "home\r\nok\r\n> ");
     }
 
     #[test]

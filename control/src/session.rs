@@ -63,6 +63,18 @@ impl Session {
         self.awaiting_reply
     }
 
+    /// The link was closed and has been opened again (a USB host opened its port): a new
+    /// terminal on the same link. Nothing typed (a partial line is abandoned), echo on, no
+    /// prompt held back. Which notices it has shown is kept: the notices that came while it
+    /// was closed are shown once, by the next [`crate::Controller::banner`]. Call it only while
+    /// no reply is awaited ([`Session::awaits_reply`]): the reply would go to the new terminal.
+    pub fn reopen(&mut self) {
+        debug_assert!(!self.awaiting_reply, "reopened with a reply still to come");
+        self.line = LineBuffer::new();
+        self.echo = true;
+        self.prompt_deferred = false;
+    }
+
     /// Writes the prompt held back after `set baud` changed the rate (echo on): call it once
     /// the board has switched the UART to the new rate, so the prompt arrives readable.
     pub fn write_deferred_prompt(&mut self, out: &mut impl Write) {

@@ -65,7 +65,7 @@ fn a_binary_frame_is_applied_at_once_in_pass_through() {
     let out = s.feed(&binary(counts));
     assert_eq!(out, "", "frames get no reply");
     assert!(s.ctl.take_new_pulses().is_none(), "applied by apply_stream");
-    s.ctl.apply_stream();
+    s.apply_stream();
     let want = Pose::from_degrees(-5.0, 5.0, 3.0, 3.0, -3.0, 4.0);
     assert!(
         poses_close(s.ctl.pose(), &want, 1e-3, 1e-4),
@@ -105,12 +105,12 @@ fn the_newest_frame_wins() {
             count(0.0),
         ]));
     }
-    s.ctl.apply_stream();
+    s.apply_stream();
     assert!(close(s.ctl.pose().z_mm, 0.3 * 15.0, 1e-3));
     let c = s.ctl.stream_counts();
     assert_eq!((c.frames, c.applied), (3, 1));
     // Nothing fresh: nothing more applied.
-    s.ctl.apply_stream();
+    s.apply_stream();
     assert_eq!(s.ctl.stream_counts().applied, 1);
 }
 
@@ -128,7 +128,7 @@ fn text_frames_use_the_bit_depth_and_axis_order_of_the_profile() {
     }
     // 10 bits: 512 is the middle, 768 is +half, 256 is -half.
     s.feed(b"768,512,256,512,768,512X");
-    s.ctl.apply_stream();
+    s.apply_stream();
     let want = Pose::from_degrees(0.0, 12.5, 0.0, 7.5, 0.0, -10.0);
     assert!(
         poses_close(s.ctl.pose(), &want, 1e-3, 1e-4),
@@ -137,7 +137,7 @@ fn text_frames_use_the_bit_depth_and_axis_order_of_the_profile() {
     );
     // A count that does not fit 10 bits: damaged, not applied.
     s.feed(b"1024,512,512,512,512,512X");
-    s.ctl.apply_stream();
+    s.apply_stream();
     assert!(poses_close(s.ctl.pose(), &want, 1e-3, 1e-4));
     assert_eq!(s.ctl.stream_counts().damaged, 1);
     // Commands still work on the same link, and a frame keeps no line open.
@@ -161,7 +161,7 @@ fn damaged_frames_and_garbage_are_counted_and_never_applied() {
     bytes.extend(good.clone());
     let out = s.feed(&bytes);
     assert_eq!(out, "", "garbage between frames gets no reply");
-    s.ctl.apply_stream();
+    s.apply_stream();
     assert!(close(s.ctl.pose().z_mm, 0.2 * 15.0, 1e-3));
     let c = s.ctl.stream_counts();
     assert_eq!(c.frames, 1);
@@ -182,7 +182,7 @@ fn an_unreachable_target_is_clamped_on_the_way_to_it_and_counted() {
         count(0.0),
         count(0.0),
     ]));
-    s.ctl.apply_stream();
+    s.apply_stream();
     let z = s.ctl.pose().z_mm;
     assert!(z > 0.0 && z < 80.0, "{z}");
     assert_eq!((s.ctl.pose().x_mm, s.ctl.pose().roll_rad), (0.0, 0.0));
@@ -221,7 +221,7 @@ fn the_tracker_respects_speed_and_acceleration_and_does_not_overshoot() {
         count(0.0),
         count(0.0),
     ]));
-    s.ctl.apply_stream();
+    s.apply_stream();
     assert_eq!(
         *s.ctl.pose(),
         Pose::HOME,
@@ -270,7 +270,7 @@ fn a_command_ends_the_stream_and_a_frame_starts_it_again() {
         count(0.0),
         count(0.0),
     ]));
-    s.ctl.apply_stream();
+    s.apply_stream();
     assert!(s.ctl.is_streaming());
     s.ok("pose 0 0 2 0 0 0");
     assert!(!s.ctl.is_streaming());
@@ -286,7 +286,7 @@ fn a_command_ends_the_stream_and_a_frame_starts_it_again() {
         count(0.0),
         count(0.0),
     ]));
-    s.ctl.apply_stream();
+    s.apply_stream();
     assert!(s.ctl.is_streaming());
     assert_eq!(*s.ctl.pose(), Pose::HOME);
     s.ok("stop");
@@ -307,7 +307,7 @@ fn the_e_stop_freezes_refuses_moves_and_frames_until_closed_and_reset() {
         count(0.0),
         count(0.0),
     ]));
-    s.ctl.apply_stream();
+    s.apply_stream();
     assert!(s.ctl.servo_power());
     let frozen = *s.ctl.pose();
     s.ctl.set_estop_input(true);
@@ -328,7 +328,7 @@ fn the_e_stop_freezes_refuses_moves_and_frames_until_closed_and_reset() {
         count(0.0),
         count(0.0),
     ]));
-    s.ctl.apply_stream();
+    s.apply_stream();
     assert_eq!(*s.ctl.pose(), frozen);
     assert_eq!(s.ctl.stream_counts().refused, 1);
     let refusal = s.err("home");
@@ -389,7 +389,7 @@ fn a_stream_that_stops_eases_home_after_the_link_timeout() {
         count(0.0),
         count(0.0),
     ]));
-    s.ctl.apply_stream();
+    s.apply_stream();
     s.frames(5);
     assert!(s.ctl.is_streaming(), "frames are a sign of life");
     s.frames(30);
@@ -404,4 +404,33 @@ fn defaults_for_a_fresh_board_have_no_safety_pins() {
     let s = Settings::default();
     assert_eq!(s.safety.estop_pin, None);
     assert_eq!(s.safety.power_pin, None);
+}
+
+#[test]
+fn a_clamp_is_the_controllers_own_work_a_slice_at_a_time() {
+    let mut s = pass_through();
+    s.ok("set stream.z_mm 100");
+    s.feed(&binary([
+        count(0.0),
+        count(0.0),
+        count(0.8),
+        count(0.0),
+        count(0.0),
+        count(0.0),
+    ]));
+    s.ctl.apply_stream();
+    // The target's own IK failed: the bisection (6 IK solutions) is left to `work`, a few per
+    // slice, so the pass that fed the frame stays short; nothing moved yet.
+    assert!(s.ctl.is_busy());
+    assert_eq!(*s.ctl.pose(), Pose::HOME);
+    let mut slices = 0;
+    let mut out = String::new();
+    while s.ctl.is_busy() {
+        s.ctl.work(&mut s.link, &mut out);
+        slices += 1;
+    }
+    assert_eq!(out, "", "the controller's own work replies to nobody");
+    assert!(slices >= 2, "{slices} slice(s) for 6 IK solutions");
+    assert!(s.ctl.pose().z_mm > 0.0);
+    assert!(s.ctl.take_new_pulses().is_some());
 }

@@ -10,17 +10,21 @@ import { fileURLToPath } from 'node:url';
 import { parseArgs } from 'node:util';
 
 import { DEFAULT_ELF } from './board.js';
-import { sectionSizes, symbolSizes, symbolValues } from './elf.js';
+import { sectionSizes, sizedSymbols, symbolSizes, symbolValues } from './elf.js';
 import {
   measureLatency,
   measureLockStep,
   measureSave,
-  measureStream,
   measureLongestPass,
+  measureLongestPassBothLinks,
+  measureStream,
+  measureUsbStream,
   measureWorstCommand,
   stackHighWaterBytes,
 } from './firmware-bench.js';
+import { BULK_PACKETS_PER_FRAME } from './rp2040js-gaps.js';
 import { benchPoses, profileIk, runIkBench, runKinematicsBench, runStreamBench } from './ik-bench.js';
+import { highestFrameRate, measureFrameLatency, measureStreamCpu } from './stream-bench.js';
 
 const REPO = join(dirname(fileURLToPath(import.meta.url)), '..', '..');
 const CLOCK_HZ = 125e6;
@@ -50,12 +54,6 @@ const BEFORE_ROM = {
 const TARGET_US = 0.01;
 /** Cycles in one servo frame at the highest frame rate (333 Hz) at 125 MHz. */
 const FRAME_333_CYCLES = 125e6 / 333;
-/**
- * The firmware's size at commit a5c9084, the last before the settings storage (`save`, the
- * store, the flash routines), measured once with this harness's section sums: flash and
- * static RAM bytes.
- */
-const BEFORE_STORAGE = { commit: 'a5c9084', flash: 140_796, ram: 5_280 };
 /** What each variant of the IK benchmark is, for its row. */
 const VARIANT_ROWS = {
   rom: 'the boot ROM\'s `f32` `fsin`, `fsqrt`, `fatan2` in place of the integer routines',
@@ -72,6 +70,22 @@ const MICROMATH_ALONE = {
   sqrt: 'micromath-sqrt',
   atan2: 'micromath-atan2',
 };
+/**
+ * The firmware just before the settings storage (`save`, the store, the flash routines) was
+ * merged in (commit b7187c2: streaming and the safety pins, UART0 only), measured once with
+ * this harness's section sums: flash and static RAM bytes.
+ */
+const BEFORE_STORAGE = { commit: 'b7187c2', flash: 158_696, ram: 5_288 };
+/**
+ * The firmware just before USB serial (commit 20de6a3: b7187c2 with the settings storage
+ * merged in, UART0 only), measured once the same way: flash and static RAM, bytes.
+ */
+const WITHOUT_USB = { commit: '20de6a3', flash: 177_772, ram: 5_652 };
+/** The USB code and data in the ELF's symbol table (rust names; the handler by its own). */
+const USB_SYMBOL =
+  /usb_serial|usb_device|usbd_serial|rp2040_hal\.\.usb\.\.|rp2040_hal3usb|USBCTRL_IRQ/;
+/** Where the RP2040's SRAM starts: symbols below it are in flash. */
+const RAM_START = 0x20000000;
 
 const { values: args } = parseArgs({
   options: {
@@ -149,6 +163,18 @@ const steps = streamLines(41).map((line) => line.slice('pose '.length));
 const latencySmall = measureLatency(steps.slice(1), { from: steps[0] });
 const latencyJump = measureLatency(['5 0 0 0 0 0', '0 0 0 0 0 0', '0 0 5 0 0 0']);
 const latencySmallFast = measureLatency(steps.slice(1), { baud: STREAM_BAUD, from: steps[0] });
+const latencySmallUsb = measureLatency(steps.slice(1), { usb: true, from: steps[0] });
+const latencyJumpUsb = measureLatency(['5 0 0 0 0 0', '0 0 0 0 0 0', '0 0 5 0 0 0'], { usb: true });
+
+// ---- stream frames ----
+log('stream frames ...');
+const frameCountsFor = (i) => [32768 + (i % 5) * 300 + 7, 32768 + i, 32768 + (i % 3) * 500, 32768, 32768 + (i % 2) * 200, 32768 + (i % 4) * 200];
+const frameSet = Array.from({ length: 40 }, (_, i) => frameCountsFor(i));
+const frameFastUs = measureFrameLatency(frameSet, { baud: STREAM_BAUD });
+const frameSlowUs = measureFrameLatency(frameSet, { baud: 115200 });
+const frameRate = highestFrameRate([1000, 2000, 3000, 3500, 4000, 4500, 5000, 5500, 5760]);
+const streamCpu100 = measureStreamCpu({ framesPerSecond: 100, seconds: 1 });
+const streamCpu333 = measureStreamCpu({ framesPerSecond: 333, seconds: 0.5 });
 
 // ---- sustained ----
 const lines = streamLines(Number(args.lines));
@@ -164,12 +190,22 @@ for (const linesPerSecond of [1000, 1200, 1400, 1600, 1800, Infinity]) {
   }
 }
 const lockStep = measureLockStep(lines.slice(0, 500), { baud: STREAM_BAUD });
+log(`USB: ${lines.length} lines ...`);
+const usbRates = [];
+for (const linesPerSecond of [1000, 1500, 2000, 2500, Infinity]) {
+  const result = measureUsbStream(lines, { linesPerSecond });
+  usbRates.push({ offered: linesPerSecond, ...result });
+  const answered = `${result.ok}/${result.lines} ok, ${fmt(result.linesPerSecond)} lines/s`;
+  log(`  offered ${linesPerSecond}/s: ${answered}`);
+}
+const usbLockStep = measureLockStep(lines.slice(0, 500), { usb: true });
 
 // ---- worst case ----
 log('worst-case command ...');
 const worst = measureWorstCommand();
 log('longest main-loop pass ...');
 const passes = measureLongestPass();
+const passesBoth = measureLongestPassBothLinks();
 log('save ...');
 const saves = ['typical', 'max'].map((timing) => ({ timing, ...measureSave({ timing }) }));
 
@@ -183,6 +219,12 @@ const sizes = (elf) => {
 };
 const fw = sizes(DEFAULT_ELF);
 const symbols = symbolValues(DEFAULT_ELF, ['_stack_end', '_stack_start']);
+const usbSymbols = sizedSymbols(DEFAULT_ELF).filter((symbol) => USB_SYMBOL.test(symbol.name));
+const usbRam = usbSymbols.filter((s) => s.value >= RAM_START).reduce((n, s) => n + s.size, 0);
+const usbCode = usbSymbols.filter((s) => s.value < RAM_START).reduce((n, s) => n + s.size, 0);
+// What USB added against the firmware just before it (anything added since counts too).
+const usbFlash = fw.flash - WITHOUT_USB.flash;
+const usbRamTotal = fw.ram - WITHOUT_USB.ram;
 const stackBytes = stackHighWaterBytes(worst.board, {
   stackEnd: symbols._stack_end,
   stackStart: symbols._stack_start,
@@ -211,8 +253,27 @@ const stat = (values) => {
   return { mean: sum / values.length, min: Math.min(...values), max: Math.max(...values) };
 };
 const small = stat(latencySmall);
+const frameFast = stat(frameFastUs);
+const frameSlow = stat(frameSlowUs);
 const smallFast = stat(latencySmallFast);
 const jump = stat(latencyJump);
+const smallUsb = stat(latencySmallUsb);
+const jumpUsb = stat(latencyJumpUsb);
+const usbRateRows = usbRates
+  .map((r) => {
+    const offered = Number.isFinite(r.offered)
+      ? `${fmt(r.offered)}/s`
+      : 'all at once (as fast as the firmware takes them)';
+    const outcome =
+      r.ok === r.lines
+        ? 'all `ok`'
+        : `${r.ok} of ${r.lines} \`ok\`; first other reply: \`${r.errors[0] ?? ''}\``;
+    return `| ${offered} | ${fmt(r.linesPerSecond)}/s | ${outcome} |`;
+  })
+  .join('\n');
+const usbBest = usbRates
+  .filter((r) => r.ok === r.lines)
+  .reduce((a, r) => (a && a.linesPerSecond > r.linesPerSecond ? a : r), null);
 const rel = (path) => relative(REPO, path);
 
 const report = `# Benchmarks
@@ -366,6 +427,36 @@ next PWM period start (at most one frame, 20 ms at 50 Hz, later; no pulse is cut
 Target: under 500 us. With a speed limit set, the first step of a move comes with the next
 servo frame instead (up to one frame later), so that no frame moves more than the limit.
 
+## Stream frames
+
+Binary frames (\`A5 5A\`, six 16-bit counts, \`0D 0A\`; README "Streaming from
+motion-simulator software"), echo off, all speed and acceleration limits off (pass-through):
+from the frame's last byte entering the UART to all six new compare values written.
+
+| binary frames | latency mean | min | max |
+|---|---:|---:|---:|
+| 40 frames of small steps at 921,600 baud | ${fmt(frameFast.mean)} us | ${fmt(frameFast.min)} us | ${fmt(frameFast.max)} us |
+| the same at 115,200 baud | ${fmt(frameSlow.mean)} us | ${fmt(frameSlow.min)} us | ${fmt(frameSlow.max)} us |
+
+Target: under 200 us at 921,600 baud.
+
+Frames sent evenly for 0.5 s at 921,600 baud (the wire carries 5,760 frames/s), pass-through:
+${frameRate.results.map((r) => `${fmt(r.framesPerSecond)}/s: ${r.applied}/${r.sent} applied`).join('; ')}.
+Highest rate tried with every frame applied: **${frameRate.best ? `${fmt(frameRate.best.framesPerSecond)} frames/s` : 'none'}**
+(above it the newest frame wins: frames arriving while one is applied are superseded, never
+queued).
+
+The whole stream pipeline with clamping active: \`frame_hz 333\`, the tracker on
+(200 mm/s, 2000 mm/s^2, 200 deg/s, 2000 deg/s^2), every frame's target beyond the workspace
+(so each is clamped by bisection: up to 7 IK solutions), the tracker stepping every 3 ms:
+
+| frames in | CPU busy | cycles per servo frame | frames applied / clamped | longest pass |
+|---|---:|---:|---:|---:|
+| 100/s | ${fmt(streamCpu100.cpuShare * 100, 1)} % | ${fmt(streamCpu100.cyclesPerServoFrame)} | ${streamCpu100.applied} / ${streamCpu100.clamped} | ${fmt(streamCpu100.longestPassCycles)} cycles = ${fmt(us(streamCpu100.longestPassCycles))} us |
+| 333/s | ${fmt(streamCpu333.cpuShare * 100, 1)} % | ${fmt(streamCpu333.cyclesPerServoFrame)} | ${streamCpu333.applied} / ${streamCpu333.clamped} | ${fmt(streamCpu333.longestPassCycles)} cycles = ${fmt(us(streamCpu333.longestPassCycles))} us |
+
+Target: under 30 % of the CPU at 333 Hz with clamping active.
+
 ## Sustained pose lines per second
 
 ${lines.length} \`pose\` lines of a smooth path (${fmt(bytesPerLine, 1)} bytes each on average), echo off, speeds off, at ${fmt(STREAM_BAUD)}
@@ -378,6 +469,48 @@ ${rateRows}
 
 Highest rate with every line accepted: **${best ? fmt(best.linesPerSecond) : 'none'} lines/s**. A host that waits for each \`ok\` before
 sending the next line gets ${fmt(lockStep.linesPerSecond)} lines/s (${lockStep.ok}/${lockStep.lines} ok). Target: at least 1,000 lines/s.
+
+## USB serial
+
+The same firmware with a USB host on its USB port (\`emulator/src/rp2040js-gaps.js\`, gaps
+9-12): the host has enumerated the firmware and opened the port, echo off there, speed limits
+off. The host's packets share a full-speed bus of at most ${BULK_PACKETS_PER_FRAME} bulk packets of 64 bytes
+per 1 ms frame, each transaction holding the bus for 1/${BULK_PACKETS_PER_FRAME} ms whatever its length (a short
+packet is shorter on the wire: these figures err on the slow side). rp2040js itself counts an
+armed IN packet as sent at once, which would flatter the firmware; here the host takes it in
+its bus slot. Not in these figures: the host's own latency (its USB controller's scheduling
+and its OS, typically up to a millisecond or two each way on a PC), which the firmware cannot
+change.
+
+Latency, from the USB packet carrying a \`pose\` line's end reaching the firmware's endpoint
+buffer to all six new compare values written to the PWM registers (the USB interrupt, the
+line's parse and check, its IK and path check, the reply, the write):
+
+| pose lines over USB | latency mean | min | max |
+|---|---:|---:|---:|
+| streaming steps (${latencySmallUsb.length} lines, one IK each) | ${fmt(smallUsb.mean)} us | ${fmt(smallUsb.min)} us | ${fmt(smallUsb.max)} us |
+| 5 mm jumps (10 IKs) | ${fmt(jumpUsb.mean)} us | ${fmt(jumpUsb.min)} us | ${fmt(jumpUsb.max)} us |
+
+Sustained: the ${fmt(lines.length)} \`pose\` lines above, sent by the host at the offered rate without
+waiting for replies. USB loses nothing: what the firmware cannot take yet waits in the host
+(flow control), so every line gets \`ok\` and the rate is the firmware's own: lines answered
+per second from the first line sent to the last reply.
+
+| offered | answered | outcome |
+|---|---:|---|
+${usbRateRows}
+
+Highest rate with every line answered \`ok\`: **${usbBest ? fmt(usbBest.linesPerSecond) : 'none'} lines/s**, the firmware's limit
+(the bus could carry about ${fmt((BULK_PACKETS_PER_FRAME * 64 * 1000) / bytesPerLine)}/s of these lines). A host that waits for each \`ok\`
+before sending the next line gets ${fmt(usbLockStep.linesPerSecond)} lines/s (${usbLockStep.ok}/${usbLockStep.lines} ok).
+
+What USB costs: the firmware just before it (commit ${WITHOUT_USB.commit}, UART0 only) took
+${fmt(WITHOUT_USB.flash)} bytes of flash and ${fmt(WITHOUT_USB.ram)} of static RAM (measured once); this one takes ${fmt(fw.flash)} and
+${fmt(fw.ram)}: **${fmt(usbFlash)} bytes of flash and ${fmt(usbRamTotal)} of static RAM** for USB serial (usb-device,
+usbd-serial, rp2040-hal's USB driver, \`firmware/src/usb_serial.rs\`, the second link in the
+main loop). Of that, the symbols named for USB hold ${fmt(usbCode)} bytes of code (the rest is inlined
+into callers, descriptors and tables) and ${fmt(usbRam)} bytes of RAM: the receive queue (1 KB), the
+transmit queue (4 KB), usbd-serial's two 128-byte buffers and the USB device's state.
 
 ## The longest main-loop pass vs the watchdog and the frames
 
@@ -392,8 +525,10 @@ written well before the next period starts; the ${WATCHDOG_MS} ms watchdog is 50
 |---|---:|---:|---:|
 | the longest command: a move whose path check solves the IK at every one of ${worst.checks} frames (the budget, \`control::motion::MAX_PATH_CHECKS\`), 20.48 mm at 1 mm/s, 50 Hz; its line end to its reply's last byte at the host: ${fmt(worst.micros / 1000, 1)} ms (${fmt(worst.cycles)} cycles) | ${fmt(worst.longestPassCycles)} cycles = ${fmt(worst.longestPassCycles / 125, 0)} us | ${worst.frames} | ${worst.missed} |
 | ${passes.lines} lines: every long command class back to back at 333 Hz with echo on (checks of 1,000 poses, config, help, geometry, status, geometry changes, defaults, a move checked while moving, refusals), then 20 moves of 1,000 checks each in flight at 921,600 baud | **${fmt(passes.longestPassCycles)} cycles = ${fmt(passes.longestPassCycles / 125, 0)} us** | ${passes.frames} | ${passes.missed} |
+| both links at once, 333 Hz: ${passesBoth.lines} lines, UART0 pipelining moves of 1,000 checks at 921,600 baud while USB (echo on) pipelines listings and checks of 1,000 poses | **${fmt(passesBoth.longestPassCycles)} cycles = ${fmt(passesBoth.longestPassCycles / 125, 0)} us** | ${passesBoth.frames} | ${passesBoth.missed} |
 
-The longest interrupt handler over the same session: ${fmt(passes.longestHandlerCycles)} cycles. A pass is
+The longest interrupt handler over the UART0 session: ${fmt(passes.longestHandlerCycles)} cycles; over the session on
+both links (the USB interrupt among them): ${fmt(passesBoth.longestHandlerCycles)} cycles. A pass is
 measured from one watchdog feed to the next (the loop feeds it at its top), in CPU cycles, which
 the emulator does not count while the core sleeps; interrupt handlers inside a pass count in it.
 A missed frame is a frame period in which the firmware wrote no new compare values
@@ -440,15 +575,15 @@ ${Object.entries(fw.s)
 | **flash** (vector table + boot2 + text + rodata + data) | **${fmt(fw.flash)}** of 2,097,152 |
 | **static RAM** (data + bss + uninit) | **${fmt(fw.ram)}** of 264 KiB |
 
-The controller, the transmit buffer and the receive queue live on the stack of \`main\` (not
-in the static figure). Stack high-water mark after the worst-case command above (the deepest
-non-zero RAM word below the stack top; RAM starts zeroed): **${fmt(stackBytes)} bytes**; on a
-board that booted and saved: ${fmt(saveStackBytes)} bytes.
+The controller and UART0's transmit buffer live on the stack of \`main\` (not in the static
+figure); the receive queues and USB's transmit queue are static. Stack high-water mark after
+the worst-case command above (the deepest non-zero RAM word below the stack top; RAM starts
+zeroed): **${fmt(stackBytes)} bytes**; on a board that booted and saved: ${fmt(saveStackBytes)} bytes.
 
 The settings storage (\`save\`, \`control::store\` and \`control::record\`, the flash routines,
-the power-up load and their words) against commit ${BEFORE_STORAGE.commit}, the last before it
-(measured there once with the same sums; anything added since counts too): flash
-**+${fmt(fw.flash - BEFORE_STORAGE.flash)} bytes**, static RAM **+${fmt(fw.ram - BEFORE_STORAGE.ram)} bytes**. Its RAM by symbol:
+the power-up load and their words): commit ${WITHOUT_USB.commit}, which merged it in, against
+commit ${BEFORE_STORAGE.commit} just before (both measured once with the same sums): flash
+**+${fmt(WITHOUT_USB.flash - BEFORE_STORAGE.flash)} bytes**, static RAM **+${fmt(WITHOUT_USB.ram - BEFORE_STORAGE.ram)} bytes**. Its RAM by symbol:
 ${Object.entries(storageSymbols)
   .map(([name, size]) => `\`${name}\` ${fmt(size)} bytes`)
   .join(', ')} (the two routines also have their copy in flash, in \`.data\`'s load image).
@@ -472,4 +607,4 @@ log(
   `FK ${fmt(kin.fk.mean)} cycles (${fmt(kin.fk.iterations.mean, 2)} iterations), ` +
     `Jacobian ${fmt(kin.jacobian.mean)}, torque ${fmt(kin.torque.mean)}, limits ${fmt(kin.limits.mean)}`,
 );
-log(`IK ${fmt(firmware.mean)} cycles (max ${fmt(firmware.max)}; micromath ${fmt(variant('micromath').mean)}), max error ${firmware.worstVsRef.toExponential(2)} us; clamp ${fmt(stream.clamp.mean)}, tracker frame ${fmt(stream.track.mean)} cycles; latency ${fmt(small.mean)} us; sustained ${best ? fmt(best.linesPerSecond) : 'none'} lines/s; worst command ${fmt(worst.micros / 1000, 1)} ms`);
+log(`IK ${fmt(firmware.mean)} cycles (max ${fmt(firmware.max)}; micromath ${fmt(variant('micromath').mean)}), max error ${firmware.worstVsRef.toExponential(2)} us; clamp ${fmt(stream.clamp.mean)}, tracker frame ${fmt(stream.track.mean)} cycles; latency ${fmt(small.mean)} us (USB ${fmt(smallUsb.mean)} us); sustained ${best ? fmt(best.linesPerSecond) : 'none'} lines/s (USB ${usbBest ? fmt(usbBest.linesPerSecond) : 'none'}); worst command ${fmt(worst.micros / 1000, 1)} ms`);

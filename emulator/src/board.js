@@ -1,6 +1,7 @@
-// A Raspberry Pi Pico running the real firmware ELF in rp2040js, with a host on UART0 and a
-// logic analyser on the six servo pins. Everything runs in emulated time: the same calls give
-// the same results on every run and machine, however fast the host is.
+// A Raspberry Pi Pico running the real firmware ELF in rp2040js, with a host on UART0, a USB
+// host on its USB port (optional) and a logic analyser on the six servo pins. Everything runs
+// in emulated time: the same calls give the same results on every run and machine, however
+// fast the host is.
 
 import { dirname, join } from 'node:path';
 import { fileURLToPath } from 'node:url';
@@ -17,6 +18,7 @@ import {
   PadPulls,
   PacedUartInput,
   patchEmulatorGaps,
+  UsbCdcHost,
   wakeIfInterruptPending,
 } from './rp2040js-gaps.js';
 import { ServoPulseMeter } from './servo-pulses.js';
@@ -55,6 +57,9 @@ export class EmulatedBoard {
    *   times (rp2040js-gaps.js, gap 7, `W25Q080_TIMING`)
    * @param {{address: number, bytes: Uint8Array}[]} [options.segments] what to program into
    *   the flash instead of the ELF's load segments (e.g. a UF2's blocks)
+   * @param {boolean|{open?: boolean}} [options.usb] plug a USB host into the USB port at
+   *   power-on (default: nothing plugged in). It enumerates the firmware and opens its serial
+   *   port (DTR) unless `{ open: false }`; `board.usb` is that link.
    */
   constructor({
     elf = DEFAULT_ELF,
@@ -62,6 +67,7 @@ export class EmulatedBoard {
     onWatchdog = 'fail',
     flashTiming = 'typical',
     segments,
+    usb = false,
   } = {}) {
     this.elf = elf;
     this.segments = segments ?? loadSegments(elf);
@@ -80,12 +86,11 @@ export class EmulatedBoard {
     this.fault = null;
     this.eventPending = false;
 
-    // UART0 output survives resets (it is what the host saw).
-    this.outputBytes = [];
-    this.lines = [];
-    this.partialLine = '';
-    this.lineCursor = 0;
-    this.outputListeners = new Set();
+    // What each host saw survives resets.
+    /** UART0's host. */
+    this.uart = new SerialLink(this, (bytes) => this.input.send(bytes));
+    /** The USB host's serial port, or null when nothing is plugged into the USB port. */
+    this.usb = usb ? new UsbLink(this, usb === true ? {} : usb) : null;
     this.servoChangeListener = null;
 
     this.powerOn(0);
@@ -144,13 +149,14 @@ export class EmulatedBoard {
     });
 
     // UART0: what the firmware sends, split into lines; what we send, paced.
-    mcu.uart[0].onByte = (byte) => this.received(byte);
+    mcu.uart[0].onByte = (byte) => this.uart.received(byte);
     this.uart0 = mcu.uart[0].pl011;
     this.uart0.onTxLost = (byte) => {
       // The PL011 drops a byte written while TXFF is set; firmware must check TXFF first.
       this.fail(`firmware wrote 0x${byte.toString(16)} to UART0 while its TX FIFO was full: byte lost`);
     };
     this.input = new PacedUartInput(mcu, mcu.uart[0]);
+    this.usb?.host.attach(mcu);
 
     /** The main loop's longest pass and the longest interrupt handler (see loop-meter.js). */
     this.loop = attachLoopMeter(mcu);
@@ -329,53 +335,66 @@ export class EmulatedBoard {
     this.sendBytes(`${text}\n`);
   }
 
-  /**
-   * Waits for the next received line (without its CR/LF) that matches `matcher` (a RegExp or
-   * a predicate on the line). Lines are consumed in order: the search starts after the line
-   * the previous wait returned, and lines skipped on the way are consumed too.
-   * Throws if none arrives within `timeoutMs` of emulated time.
-   */
-  waitForLine(matcher, { timeoutMs = 1000 } = {}) {
-    const matches = typeof matcher === 'function' ? matcher : (line) => matcher.test(line);
-    let found;
-    const seen = () => {
-      for (; this.lineCursor < this.lines.length; this.lineCursor++) {
-        if (matches(this.lines[this.lineCursor])) {
-          found = this.lines[this.lineCursor++];
-          return true;
-        }
-      }
-      return false;
-    };
-    if (!this.runUntil(seen, { timeoutMs })) {
-      throw new Error(
-        `no line matching ${matcher} within ${timeoutMs} ms (emulated); ` +
-          `last lines: ${JSON.stringify(this.lines.slice(-5))}, partial: ${JSON.stringify(this.partialLine)}`,
-      );
-    }
-    return found;
+  /** See `SerialLink.waitForLine` (UART0). */
+  waitForLine(matcher, options) {
+    return this.uart.waitForLine(matcher, options);
   }
 
-  /**
-   * Sends a command line and waits for its final reply (`ok` / `error:...`).
-   * Returns `{ reply, lines }`: the final reply and every line received up to it.
-   */
-  request(text, { timeoutMs = 1000, final = FINAL_REPLY } = {}) {
-    const first = this.lineCursor;
-    this.sendLine(text);
-    const reply = this.waitForLine(final, { timeoutMs });
-    return { reply, lines: this.lines.slice(first, this.lineCursor) };
+  /** See `SerialLink.request` (UART0). */
+  request(text, options) {
+    return this.uart.request(text, options);
   }
 
   /** Everything the firmware sent on UART0 so far, as text. */
   get output() {
-    return Buffer.from(this.outputBytes).toString('latin1');
+    return this.uart.output;
   }
 
-  /** Calls `listener(byte)` for every byte the firmware sends; returns an unsubscribe. */
+  get outputBytes() {
+    return this.uart.outputBytes;
+  }
+
+  /** UART0's lines so far, and the cursor `waitForLine` searches from. */
+  get lines() {
+    return this.uart.lines;
+  }
+
+  get lineCursor() {
+    return this.uart.lineCursor;
+  }
+
+  set lineCursor(index) {
+    this.uart.lineCursor = index;
+  }
+
+  get partialLine() {
+    return this.uart.partialLine;
+  }
+
+  /** Calls `listener(byte)` for every byte the firmware sends on UART0; returns an unsubscribe. */
   onOutput(listener) {
-    this.outputListeners.add(listener);
-    return () => this.outputListeners.delete(listener);
+    return this.uart.onOutput(listener);
+  }
+
+  /**
+   * The board as a host on `link` sees it (`board.through(board.usb)`): every call of the
+   * board (pins, time, ...), with the serial ones (`sendLine`, `sendBytes`, `request`,
+   * `waitForLine`, `lines`, `lineCursor`, `partialLine`, `output`, `outputBytes`,
+   * `onOutput`) going over `link`. The e2e helpers take it in place of the board.
+   */
+  through(link) {
+    const board = this;
+    return new Proxy(board, {
+      get(target, property) {
+        const source = LINK_CALLS.has(property) ? link : target;
+        const value = Reflect.get(source, property, source);
+        return typeof value === 'function' ? value.bind(source) : value;
+      },
+      set(target, property, value) {
+        Reflect.set(LINK_CALLS.has(property) ? link : target, property, value);
+        return true;
+      },
+    });
   }
 
   /** Bytes lost because they arrived while the 32-byte RX FIFO was full (overruns). */
@@ -401,20 +420,6 @@ export class EmulatedBoard {
   /** Bytes queued by `sendBytes` that are not on the wire yet. */
   get inputPending() {
     return this.input.pending;
-  }
-
-  received(byte) {
-    this.outputBytes.push(byte);
-    for (const listener of this.outputListeners) {
-      listener(byte);
-    }
-    if (byte === 0x0a) {
-      this.lines.push(this.partialLine.replace(/\r$/, ''));
-      this.partialLine = '';
-      this.eventPending = true;
-    } else {
-      this.partialLine += String.fromCharCode(byte);
-    }
   }
 
   // ---- servos ----
@@ -473,5 +478,208 @@ export class EmulatedBoard {
   /** The baud rate the firmware latched into UART0, rounded (what the paced input follows). */
   get baud() {
     return Math.round(this.input.baud);
+  }
+}
+
+/** What `EmulatedBoard.through` sends over the link instead of UART0. */
+const LINK_CALLS = new Set([
+  'sendBytes',
+  'sendLine',
+  'request',
+  'waitForLine',
+  'lines',
+  'lineCursor',
+  'partialLine',
+  'output',
+  'outputBytes',
+  'onOutput',
+]);
+
+/**
+ * One serial link's host side: what the firmware sent, split into lines, and the host's
+ * sending. UART0's (`board.uart`, also reachable as `board.sendLine`, `board.request`, ...) and
+ * the USB port's (`board.usb`) have the same calls, so a test can speak through either.
+ */
+export class SerialLink {
+  constructor(board, send) {
+    this.board = board;
+    this.send = send;
+    this.outputBytes = [];
+    this.lines = [];
+    this.partialLine = '';
+    this.lineCursor = 0;
+    this.outputListeners = new Set();
+  }
+
+  /** Sends raw bytes (a string is sent as latin1). */
+  sendBytes(data) {
+    this.send(typeof data === 'string' ? Buffer.from(data, 'latin1') : data);
+  }
+
+  /** Sends `text` and a LF. */
+  sendLine(text) {
+    this.sendBytes(`${text}\n`);
+  }
+
+  /**
+   * Waits for the next received line (without its CR/LF) that matches `matcher` (a RegExp or
+   * a predicate on the line). Lines are consumed in order: the search starts after the line
+   * the previous wait returned, and lines skipped on the way are consumed too.
+   * Throws if none arrives within `timeoutMs` of emulated time.
+   */
+  waitForLine(matcher, { timeoutMs = 1000 } = {}) {
+    const matches = typeof matcher === 'function' ? matcher : (line) => matcher.test(line);
+    let found;
+    const seen = () => {
+      for (; this.lineCursor < this.lines.length; this.lineCursor++) {
+        if (matches(this.lines[this.lineCursor])) {
+          found = this.lines[this.lineCursor++];
+          return true;
+        }
+      }
+      return false;
+    };
+    if (!this.board.runUntil(seen, { timeoutMs })) {
+      throw new Error(
+        `no line matching ${matcher} within ${timeoutMs} ms (emulated); ` +
+          `last lines: ${JSON.stringify(this.lines.slice(-5))}, ` +
+          `partial: ${JSON.stringify(this.partialLine)}`,
+      );
+    }
+    return found;
+  }
+
+  /**
+   * Sends a command line and waits for its final reply (`ok` / `error:...`).
+   * Returns `{ reply, lines }`: the final reply and every line received up to it.
+   */
+  request(text, { timeoutMs = 1000, final = FINAL_REPLY } = {}) {
+    const first = this.lineCursor;
+    this.sendLine(text);
+    const reply = this.waitForLine(final, { timeoutMs });
+    return { reply, lines: this.lines.slice(first, this.lineCursor) };
+  }
+
+  /** Everything the firmware sent on this link so far, as text. */
+  get output() {
+    return Buffer.from(this.outputBytes).toString('latin1');
+  }
+
+  /** Calls `listener(byte)` for every byte the firmware sends; returns an unsubscribe. */
+  onOutput(listener) {
+    this.outputListeners.add(listener);
+    return () => this.outputListeners.delete(listener);
+  }
+
+  /** Runs emulated time (the board's). */
+  runUntil(condition, options) {
+    return this.board.runUntil(condition, options);
+  }
+
+  received(byte) {
+    this.outputBytes.push(byte);
+    for (const listener of this.outputListeners) {
+      listener(byte);
+    }
+    if (byte === 0x0a) {
+      this.lines.push(this.partialLine.replace(/\r$/, ''));
+      this.partialLine = '';
+      this.board.eventPending = true;
+    } else {
+      this.partialLine += String.fromCharCode(byte);
+    }
+  }
+}
+
+/**
+ * The USB port's serial link (`board.usb`): a USB host (`UsbCdcHost`, rp2040js-gaps.js, gaps
+ * 9-12) with the firmware's CDC ACM port. Besides the `SerialLink` calls: open and close the
+ * port (DTR), stop and resume reading, unplug and plug in again.
+ */
+export class UsbLink extends SerialLink {
+  constructor(board, { open = true } = {}) {
+    super(board, (bytes) => this.host.send(bytes));
+    this.host = new UsbCdcHost({
+      open,
+      onData: (bytes) => {
+        for (const byte of bytes) {
+          this.received(byte);
+        }
+      },
+    });
+  }
+
+  /** The device is enumerated (configured) and the host has its port open (DTR up). */
+  get isOpen() {
+    return this.host.open;
+  }
+
+  /** The host has enumerated (configured) the device since it was last plugged in. */
+  get configured() {
+    return this.host.configured;
+  }
+
+  /** Runs until the port is open (enumerated, DTR up); throws after `timeoutMs`. */
+  waitUntilOpen({ timeoutMs = 1000 } = {}) {
+    if (!this.board.runUntil(() => this.host.open, { timeoutMs })) {
+      throw new Error(`the USB port did not open within ${timeoutMs} ms (emulated)`);
+    }
+  }
+
+  /** Reads a descriptor (GET_DESCRIPTOR: `type` 1 device, 3 string), running until it came. */
+  readDescriptor(type, index, { langId = 0, timeoutMs = 100 } = {}) {
+    let bytes = null;
+    this.host.readDescriptor(type, index, (data) => (bytes = data), { langId });
+    if (!this.board.runUntil(() => bytes !== null, { timeoutMs })) {
+      throw new Error(`descriptor ${type}/${index} did not come within ${timeoutMs} ms (emulated)`);
+    }
+    return bytes;
+  }
+
+  /** The configuration descriptor (with its interfaces and endpoints) read at enumeration. */
+  get configurationDescriptor() {
+    return Uint8Array.from(this.host.cdc.descriptors);
+  }
+
+  /** Sets the port's line coding to `baud` 8N1 (SET_LINE_CODING), running until acknowledged. */
+  setLineCoding(baud, { timeoutMs = 100 } = {}) {
+    let done = false;
+    this.host.setLineCoding(baud, () => (done = true));
+    if (!this.board.runUntil(() => done, { timeoutMs })) {
+      throw new Error(`SET_LINE_CODING was not acknowledged within ${timeoutMs} ms (emulated)`);
+    }
+  }
+
+  /** Opens the port (DTR up), as a terminal program does. */
+  open() {
+    this.host.openPort();
+  }
+
+  /** Closes the port (DTR down). */
+  close() {
+    this.host.closePort();
+  }
+
+  /** The host's program stops reading: the device's IN buffer stays full. */
+  stopReading() {
+    this.host.setReading(false);
+  }
+
+  startReading() {
+    this.host.setReading(true);
+  }
+
+  unplug() {
+    this.host.unplug();
+  }
+
+  /** Plugs the cable in again; the host opens the port once enumerated unless `open: false`. */
+  replug({ open = true } = {}) {
+    this.host.replug({ open });
+  }
+
+  /** Bytes sent that the device has not taken yet (USB's flow control holds them). */
+  get unsent() {
+    return this.host.unsent;
   }
 }

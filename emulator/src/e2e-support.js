@@ -4,8 +4,9 @@
 
 import assert from 'node:assert/strict';
 import { existsSync } from 'node:fs';
+import { test } from 'node:test';
 
-import { DEFAULT_ELF, EmulatedBoard } from './board.js';
+import { BANNER, DEFAULT_ELF, EmulatedBoard } from './board.js';
 import { loadBootrom } from './bootrom.js';
 
 /** The boot ROM words for a test file, after checking that the firmware ELF has been built. */
@@ -125,6 +126,57 @@ export function bootQuiet(bootrom) {
   assert.equal(board.request('set echo off').reply, 'ok');
   board.runUntil(() => board.servos().every((servo) => servo.live), { timeoutMs: 100 });
   return board;
+}
+
+/**
+ * Boots the firmware with a USB host plugged in, waits until the host has its port open and
+ * the banner has come over USB, turns echo off there (as a program would) and runs until every
+ * pin pulsed. Returns the board as the USB host sees it (`board.through(board.usb)`: the
+ * helpers here speak over USB; `.usb` is the link, `.uart` UART0's).
+ */
+export function bootQuietUsb(bootrom) {
+  const board = new EmulatedBoard({ bootrom, usb: true });
+  board.boot();
+  board.usb.waitUntilOpen();
+  board.usb.waitForLine(BANNER);
+  const viaUsb = board.through(board.usb);
+  assert.equal(viaUsb.request('set echo off').reply, 'ok');
+  board.runUntil(() => board.servos().every((servo) => servo.live), { timeoutMs: 100 });
+  return viaUsb;
+}
+
+/**
+ * Boots the firmware as a terminal meets it, echo on: on UART0, after the power-up banner; or,
+ * with `usb`, on the USB port once the host has opened it and its banner came. Returns the
+ * board as that link's host sees it.
+ */
+export function bootTerminal(bootrom, { usb = false } = {}) {
+  const board = new EmulatedBoard({ bootrom, usb });
+  board.boot();
+  if (!usb) {
+    return board;
+  }
+  board.usb.waitUntilOpen();
+  board.usb.waitForLine(BANNER);
+  return board.through(board.usb);
+}
+
+/** The serial links the command checks run through: UART0 and the Pico's USB port. */
+export const LINKS = [
+  { name: 'UART0', suffix: '', quiet: bootQuiet, terminal: (bootrom) => bootTerminal(bootrom) },
+  {
+    name: 'USB',
+    suffix: ' (USB)',
+    quiet: bootQuietUsb,
+    terminal: (bootrom) => bootTerminal(bootrom, { usb: true }),
+  },
+];
+
+/** A test run once per link in `LINKS`: `fn(link)`, its name suffixed for USB. */
+export function linkTest(name, fn) {
+  for (const link of LINKS) {
+    test(`${name}${link.suffix}`, () => fn(link));
+  }
 }
 
 /** Sends a line that must succeed; returns its data lines (`# ` removed). */

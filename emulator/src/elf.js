@@ -99,15 +99,15 @@ export function symbolValues(elfPath, names) {
   return values;
 }
 
-/** Sizes of the symbols whose (mangled) names `keep` accepts, by demangled-looking name. */
-export function symbolSizes(elfPath, keep) {
+/** Every symbol in the ELF's symbol table with a size: `[{ name, value, size }]` (raw names). */
+export function sizedSymbols(elfPath) {
   const file = readFileSync(elfPath);
   const view = new DataView(file.buffer, file.byteOffset, file.byteLength);
   const sectionHeaderOffset = view.getUint32(0x20, true);
   const sectionHeaderSize = view.getUint16(0x2e, true);
   const sectionCount = view.getUint16(0x30, true);
   const header = (i) => sectionHeaderOffset + i * sectionHeaderSize;
-  const sizes = {};
+  const symbols = [];
   for (let i = 0; i < sectionCount; i++) {
     if (view.getUint32(header(i) + 0x04, true) !== SHT_SYMTAB) {
       continue;
@@ -117,16 +117,31 @@ export function symbolSizes(elfPath, keep) {
     const entrySize = view.getUint32(header(i) + 0x24, true);
     const strings = view.getUint32(header(view.getUint32(header(i) + 0x18, true)) + 0x10, true);
     for (let entry = offset; entry < offset + size; entry += entrySize) {
+      const symbolSize = view.getUint32(entry + 8, true);
+      if (symbolSize === 0) {
+        continue;
+      }
       let end = strings + view.getUint32(entry, true);
       const start = end;
       while (file[end] !== 0) {
         end++;
       }
-      const name = file.toString('latin1', start, end);
-      const bytes = view.getUint32(entry + 8, true);
-      if (bytes > 0 && keep(name)) {
-        sizes[readableName(name)] = bytes;
-      }
+      symbols.push({
+        name: file.toString('latin1', start, end),
+        value: view.getUint32(entry + 4, true),
+        size: symbolSize,
+      });
+    }
+  }
+  return symbols;
+}
+
+/** Sizes of the symbols whose (mangled) names `keep` accepts, by demangled-looking name. */
+export function symbolSizes(elfPath, keep) {
+  const sizes = {};
+  for (const { name, size } of sizedSymbols(elfPath)) {
+    if (keep(name)) {
+      sizes[readableName(name)] = size;
     }
   }
   return sizes;

@@ -1,7 +1,7 @@
 // Timing of the real firmware in the emulator (emulated time): command-to-output latency,
 // sustained pose lines per second, the worst-case command against the watchdog.
 
-import { EmulatedBoard } from './board.js';
+import { BANNER, EmulatedBoard } from './board.js';
 
 const RAM_START = 0x20000000;
 
@@ -10,12 +10,8 @@ const CHANNEL_CC = 0x0c; // compare values (channel A low half, B high half)
 const SERVO_SLICES = [1, 2, 3]; // servo 1..6 = slices 1..3, channels A and B
 const LF = 0x0a;
 
-/**
- * The real firmware, booted, echo off, speed limits off (jumps), at `baud`, with the
- * emulator's PWM compare-register writes and UART RX deliveries time-stamped.
- */
-export function streamingBoard({ baud = 115200, elf, flashTiming } = {}) {
-  const board = new EmulatedBoard({ ...(elf ? { elf } : {}), ...(flashTiming ? { flashTiming } : {}) });
+/** Time-stamps the emulator's PWM compare-register writes: `[{ nanos, slice, value }]`. */
+function recordCompareWrites(board) {
   const ccWrites = [];
   const pwm = board.mcu.pwm;
   const writeRegister = pwm.writeUint32.bind(pwm);
@@ -26,6 +22,17 @@ export function streamingBoard({ baud = 115200, elf, flashTiming } = {}) {
     }
     writeRegister(offset, value);
   };
+  return ccWrites;
+}
+
+/**
+ * The real firmware, booted, echo off, speed limits off (jumps), at `baud`, with the
+ * emulator's PWM compare-register writes and UART RX deliveries time-stamped. `link` is UART0
+ * (`board.uart`).
+ */
+export function streamingBoard({ baud = 115200, elf, flashTiming } = {}) {
+  const board = new EmulatedBoard({ ...(elf ? { elf } : {}), ...(flashTiming ? { flashTiming } : {}) });
+  const ccWrites = recordCompareWrites(board);
   const lineEnds = [];
   /** When each byte reached the UART (emulated ns), in order. */
   const byteTimes = [];
@@ -46,11 +53,35 @@ export function streamingBoard({ baud = 115200, elf, flashTiming } = {}) {
     expectOk(board, `set baud ${baud}`);
     board.runMs(5); // the reply goes out at the old rate, then the UART switches
   }
-  return { board, ccWrites, lineEnds, byteTimes };
+  return { board, link: board.uart, ccWrites, lineEnds, byteTimes };
 }
 
-function expectOk(board, line, options) {
-  const { reply } = board.request(line, options);
+/**
+ * The same over USB: a USB host plugged in at power-on has opened the port; echo off there,
+ * speed limits off. `lineEnds` are the instants the OUT packets carrying a line end reached
+ * the firmware's endpoint buffer (the end of their bus slot, rp2040js-gaps.js gap 11).
+ */
+export function usbStreamingBoard({ elf } = {}) {
+  const board = new EmulatedBoard({ ...(elf ? { elf } : {}), usb: true });
+  const ccWrites = recordCompareWrites(board);
+  const lineEnds = [];
+  board.usb.host.onOutDelivered = (bytes, nanos) => {
+    if (bytes.includes(LF)) {
+      lineEnds.push(nanos);
+    }
+  };
+  board.boot();
+  board.usb.waitUntilOpen();
+  board.usb.waitForLine(BANNER);
+  for (const line of ['set echo off', 'set speed_mm_s off', 'set speed_deg_s off']) {
+    expectOk(board.usb, line);
+  }
+  return { board, link: board.usb, ccWrites, lineEnds };
+}
+
+/** Sends `line` on `link` (a board is UART0's link too) and expects `ok`. */
+function expectOk(link, line, options) {
+  const { reply } = link.request(line, options);
   if (reply !== 'ok') {
     throw new Error(`${line}: ${reply}`);
   }
@@ -64,14 +95,17 @@ function ccState(board) {
 }
 
 /**
- * Latency of `pose` lines: from the line's last byte (LF) reaching the UART to the moment the
- * compare registers all hold the new pose's values (they latch at the next PWM period).
- * Starts at pose `from` (mm, degrees as typed; default home). Returns microseconds per pose.
+ * Latency of `pose` lines: from the line's last byte (LF) reaching the UART (with `usb`: the
+ * USB packet carrying it reaching the firmware's endpoint buffer) to the moment the compare
+ * registers all hold the new pose's values (they latch at the next PWM period). Starts at pose
+ * `from` (mm, degrees as typed; default home). Returns microseconds per pose.
  */
-export function measureLatency(poses, { baud = 115200, from, elf } = {}) {
-  const { board, ccWrites, lineEnds } = streamingBoard({ baud, elf });
+export function measureLatency(poses, { baud = 115200, from, elf, usb = false } = {}) {
+  const { board, link, ccWrites, lineEnds } = usb
+    ? usbStreamingBoard({ elf })
+    : streamingBoard({ baud, elf });
   if (from) {
-    expectOk(board, `pose ${from}`); // where the measured lines start from (not measured)
+    expectOk(link, `pose ${from}`); // where the measured lines start from (not measured)
   }
   const latenciesUs = [];
   for (const [i, pose] of poses.entries()) {
@@ -79,7 +113,7 @@ export function measureLatency(poses, { baud = 115200, from, elf } = {}) {
     board.runMs((i * 7.3) % 20);
     const before = ccState(board);
     const writesBefore = ccWrites.length;
-    expectOk(board, `pose ${pose}`);
+    expectOk(link, `pose ${pose}`);
     const lineEnd = lineEnds[lineEnds.length - 1];
     board.runMs(1);
     const final = ccState(board);
@@ -191,13 +225,50 @@ export function measureStream(lines, { baud = 921600, linesPerSecond = Infinity 
   };
 }
 
-/** Sends each line when the previous reply has arrived (a host that waits for `ok`). */
-export function measureLockStep(lines, { baud = 921600 } = {}) {
-  const { board } = streamingBoard({ baud });
+/**
+ * Over USB: the host sends `lines` at `linesPerSecond` (`Infinity`: all at once, as fast as the
+ * firmware takes them), without waiting for replies; USB's flow control holds back what the
+ * firmware cannot take yet, so nothing is lost and every line must get `ok`. Returns
+ * { lines, ok, errors, seconds, linesPerSecond }, the rate being lines answered per second
+ * from the first line sent to the last reply.
+ */
+export function measureUsbStream(lines, { linesPerSecond = Infinity } = {}) {
+  const { board, link } = usbStreamingBoard();
+  const first = link.lines.length;
+  const startNanos = board.nanos;
+  if (Number.isFinite(linesPerSecond)) {
+    const periodNanos = 1e9 / linesPerSecond;
+    for (const [i, line] of lines.entries()) {
+      board.runUntil(() => board.nanos >= startNanos + i * periodNanos, { timeoutMs: 1000 });
+      link.sendLine(line);
+    }
+  } else {
+    link.sendBytes(lines.map((line) => `${line}\n`).join(''));
+  }
+  const replies = () => link.lines.length - first;
+  board.runUntil(() => replies() >= lines.length, { timeoutMs: 5000 });
+  const seconds = (board.nanos - startNanos) / 1e9;
+  const got = link.lines.slice(first);
+  const ok = got.filter((line) => line === 'ok').length;
+  return {
+    lines: lines.length,
+    ok,
+    errors: got.filter((line) => line !== 'ok').slice(0, 3),
+    seconds,
+    linesPerSecond: ok / seconds,
+  };
+}
+
+/**
+ * Sends each line when the previous reply has arrived (a host that waits for `ok`), on UART0
+ * at `baud`, or with `usb` over the USB port.
+ */
+export function measureLockStep(lines, { baud = 921600, usb = false } = {}) {
+  const { board, link } = usb ? usbStreamingBoard() : streamingBoard({ baud });
   const startNanos = board.nanos;
   let ok = 0;
   for (const line of lines) {
-    if (board.request(line).reply === 'ok') {
+    if (link.request(line).reply === 'ok') {
       ok++;
     }
   }
@@ -334,6 +405,46 @@ export function measureSave({ timing = 'typical' } = {}) {
     longPasses: board.loop.longPasses.length,
     times: board.flash.times,
     board,
+  };
+}
+
+/**
+ * The longest main-loop pass and interrupt handler with both links busy at once, at 333 Hz:
+ * UART0 pipelining moves checked at 1,000 poses each at 921,600 baud while a USB host (echo on)
+ * pipelines every long listing and checks of 1,000 poses. Returns { longestPassCycles,
+ * longestHandlerCycles, frames, missed, lines }.
+ */
+export function measureLongestPassBothLinks() {
+  const board = new EmulatedBoard({ usb: true });
+  board.boot();
+  board.usb.waitUntilOpen();
+  board.usb.waitForLine(BANNER);
+  for (const line of ['set frame_hz 333', 'set speed_mm_s 1', 'set echo off', 'set baud 921600']) {
+    expectOk(board, line, { final: /^(ok|error:)/ });
+  }
+  board.runMs(5);
+  board.loop.reset();
+  board.frames.reset();
+  const moves = Array.from({ length: 12 }, (_, i) => `move x=${i % 2 ? '-10.1' : '-10.2'}`);
+  const usbLines = ['check 20 0 0 0 0 0', 'config', 'help', 'geometry', 'status'];
+  const usbAll = [...usbLines, 'check -20 0 0 0 0 0', ...usbLines.slice(1)];
+  const finals = (link, from) => link.lines.slice(from).filter((l) => /^(ok|error:)/.test(l));
+  const [uartFrom, usbFrom] = [board.lines.length, board.usb.lines.length];
+  board.sendBytes(moves.map((l) => `${l}\n`).join(''));
+  board.usb.sendBytes(usbAll.map((l) => `${l}\r`).join(''));
+  const done = () =>
+    finals(board.uart, uartFrom).length >= moves.length &&
+    finals(board.usb, usbFrom).length >= usbAll.length;
+  if (!board.runUntil(done, { timeoutMs: 20_000 })) {
+    throw new Error('both links: not every line was answered');
+  }
+  board.runMs(50);
+  return {
+    longestPassCycles: board.loop.longestPassCycles,
+    longestHandlerCycles: board.loop.longestHandlerCycles,
+    frames: board.frames.frames,
+    missed: board.frames.missed,
+    lines: moves.length + usbAll.length,
   };
 }
 

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Pseudo-terminal bridge for the emulator's UART0 (Node has no pty support built in).
+"""Pseudo-terminal bridge for the emulator's serial ports (Node has no pty support built in).
 
 Opens a pty pair, prints the path of its terminal side on the first line of stdout, then
 relays bytes: what a program (picocom, screen, a host tool) writes to that terminal comes

@@ -1,7 +1,8 @@
 #!/usr/bin/env node
-// Interactive runner: the firmware in the emulator, in (roughly) real time, with UART0 on
-// your terminal or on a pseudo-terminal, and the six measured servo pulse widths as a
-// status line. Usually started with `./dev run [--pty]`.
+// Interactive runner: the firmware in the emulator, in (roughly) real time, with its USB
+// serial port (or UART0) on your terminal or on a pseudo-terminal, the six measured servo
+// pulse widths as a status line, and the live 3D view's web server (view-server.js) unless
+// --no-view. Usually started with `./dev run [--uart] [--pty]`.
 
 import { spawn } from 'node:child_process';
 import { dirname, join } from 'node:path';
@@ -10,15 +11,25 @@ import { fileURLToPath } from 'node:url';
 
 import { DEFAULT_ELF, EmulatedBoard } from './board.js';
 import { loadBootrom } from './bootrom.js';
+import { SharedInput } from './shared-input.js';
+import { DEFAULT_VIEW_PORT, startViewServer } from './view-server.js';
 
-const USAGE = `usage: ./dev run [--pty] [--local-echo] [--elf PATH]
+const USAGE = `usage: ./dev run [--uart] [--pty] [--local-echo] [--no-view] [--view-port N] [--elf PATH]
 
-Runs the firmware in the emulator with UART0 on this terminal (raw mode, like picocom).
-  Enter sends LF. The firmware echoes what you type; if its echo is off, --local-echo
-  shows typed characters here. Ctrl-] or Ctrl-C quits.
-  --pty      put UART0 on a pseudo-terminal instead and print its path, for picocom,
-             screen or a host program (e.g. picocom -b 115200 --omap crlf /dev/pts/N).
-             Ctrl-C quits.
+Runs the firmware in the emulator with a USB cable in the Pico's USB port and this terminal
+on the serial port it brings (as picocom /dev/ttyACM0 would be, in raw mode): the port opens
+at once and the board greets it. Enter sends LF. The firmware echoes what you type; if its
+echo is off, --local-echo shows typed characters here. Ctrl-] or Ctrl-C quits.
+  --uart     this terminal on UART0 (GP0/GP1, 115200 baud) instead, no USB cable
+  --pty      put the port on a pseudo-terminal instead and print its path, for picocom,
+             screen or a host program (e.g. picocom --omap crlf /dev/pts/N). The board
+             greets the port before you connect: press Enter for a prompt. Ctrl-C quits.
+  --no-view  do not serve the live 3D view (by default its address is printed at start:
+             http://127.0.0.1:${DEFAULT_VIEW_PORT}/, or a free port if that one is taken).
+             The view sends whole lines on the same serial link (its page's, and
+             \`geometry\` / \`config\` to read the board's settings): use --no-view for a
+             link of your own.
+  --view-port N  the view's port (0: any free port)
   --elf PATH firmware ELF (default: ${DEFAULT_ELF})
 The status line (stderr) shows the six measured servo pulse widths in microseconds.`;
 
@@ -34,13 +45,16 @@ const STEP_NANOS = 10e6;
 /** If the emulator falls this far behind the wall clock, it stops trying to catch up. */
 const MAX_LAG_NANOS = 200e6;
 
-function main() {
+async function main() {
   let options;
   try {
     ({ values: options } = parseArgs({
       options: {
+        uart: { type: 'boolean', default: false },
         pty: { type: 'boolean', default: false },
         'local-echo': { type: 'boolean', default: false },
+        'no-view': { type: 'boolean', default: false },
+        'view-port': { type: 'string', default: String(DEFAULT_VIEW_PORT) },
         elf: { type: 'string', default: DEFAULT_ELF },
         help: { type: 'boolean', short: 'h', default: false },
       },
@@ -57,18 +71,35 @@ function main() {
   const board = new EmulatedBoard({
     elf: options.elf,
     bootrom: loadBootrom({ log: (message) => process.stderr.write(`${message}\n`) }),
+    usb: !options.uart,
   });
+  // The serial link on this terminal: the USB port's, as a Pico owner uses it, or UART0's.
+  const serial = options.uart ? board.uart : board.usb;
+  const name = options.uart ? 'UART0' : 'The USB serial port';
   const status = new StatusLine(process.stderr);
+  // With the view, the terminal's bytes and the page's lines share that link
+  // (shared-input.js).
+  const input = options['no-view'] ? null : new SharedInput(serial);
+  const link = input
+    ? { sendBytes: (bytes) => input.typed(bytes), onOutput: (listener) => serial.onOutput(listener) }
+    : serial;
+  const view = input && (await startView(board, serial, input, options, status));
   const connection = options.pty
-    ? new PtyConnection(board, status)
-    : new TerminalConnection(board, { echo: options['local-echo'] });
+    ? new PtyConnection(link, name, status)
+    : new TerminalConnection(link, { echo: options['local-echo'] });
 
-  const quit = (code, message) => {
+  let quitting = false;
+  const quit = async (code, message) => {
+    if (quitting) {
+      return;
+    }
+    quitting = true;
     connection.close();
     status.close();
     if (message) {
       process.stderr.write(`${message}\n`);
     }
+    await view?.close(message ? message.trim() : 'the runner was stopped (Ctrl-C, or its input ended)');
     process.exit(code);
   };
   connection.onQuit = () => quit(0);
@@ -78,6 +109,23 @@ function main() {
 
   board.onServoChange(() => status.update(board));
   runInRealTime(board, status, (error) => quit(1, `\n${error.message}`));
+}
+
+/** Starts the 3D view's server and prints its address; exits with a message if it cannot. */
+async function startView(board, serial, input, options, status) {
+  const port = Number(options['view-port']);
+  if (!Number.isInteger(port) || port < 0 || port > 65535) {
+    console.error(`--view-port: not a port number: ${options['view-port']}\n\n${USAGE}`);
+    process.exit(2);
+  }
+  try {
+    const view = await startViewServer({ board, serial, input, port, link: options.pty ? 'pty' : 'terminal' });
+    status.message(`3D view: ${view.url}  (open it in a browser; --no-view skips it)`);
+    return view;
+  } catch (error) {
+    console.error(`cannot start the 3D view on port ${port}: ${error.message} (--no-view skips it)`);
+    process.exit(1);
+  }
 }
 
 /**
@@ -118,14 +166,14 @@ function runInRealTime(board, status, onFault) {
   step();
 }
 
-/** UART0 <-> this terminal in raw mode. */
+/** A serial link (`board.uart`, `board.usb`) <-> this terminal in raw mode. */
 class TerminalConnection {
-  constructor(board, { echo }) {
-    this.board = board;
+  constructor(link, { echo }) {
+    this.link = link;
     this.echo = echo;
     this.onQuit = () => {};
     this.previousByte = null;
-    board.onOutput((byte) => this.show(byte));
+    link.onOutput((byte) => this.show(byte));
     if (process.stdin.isTTY) {
       process.stdin.setRawMode(true);
     }
@@ -141,7 +189,7 @@ class TerminalConnection {
       }
       // Enter gives CR in raw mode; lines end with LF on the wire.
       const sent = byte === CR ? LF : byte;
-      this.board.sendBytes([sent]);
+      this.link.sendBytes([sent]);
       if (this.echo) {
         if (sent === LF) {
           process.stdout.write('\r\n');
@@ -172,9 +220,9 @@ class TerminalConnection {
   }
 }
 
-/** UART0 <-> a pseudo-terminal, through a tiny Python bridge (pty-bridge.py). */
+/** A serial link <-> a pseudo-terminal, through a tiny Python bridge (pty-bridge.py). */
 class PtyConnection {
-  constructor(board, status) {
+  constructor(link, name, status) {
     this.onQuit = () => {};
     const bridgeScript = join(dirname(fileURLToPath(import.meta.url)), 'pty-bridge.py');
     this.bridge = spawn('python3', [bridgeScript], { stdio: ['pipe', 'pipe', 'inherit'] });
@@ -189,7 +237,7 @@ class PtyConnection {
     let pending = Buffer.alloc(0);
     this.bridge.stdout.on('data', (data) => {
       if (path !== null) {
-        board.sendBytes(data);
+        link.sendBytes(data);
         return;
       }
       // The first line is the pty's path; anything after it is already input.
@@ -199,15 +247,13 @@ class PtyConnection {
         return;
       }
       path = pending.subarray(0, newline).toString();
-      status.message(
-        `UART0 is on ${path}  (e.g. picocom -b 115200 --omap crlf ${path}); Ctrl-C quits`,
-      );
+      status.message(`${name} is on ${path}  (e.g. picocom --omap crlf ${path}); Ctrl-C quits`);
       const rest = pending.subarray(newline + 1);
       if (rest.length > 0) {
-        board.sendBytes(rest);
+        link.sendBytes(rest);
       }
     });
-    board.onOutput((byte) => this.bridge.stdin.write(Buffer.from([byte])));
+    link.onOutput((byte) => this.bridge.stdin.write(Buffer.from([byte])));
   }
 
   close() {
@@ -287,4 +333,4 @@ class StatusLine {
   }
 }
 
-main();
+await main();

@@ -1,6 +1,6 @@
-// Every command through the real firmware binary: the exact reply shape, the data lines, and
-// the servo pins. Expected pulses come from the host build of kinematics-core
-// (src/host-reference.js), expected formats and defaults from README.md.
+// Every command through the real firmware binary, over UART0 and over the USB port: the exact
+// reply shape, the data lines, and the servo pins. Expected pulses come from the host build of
+// kinematics-core (src/host-reference.js), expected formats and defaults from README.md.
 
 import assert from 'node:assert/strict';
 import { readFileSync } from 'node:fs';
@@ -11,13 +11,13 @@ import {
   assertClose,
   assertConstant,
   assertPins,
-  bootQuiet,
   capture,
   COUNT_US,
   defaultSettings,
   firmwareBootrom,
   HOME,
   lerpPose,
+  linkTest,
   ok,
   periodsUs,
   plannedFrames,
@@ -80,8 +80,8 @@ test('at power-up every servo gets its home pulse (the reference at the home pos
   assert.deepEqual(periodsUs(board), Array(6).fill(20_000));
 });
 
-test('help lists every command, all on # lines, then ok', () => {
-  const board = bootQuiet(bootrom);
+linkTest('help lists every command, all on # lines, then ok', (link) => {
+  const board = link.quiet(bootrom);
   const text = ok(board, 'help').join('\n');
   const commands = ['pose', 'move', 'nudge', 'check', 'home', 'stop', 'status', '?', 'geometry'];
   for (const command of [...commands, 'config', 'set', 'defaults', 'save', 'help']) {
@@ -90,8 +90,8 @@ test('help lists every command, all on # lines, then ok', () => {
   assert.match(text, /echo off/);
 });
 
-test('pose: ok alone, then the pins reach the host core pulses for that pose within one count', () => {
-  const board = bootQuiet(bootrom);
+linkTest('pose: ok alone, then the pins reach the host core pulses for that pose within one count', (link) => {
+  const board = link.quiet(bootrom);
   const poses = [
     [10, 0, 0, 0, 0, 5],
     [-5, 8, -6, 3, -4, 10],
@@ -119,8 +119,8 @@ test('pose: ok alone, then the pins reach the host core pulses for that pose wit
   assert.ok(worstUs <= COUNT_US, `worst pin error ${worstUs} us`);
 });
 
-test('check: reports the host core arm angles, pulses and planned duration; nothing moves', () => {
-  const board = bootQuiet(bootrom);
+linkTest('check: reports the host core arm angles, pulses and planned duration; nothing moves', (link) => {
+  const board = link.quiet(bootrom);
   const before = status(board);
   const widths = widthsNanos(board);
   for (const pose of [[10, 0, 0, 0, 0, 5], [3, -5, 2, 4, -2, -10], [2, 2, -4, 0, 6, -20], [0, 0, -9, 0, 0, 0]]) {
@@ -148,8 +148,8 @@ test('check: reports the host core arm angles, pulses and planned duration; noth
   assert.deepEqual(widthsNanos(board), widths);
 });
 
-test('move sets only the named axes (absolute), nudge moves them relative to the target', () => {
-  const board = bootQuiet(bootrom);
+linkTest('move sets only the named axes (absolute), nudge moves them relative to the target', (link) => {
+  const board = link.quiet(bootrom);
   const start = [2, -3, 4, 1, -2, 3];
   moveAndSettle(board, `pose ${poseText(start)}`, HOME, start);
 
@@ -172,8 +172,8 @@ test('move sets only the named axes (absolute), nudge moves them relative to the
   assertPins(board, solve(twice).pulse_us, 'after two nudges');
 });
 
-test('home returns to the home pulses', () => {
-  const board = bootQuiet(bootrom);
+linkTest('home returns to the home pulses', (link) => {
+  const board = link.quiet(bootrom);
   const pose = [-6, 4, 5, 2, 3, -8];
   moveAndSettle(board, `pose ${poseText(pose)}`, HOME, pose);
   moveAndSettle(board, 'home', pose, HOME);
@@ -184,8 +184,8 @@ test('home returns to the home pulses', () => {
   assertPins(board, DEFAULTS.servos.map((servo) => servo.trim_us), 'home = trims');
 });
 
-test('status while moving: state with elapsed and planned duration, target ahead of pose', () => {
-  const board = bootQuiet(bootrom);
+linkTest('status while moving: state with elapsed and planned duration, target ahead of pose', (link) => {
+  const board = link.quiet(bootrom);
   const target = [15, 0, 0, 0, 0, 0]; // 15 mm at 50 mm/s: 0.3 s = 15 frames
   const frames = plannedFrames(HOME, target, DEFAULTS);
   assert.equal(frames, 15);
@@ -202,8 +202,8 @@ test('status while moving: state with elapsed and planned duration, target ahead
   assertClose(s.pulse_us, solve(s.pose).pulse_us, 0.05, 'pulses of the reported pose');
 });
 
-test('stop mid-move freezes where it is: pins constant, pose on the line between start and target', () => {
-  const board = bootQuiet(bootrom);
+linkTest('stop mid-move freezes where it is: pins constant, pose on the line between start and target', (link) => {
+  const board = link.quiet(bootrom);
   ok(board, 'set speed_mm_s 10');
   const settings = { ...DEFAULTS, speed_mm_s: 10 };
   const target = [12, -6, 9, 0, 0, 0]; // 16.2 mm at 10 mm/s: 1.62 s
@@ -258,8 +258,8 @@ function documentedGeometry() {
   });
 }
 
-test('geometry reports b_i, p_i, beta_i, a, s, h0 and alpha0 of the documented default build', () => {
-  const board = bootQuiet(bootrom);
+linkTest('geometry reports b_i, p_i, beta_i, a, s, h0 and alpha0 of the documented default build', (link) => {
+  const board = link.quiet(bootrom);
   const data = ok(board, 'geometry');
   const expected = documentedGeometry();
   // The documented figures (README): h0 118.458 mm, alpha0 -0.252 deg.
@@ -294,13 +294,13 @@ test('geometry reports b_i, p_i, beta_i, a, s, h0 and alpha0 of the documented d
   assert.ok(Math.abs(core.h0_mm - expected[0].h0) < 0.001, `core h0 ${core.h0_mm}`);
 });
 
-test('config lists every documented setting with its documented default', () => {
-  const board = bootQuiet(bootrom);
+linkTest('config lists every documented setting with its documented default', (link) => {
+  const board = link.quiet(bootrom);
   const data = ok(board, 'config');
   const expected = [
     'frame_hz: 50',
-    'baud: 115200',
-    'echo: off', // turned off by bootQuiet
+    'baud: 115200', // UART0's rate, whichever link asks
+    'echo: off', // turned off by link.quiet, on the asking link
     'speed_mm_s: 50.000',
     'speed_deg_s: 60.000',
     'accel_mm_s2: off',
@@ -338,8 +338,8 @@ test('config lists every documented setting with its documented default', () => 
   assert.deepEqual(data, expected);
 });
 
-test('commands are case-insensitive', () => {
-  const board = bootQuiet(bootrom);
+linkTest('commands are case-insensitive', (link) => {
+  const board = link.quiet(bootrom);
   const pose = [3, 1, 4, 0, 0, 5];
   moveAndSettle(board, `POSE ${poseText(pose)}`, HOME, pose);
   assertPins(board, solve(pose).pulse_us);
@@ -355,8 +355,8 @@ test('commands are case-insensitive', () => {
   assert.equal(board.request('HoMe').reply, 'ok');
 });
 
-test('LF, CRLF and CR each end a line, with the same replies', () => {
-  const board = bootQuiet(bootrom);
+linkTest('LF, CRLF and CR each end a line, with the same replies', (link) => {
+  const board = link.quiet(bootrom);
   const answers = [];
   for (const end of ['\n', '\r\n', '\r']) {
     const first = board.lines.length;
@@ -372,9 +372,8 @@ test('LF, CRLF and CR each end a line, with the same replies', () => {
   assert.equal(board.lines.filter((line) => line === 'ok').length, 1 + 3); // + set echo off
 });
 
-test('echo on: typed characters come back, backspace and DEL erase, a prompt follows each reply', () => {
-  const board = new EmulatedBoard({ bootrom });
-  board.boot();
+linkTest('echo on: typed characters come back, backspace and DEL erase, a prompt follows each reply', (link) => {
+  const board = link.terminal(bootrom);
   assert.ok(board.runUntil(() => board.partialLine === '> ', { timeoutMs: 20 }), 'no prompt');
   const start = board.outputBytes.length;
   // "statux" <BS> "s": the line is "status". Then "cheq" <DEL> "ck 0 0 1 0 0 0".
@@ -407,8 +406,8 @@ test('echo on: typed characters come back, backspace and DEL erase, a prompt fol
   assert.equal(board.partialLine, '> ');
 });
 
-test('a blank line gets no reply; every other line exactly one, last', () => {
-  const board = bootQuiet(bootrom);
+linkTest('a blank line gets no reply; every other line exactly one, last', (link) => {
+  const board = link.quiet(bootrom);
   const first = board.lines.length;
   board.sendBytes('\n   \n\t\nstatus\n');
   board.waitForLine(/^ok$/);
@@ -418,8 +417,8 @@ test('a blank line gets no reply; every other line exactly one, last', () => {
   assert.ok(lines.slice(0, -1).every((line) => line.startsWith('# ')), JSON.stringify(lines));
 });
 
-test('line editing: ctrl-u erases the line, ctrl-c abandons it (no reply), arrow keys and other control bytes are ignored', () => {
-  const board = bootQuiet(bootrom);
+linkTest('line editing: ctrl-u erases the line, ctrl-c abandons it (no reply), arrow keys and other control bytes are ignored', (link) => {
+  const board = link.quiet(bootrom);
   const first = board.lines.length;
   // "fly" erased by ctrl-u, then "status": one ok with the status lines.
   board.sendBytes('fly\x15status\n');
@@ -436,8 +435,8 @@ test('line editing: ctrl-u erases the line, ctrl-c abandons it (no reply), arrow
   assert.ok(board.lines.slice(first).some((line) => line.startsWith('# duration_s: ')), 'the second was check');
 });
 
-test('ctrl-x abandons a line like ctrl-c: no reply, and what follows starts a new line', () => {
-  const board = bootQuiet(bootrom);
+linkTest('ctrl-x abandons a line like ctrl-c: no reply, and what follows starts a new line', (link) => {
+  const board = link.quiet(bootrom);
   const first = board.lines.length;
   board.sendBytes('home\x18');
   board.runMs(50);
@@ -447,8 +446,8 @@ test('ctrl-x abandons a line like ctrl-c: no reply, and what follows starts a ne
   assert.equal(reply, "error:unknown-command 'atus' is not a command; type help");
 });
 
-test('what terminals send for keys is ignored whole; a lone ESC swallows nothing', () => {
-  const board = bootQuiet(bootrom);
+linkTest('what terminals send for keys is ignored whole; a lone ESC swallows nothing', (link) => {
+  const board = link.quiet(bootrom);
   // The Esc key, then a command: the command runs whole.
   assert.equal(board.request('\x1bhome').reply, 'ok');
   assert.equal(board.request('\x1b\x1bstop').reply, 'ok');
@@ -466,8 +465,8 @@ test('what terminals send for keys is ignored whole; a lone ESC swallows nothing
   assert.equal(board.request('\x1b[200~home\x1b[201~').reply, 'ok');
 });
 
-test('a line of separators only is not blank: it is refused, in words', () => {
-  const board = bootQuiet(bootrom);
+linkTest('a line of separators only is not blank: it is refused, in words', (link) => {
+  const board = link.quiet(bootrom);
   assert.equal(
     board.request(' , ,').reply,
     'error:unknown-command only separators, no command; type help',

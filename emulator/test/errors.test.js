@@ -1,4 +1,5 @@
-// Every error class through the real firmware binary: the reply is exactly one line
+// Every error class through the real firmware binary, over UART0 and over the USB port (the
+// USB link cannot lose input, so rx-overflow is UART0's alone): the reply is exactly one line
 // `error:<code> <message>` naming what is wrong, nothing moves (pins constant over the
 // following frames, status and config unchanged), and the next good line works. The codes
 // come from README.md; the last test checks that each documented code that can be
@@ -16,6 +17,7 @@ import {
   firmwareBootrom,
   HOME,
   lerpPose,
+  linkTest,
   ok,
   periodsUs,
   plannedFrames,
@@ -63,8 +65,8 @@ function expectRefusal(board, line, code, message) {
   return reply;
 }
 
-function quietBoardAt(pose) {
-  const board = bootQuiet(bootrom);
+function quietBoardAt(link, pose) {
+  const board = link.quiet(bootrom);
   if (pose) {
     ok(board, `pose ${poseText(pose)}`);
     runFrames(board, plannedFrames(HOME, pose, defaultSettings()) + 3);
@@ -128,17 +130,19 @@ const PARSE_CASES = [
 // One board for these: each refusal must leave it exactly as it was (which each checks), so
 // the next case starts from the same state. Away from home, so "nothing moved" is not just
 // "still at home".
-let parseBoard;
+const parseBoards = new Map();
 for (const [code, line, message] of PARSE_CASES) {
-  test(`${code}: ${JSON.stringify(line).slice(0, 60)}`, () => {
-    parseBoard ??= quietBoardAt([3, -2, 1, 2, -1, 4]);
-    expectRefusal(parseBoard, line, code, message);
+  linkTest(`${code}: ${JSON.stringify(line).slice(0, 60)}`, (link) => {
+    if (!parseBoards.has(link)) {
+      parseBoards.set(link, quietBoardAt(link, [3, -2, 1, 2, -1, 4]));
+    }
+    expectRefusal(parseBoards.get(link), line, code, message);
   });
 }
 
-test('unreachable: names the leg the host core names; pose and check alike', () => {
+linkTest('unreachable: names the leg the host core names; pose and check alike', (link) => {
   const settings = defaultSettings();
-  const board = quietBoardAt(null);
+  const board = quietBoardAt(link, null);
   for (const pose of [[0, 0, 80, 0, 0, 0], [60, 0, 0, 0, 0, 0], [0, -45, 10, 0, 0, 90]]) {
     const [core] = reference.solve(settings, [pose]);
     assert.equal(core.code, 'unreachable', `${pose}: ${JSON.stringify(core)}`);
@@ -148,9 +152,9 @@ test('unreachable: names the leg the host core names; pose and check alike', () 
   }
 });
 
-test('servo-limit: names the servo, the pulse it would need (as the host core computes it) and its limits', () => {
+linkTest('servo-limit: names the servo, the pulse it would need (as the host core computes it) and its limits', (link) => {
   const settings = defaultSettings();
-  const board = quietBoardAt(null);
+  const board = quietBoardAt(link, null);
   for (const pose of [[0, 0, -15, 0, 0, 0], [0, 0, 15, 0, 0, 0], [0, 0, 0, 14, 0, 0]]) {
     const [core] = reference.solve(settings, [pose]);
     assert.equal(core.code, 'servo-limit', `${pose}: ${JSON.stringify(core)}`);
@@ -165,23 +169,23 @@ test('servo-limit: names the servo, the pulse it would need (as the host core co
   }
 });
 
-test('path-blocked: both ends reachable, the straight line between them not', () => {
+linkTest('path-blocked: both ends reachable, the straight line between them not', (link) => {
   const settings = defaultSettings();
   const from = [-28, 19, -2.5, 11, 2, -20];
   const to = [30, -12, -13.5, 5, -13, 28];
   const answers = reference.solve(settings, Array.from({ length: 501 }, (_, i) => lerpPose(from, to, i / 500)));
   assert.ok(answers[0].ok && answers[500].ok && answers.some((a) => !a.ok));
-  const board = quietBoardAt(from);
+  const board = quietBoardAt(link, from);
   expectRefusal(board, `pose ${poseText(to)}`, 'path-blocked', /^the straight path from the current pose is blocked \d+\.\d% of the way: (servo \d would need|leg \d cannot reach).*; nothing moved$/);
   expectRefusal(board, `move x=${to[0]} y=${to[1]} z=${to[2]} roll=${to[3]} pitch=${to[4]} yaw=${to[5]}`, 'path-blocked', /blocked/);
 });
 
-test('pose-conflict: a setting the held pose could not be driven with is refused', () => {
+linkTest('pose-conflict: a setting the held pose could not be driven with is refused', (link) => {
   const settings = defaultSettings();
   const pose = [0, 0, -8, 0, 0, 0];
   const [core] = reference.solve(settings, [pose]);
   assert.ok(core.pulse_us[0] > 1600, `servo 1 at ${pose} needs ${core.pulse_us[0]} us`);
-  const board = quietBoardAt(pose);
+  const board = quietBoardAt(link, pose);
   expectRefusal(
     board,
     'set servo1.max_us 1600',
@@ -194,9 +198,9 @@ test('pose-conflict: a setting the held pose could not be driven with is refused
   ok(board, 'set servo1.max_us 1600');
 });
 
-test('busy while moving: frame rate, geometry, servos, defaults, save; the move goes on', () => {
+linkTest('busy while moving: frame rate, geometry, servos, defaults, save; the move goes on', (link) => {
   const settings = defaultSettings();
-  const board = bootQuiet(bootrom);
+  const board = link.quiet(bootrom);
   ok(board, 'set speed_mm_s 5');
   const target = [0, 0, 10, 0, 0, 0]; // 2 s
   const config = ok(board, 'config');
@@ -259,8 +263,8 @@ test('rx-overflow: bytes lost while the firmware was busy refuse the line they f
   assert.equal(board.rxFifoDroppedBytes, 0, 'the loss was in the firmware queue, not the UART FIFO');
 });
 
-test('e-stop: with the input open, moves are refused until it is closed and reset is sent', () => {
-  const board = quietBoardAt([3, -2, 1, 2, -1, 4]);
+linkTest('e-stop: with the input open, moves are refused until it is closed and reset is sent', (link) => {
+  const board = quietBoardAt(link, [3, -2, 1, 2, -1, 4]);
   ok(board, 'set estop_pin 15');
   board.drivePin(15, false); // the switch closed: the pin held low
   runFrames(board, 2);

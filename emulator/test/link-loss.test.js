@@ -73,7 +73,8 @@ test('after link_timeout_s of silence the platform eases home at the configured 
   // Not before the timeout.
   const moving = samples.filter((s) => !same(s.us, up) && s.ms > silentFrom + 600);
   assert.ok(moving.length > 0, 'never left after the timeout');
-  const startedMs = moving[0].ms - silentFrom;
+  // Emulated time is a float sum of instruction times: to the nanosecond (the bound is exact).
+  const startedMs = Math.round((moving[0].ms - silentFrom) * 1e6) / 1e6;
   assert.ok(
     startedMs >= TIMEOUT_S * 1000 && startedMs <= TIMEOUT_S * 1000 + 3 * FRAME_MS,
     `started home ${startedMs} ms after the last command`,
@@ -167,3 +168,31 @@ test('link loss never comes before link_timeout_s, wherever in a frame the last 
   assert.ok(latestMs <= 100 + FRAME_MS + 10, `link loss ${latestMs} ms after the line`);
 });
 
+
+test('lines on UART0 or USB keep the link alive; silence on both is link loss', () => {
+  const board = new EmulatedBoard({ bootrom, usb: true });
+  board.boot();
+  board.usb.waitUntilOpen();
+  board.usb.waitForLine(/hexapod/);
+  board.runMs(3 * FRAME_MS);
+  const home = steadyPulses(board);
+  assert.equal(board.usb.request('set link_timeout_s 1').reply, 'ok');
+  assert.equal(board.request('pose 0 0 10 0 0 0').reply, 'ok');
+  board.runMs(500);
+  const held = board.pulseWidthsUs();
+  assert.ok(!same(held, home));
+  // Only USB speaks, then only UART0, and again: lines 0.9 s apart, never a loss.
+  for (const link of [board.usb, board.uart, board.usb, board.uart]) {
+    for (let i = 0; i < 2; i++) {
+      assert.equal(link.request('status').reply, 'ok');
+      board.runMs(900);
+      assert.deepEqual(board.pulseWidthsUs(), held, 'moved while a link spoke');
+    }
+  }
+  assert.ok(!board.lines.concat(board.usb.lines).some((l) => l.startsWith('# link lost')));
+  // Then neither: home, and both links hear why.
+  board.runMs(1500);
+  assert.deepEqual(steadyPulses(board), home);
+  assert.ok(board.lines.some((l) => /^# link lost: no command for 1 s/.test(l)), 'UART0 told');
+  assert.ok(board.usb.lines.some((l) => /^# link lost: no command for 1 s/.test(l)), 'USB told');
+});

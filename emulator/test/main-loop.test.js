@@ -1,9 +1,10 @@
 // The main loop never stalls, whatever arrives: through the real firmware ELF, lines whose work
 // is long (path checks of 1,000 poses, listings, geometry changes, the return home after link
-// loss) sent back to back, pipelined, at 115,200 and 921,600 baud. Each case asserts that the
-// watchdog never fires (the board fails the run if it does), that no servo frame is missed
-// (the firmware writes new compare values in every frame period), that every line gets its
-// reply in order, and that the longest main-loop pass stays under the bound the README states:
+// loss) sent back to back, pipelined, at 115,200 and 921,600 baud, and over UART0 and USB at
+// once. Each case asserts that the watchdog never fires (the board fails the run if it does),
+// that no servo frame is missed (the firmware writes new compare values in every frame period),
+// that every line gets its reply in order, and that the longest main-loop pass stays under the
+// bound the README states:
 // 1 ms (125,000 cycles at 125 MHz), a third of a frame at the highest frame rate (333 Hz).
 // The one pass allowed to be longer is a `save`'s flash write (a sector erase keeps the core in
 // the boot ROM with interrupts masked, 45 ms in the emulator's typical W25Q080 timing): the
@@ -177,6 +178,46 @@ test('while a long reply drains at 9,600 baud the main loop sleeps instead of sp
   assert.ok(board.loop.passes < 400, `${board.loop.passes} passes while ${bytes} bytes went out`);
   const busyCycles = board.cycles - start;
   assert.ok(busyCycles < 5_000_000, `${busyCycles} cycles busy while the reply drained`);
+});
+
+test('both links busy at once at 333 Hz: UART0 and USB pipelining long commands, no stall', () => {
+  const board = new EmulatedBoard({ bootrom, usb: true });
+  board.boot();
+  board.usb.waitUntilOpen();
+  board.usb.waitForLine(/hexapod/);
+  typed(board, 'set frame_hz 333');
+  typed(board, 'set speed_mm_s 1');
+  typed(board, 'set echo off');
+  typed(board, 'set baud 921600');
+  board.runMs(5);
+  measure(board);
+  // UART0: moves of 1,000 checks each, pipelined; USB (echo on): every long command class.
+  const moves = Array.from({ length: 12 }, (_, i) => `move x=${i % 2 ? '-10.1' : '-10.2'}`);
+  const usbLines = [
+    'check 20 0 0 0 0 0',
+    'config',
+    'help',
+    'geometry',
+    'status',
+    'check -20 0 0 0 0 0',
+    'help',
+    'config',
+  ];
+  const [uartFrom, usbFrom] = [board.lines.length, board.usb.lines.length];
+  board.sendBytes(moves.map((l) => `${l}\n`).join(''));
+  board.usb.sendBytes(usbLines.map((l) => `${l}\r`).join(''));
+  const done = () =>
+    finalsFrom(board, uartFrom).length >= moves.length &&
+    board.usb.lines.slice(usbFrom).filter((l) => FINAL_REPLY.test(l)).length >= usbLines.length;
+  assert.ok(board.runUntil(done, { timeoutMs: 10_000 }));
+  assert.deepEqual(finalsFrom(board, uartFrom), moves.map(() => 'ok'));
+  // USB: each line echoed after a prompt, then its data, then its ok, in order.
+  const usbText = board.usb.lines.slice(usbFrom);
+  const echoes = usbText.filter((l) => l.startsWith('> ')).map((l) => l.slice(2));
+  assert.deepEqual(echoes, usbLines);
+  assert.deepEqual(usbText.filter((l) => FINAL_REPLY.test(l)), usbLines.map(() => 'ok'));
+  board.runMs(100);
+  assertNoStall(board, 'both links');
 });
 
 test('a save is the one pass over 1 ms: its erase and program; the pins hold meanwhile', () => {

@@ -12,6 +12,7 @@ import { BANNER, EmulatedBoard } from '../src/board.js';
 import {
   assertConstant,
   assertPins,
+  bootQuietUsb,
   capture,
   firmwareBootrom,
   FRAME_MS,
@@ -374,4 +375,31 @@ test('lines sent during a save without waiting for its ok are lost, and said so'
   board.runMs(20);
   board.lineCursor = board.lines.length;
   assert.equal(status(board).state, 'idle');
+});
+
+test('over USB, lines sent during a save wait in the host: none lost, every one answered', () => {
+  // The USB interrupt is masked during the write too: the USB controller refuses the host's
+  // packets (NAK) and the host sends them again afterwards (README, "Saving the settings").
+  const board = bootQuietUsb(bootrom); // over USB; board.uart is UART0
+  const from = board.lines.length;
+  board.loop.reset();
+  // 700 bytes of lines after the save: more than the bus carries before the write begins.
+  board.sendBytes(`save\n${'status\n'.repeat(100)}`);
+  assert.ok(board.runUntil(() => board.flash.ops.length > 0, { timeoutMs: 100 }), 'no erase');
+  // The erase is done (45 ms): the firmware took nothing meanwhile, the host still holds bytes.
+  assert.ok(board.usb.unsent > 0, 'the host had nothing left to send during the erase');
+  const finals = () => board.lines.slice(from).filter((l) => /^(ok|error:)/.test(l));
+  const answered = board.runUntil(() => finals().length >= 101, { timeoutMs: 1000 });
+  assert.ok(answered, JSON.stringify(finals()));
+  board.runMs(20);
+  assert.deepEqual(finals(), Array(101).fill('ok'));
+  assert.ok(!board.lines.slice(from).some((l) => l.startsWith('# warning')), 'nothing lost');
+  assert.deepEqual(board.flash.ops.map((op) => op.routine), ['erase', 'program']);
+  assert.equal(board.loop.longPasses.length, 1, 'the save\'s pass, the only long one');
+  board.lineCursor = board.lines.length; // the replies above were read
+  // Saved, as UART0 sees it too.
+  assert.equal(config(board).saved, 'yes');
+  assert.equal(board.uart.request('set echo off').reply, 'ok');
+  const uartConfig = board.uart.request('config').lines;
+  assert.ok(uartConfig.includes('# saved: yes (these settings are the ones saved in flash)'));
 });

@@ -2,7 +2,9 @@
 // pulses on the pins, read back into poses with the host core's IK, must follow the
 // documented tracker limits (README.md "Streaming": per-axis speed and acceleration limits, no
 // overshoot), clamp unreachable targets, survive garbage, and stop for the e-stop. Expected
-// values come from the README's frame format and the host core, never from the firmware.
+// values come from the README's frame format and the host core, never from the firmware. The
+// last tests stream over the USB port (README "Serial links"): the same frames, beside
+// commands on UART0, and keeping the link alive.
 
 import assert from 'node:assert/strict';
 import { before, test } from 'node:test';
@@ -11,6 +13,7 @@ import {
   assertPins,
   assertWithinLimits,
   bootQuiet,
+  bootQuietUsb,
   capture,
   COUNT_US,
   defaultSettings,
@@ -278,4 +281,93 @@ test('e-stop during a commanded move: the pins stop within a frame, moves refuse
   assert.ok(s.pose[2] > 1 && s.pose[2] < 7, `stopped part way: z ${s.pose[2]}`);
   assert.equal(board.pinOutput(16), false);
   refused(board, 'home', 'e-stop');
+});
+
+test('a stream that is clamped on every frame keeps every main-loop pass under 1 ms and misses no frame', () => {
+  const board = trackingBoard({ hz: 333, speed: 200, accel: 2000 });
+  ok(board, 'set speed_deg_s 200');
+  ok(board, 'set accel_deg_s2 2000');
+  ok(board, 'set stream.z_mm 200');
+  board.loop.reset();
+  board.frames.reset();
+  // 300 frames/s, their targets alternately far above and far below reach: each clamped.
+  for (let k = 0; k < 90; k++) {
+    board.sendBytes(binaryFrame([32768 + (k % 7) * 200, 32768, k % 2 ? 0 : 65535, 32768, 32768, 32768]));
+    board.runMs(1000 / 300);
+  }
+  const { longestPassCycles } = board.loop;
+  assert.ok(longestPassCycles < 125_000, `a pass took ${longestPassCycles} cycles (bound: 1 ms)`);
+  assert.ok(board.frames.frames > 80, `${board.frames.frames} frames seen`);
+  assert.equal(board.frames.missed, 0, 'servo frames missed');
+  const s = status(board).stream;
+  assert.ok(s.clamped >= 80, `clamped ${s.clamped}`);
+  for (const servo of board.servos()) {
+    assert.ok(servo.widthUs >= 1100 - COUNT_US && servo.widthUs <= 1900 + COUNT_US);
+  }
+});
+
+test('over USB: a frame with LF and CR bytes in its counts, then a line, in one packet: both taken', () => {
+  const board = bootQuietUsb(bootrom); // helpers speak over USB; board.uart is UART0
+  ok(board, 'set speed_mm_s off');
+  ok(board, 'set speed_deg_s off');
+  // Every count's low byte is LF (0x0A) or CR (0x0D): the frame's bytes hold line ends that
+  // are not line ends (README: binary frames are `A5 5A`, six counts, `0D 0A`).
+  const counts = [0x800a, 0x7f0d, 0x8a0a, 0x800d, 0x7f0a, 0x8a0d];
+  const pose = counts.map((c, i) => ((c - 32768) / 32768) * SCALES[i]);
+  const from = board.lines.length;
+  // One USB packet: the frame, then a line.
+  board.sendBytes(Buffer.concat([binaryFrame(counts), Buffer.from('status\n', 'latin1')]));
+  board.waitForLine(/^ok$/);
+  // The packet is fed in one pass: its LF bytes inside the frame did not end the pass's input
+  // (a line end does), so `status` ran in that pass, after the frame was stored and before the
+  // pass applied it. A board ending its input at any LF would have applied it passes earlier.
+  const stat = board.lines.slice(from).find((l) => l.startsWith('# stream: '));
+  assert.equal(stat, '# stream: frames=1 applied=0 damaged=0 clamped=0 refused=0');
+  runFrames(board, 2);
+  assertPins(board, solve(pose));
+  const s = status(board);
+  assert.equal(s.state, 'streaming (pass-through)');
+  assert.deepEqual(s.stream, { frames: 1, applied: 1, damaged: 0, clamped: 0, refused: 0 });
+});
+
+test('a stream on USB beside commands on UART0: both served, frames keep the link alive, notices on both', () => {
+  const board = bootQuietUsb(bootrom);
+  const uart = board.uart;
+  assert.equal(uart.request('set echo off').reply, 'ok');
+  ok(board, 'set speed_mm_s off');
+  ok(board, 'set speed_deg_s off');
+  assert.equal(uart.request('set link_timeout_s 0.2').reply, 'ok');
+  // 100 Hz frames on USB for 0.6 s (three link timeouts) while UART0 asks for its status.
+  const path = Array.from({ length: 60 }, (_, k) => [0, 0, 3 * Math.sin(k / 10), 0, 0, 2]);
+  let uartReplies = 0;
+  for (const [k, pose] of path.entries()) {
+    board.sendBytes(frameFor(pose));
+    if (k % 10 === 5) {
+      const { reply, lines } = uart.request('status');
+      assert.equal(reply, 'ok');
+      assert.ok(lines.some((l) => l === '# state: streaming (pass-through)'), JSON.stringify(lines));
+      uartReplies += 1;
+    }
+    board.runMs(10);
+  }
+  assert.equal(uartReplies, 6);
+  runFrames(board, 2);
+  assertPins(board, solve(carried(path.at(-1))));
+  const lost = /^# link lost: /;
+  assert.ok(!uart.lines.some((l) => lost.test(l)), 'frames on USB are a sign of life');
+  assert.ok(!board.lines.some((l) => lost.test(l)));
+  assert.equal(status(board).stream.frames, path.length);
+  // Silence on both links: link loss, told on both.
+  uart.waitForLine(lost, { timeoutMs: 400 });
+  board.waitForLine(lost, { timeoutMs: 5 });
+  // The e-stop's notices reach both links too, and frames on USB are refused while it is open.
+  board.drivePin(15, false);
+  ok(board, 'set estop_pin 15');
+  board.drivePin(15, null);
+  const opened = /^# emergency stop: input open/;
+  uart.waitForLine(opened, { timeoutMs: 100 });
+  board.waitForLine(opened, { timeoutMs: 5 });
+  board.sendBytes(frameFor([0, 0, 1, 0, 0, 0]));
+  runFrames(board, 2);
+  assert.equal(status(board).stream.refused, 1);
 });

@@ -1,9 +1,10 @@
 //! hexapod-fw: the RP2040 board layer.
 //!
-//! Data flows one way: UART0 bytes -> controller (lines, commands, stream frames, motion) ->
-//! six pulse widths per servo frame (and right after a command that jumps or a stream frame in
-//! pass-through) -> PWM registers. This file only wires the pieces together: clocks and
-//! watchdog, UART0 ([`serial`]) with its link [`control::Session`], the six servo outputs
+//! Data flows one way: serial bytes (UART0 and the USB port) -> controller (lines, commands,
+//! stream frames, motion) -> six pulse widths per servo frame (and right after a command that
+//! jumps or a stream frame in pass-through) -> PWM registers. This file only wires the pieces
+//! together: clocks and watchdog, the two serial links, UART0 ([`serial`]) and USB CDC
+//! ([`usb_serial`]), each with its own [`control::Session`], the six servo outputs
 //! ([`servo_pwm`]), the e-stop input and servo-power output ([`safety_pins`]), the settings
 //! saved in flash ([`flash`]) and the hardware-independent [`control::Controller`], which runs
 //! on the boot ROM's float routines ([`firmware::rom_math`]) where it computes in `f32` (its IK
@@ -16,6 +17,9 @@ mod flash;
 mod safety_pins;
 mod serial;
 mod servo_pwm;
+mod usb_serial;
+
+use core::fmt;
 
 use defmt_rtt as _;
 use panic_probe as _;
@@ -29,6 +33,7 @@ use flash::SettingsFlash;
 use safety_pins::{FreePin, SafetyPins};
 use serial::{Received, Serial};
 use servo_pwm::{PulseWindowUs, ServoPwm, SERVO_COUNT};
+use usb_serial::UsbSerial;
 
 type Controller = control::Controller<RomMath>;
 
@@ -44,11 +49,38 @@ const WATCHDOG_TIMEOUT_MS: u32 = 500;
 /// to 400 ms and a page program up to 3 ms (datasheet maxima), with interrupts masked; 2 s
 /// leaves a wide margin and still resets a write that hangs.
 const SAVE_WATCHDOG_MS: u32 = 2000;
-/// Most received bytes handed to the controller in one pass (a line end ends the pass's input
-/// early, so at most one command runs per pass; stream frames do not end it, so the newest of
-/// the frames waiting is the one applied). 128 bytes are 8 binary frames, 1.4 ms of a stream
-/// at 921,600 baud: more than a pass takes, so a stream never falls behind.
+/// Most received bytes handed to the controller in one pass, both links together (a line end
+/// ends the pass's input early, so at most one command runs per pass; stream frames do not end
+/// it, so the newest of the frames waiting is the one applied). 128 bytes are 8 binary frames,
+/// 1.4 ms of a stream at 921,600 baud: more than a pass takes, so a UART stream never falls
+/// behind (a USB host that sends faster waits: USB's flow control).
 const RX_BYTES_PER_PASS: usize = 128;
+
+/// A serial link's port, as the main loop uses it: received bytes in, output written.
+trait Port: fmt::Write {
+    /// The output of one controller step fits (or is dropped anyway): the step may be taken.
+    fn has_room_for_step(&self) -> bool;
+    /// The next received byte, or where bytes were lost.
+    fn receive(&mut self) -> Option<Received>;
+}
+
+impl Port for Serial {
+    fn has_room_for_step(&self) -> bool {
+        Serial::has_room_for_step(self)
+    }
+    fn receive(&mut self) -> Option<Received> {
+        self.read()
+    }
+}
+
+impl Port for UsbSerial {
+    fn has_room_for_step(&self) -> bool {
+        UsbSerial::has_room_for_step(self)
+    }
+    fn receive(&mut self) -> Option<Received> {
+        self.read()
+    }
+}
 
 #[hal::entry]
 fn main() -> ! {
@@ -72,6 +104,8 @@ fn main() -> ! {
         "settings storage at flash offset {=u32:#x}",
         settings_flash.base()
     );
+    // The 1 MHz timer: its alarm 0 polls UART0's RX FIFO, its counter times the USB host's
+    // reading.
     let mut timer = hal::Timer::new(p.TIMER, &mut p.RESETS, &clocks);
     let rx_poll = timer.alarm_0().expect("alarm 0 is taken once, here");
     let mut serial = Serial::new(
@@ -120,35 +154,60 @@ fn main() -> ! {
     ]);
     safety.apply(&controller.settings().safety);
     watchdog.start(WATCHDOG_TIMEOUT_MS.millis());
+    let mut usb = UsbSerial::new(
+        p.USBCTRL_REGS,
+        p.USBCTRL_DPRAM,
+        clocks.usb_clock,
+        &mut p.RESETS,
+    );
 
-    // UART0's line assembly, echo and prompt (the platform's state is the controller's).
-    let mut uart = Session::new();
-    controller.banner(&mut uart, &mut serial);
+    // Each link's line assembly, echo and prompt (the platform's state is the controller's).
+    // UART0 is greeted now; the USB port when a host opens it.
+    let mut uart_link = Session::new();
+    let mut usb_link = Session::new();
+    controller.banner(&mut uart_link, &mut serial);
     defmt::info!("ready");
 
-    // The main loop. Every pass is short, whatever arrives: it runs at most one command, or
-    // one slice of a command's long work (a path check a few IK solutions at a time, a listing
-    // a line at a time: the controller splits it, see `control::Controller::work`), plus the
-    // frame that came due. The longest pass is measured in the emulator (well under 1 ms,
-    // against a 3 ms frame at 333 Hz and the 500 ms watchdog; BENCHMARKS.md). The one
+    // The main loop. Every pass is short, whatever arrives on either link: it runs at most one
+    // command (from one link or the other, the link that goes first alternating), or one slice
+    // of a command's long work (a path check a few IK solutions at a time, a listing a line at
+    // a time: the controller splits it, see `control::Controller::work`), plus the newest
+    // stream frame and the frame that came due. A reply goes to the link that sent the line,
+    // notices to every open link. The longest pass is measured in the emulator (well under
+    // 1 ms, against a 3 ms frame at 333 Hz and the 500 ms watchdog; BENCHMARKS.md). The one
     // exception is a `save`'s flash write (a sector erase: tens to hundreds of milliseconds
-    // with interrupts masked), alone in its pass, with the watchdog given longer.
+    // with interrupts masked, USB's too), alone in its pass, with the watchdog given longer.
     let mut rx_line_errors_reported = 0;
+    let mut usb_first = false;
     loop {
         watchdog.feed();
 
-        // Lost input is announced at once, to every link; the line it cut is refused when the
-        // loop reaches the gap.
+        // The USB host opened its port (DTR): a new terminal, greeted like UART0 at power-up;
+        // or closed it (its output is dropped from now on). A host that stopped reading has its
+        // output dropped too, after a while, so that it holds up nothing else.
+        if usb.take_open_change(usb_link.awaits_reply()) == Some(true) {
+            usb_link.reopen();
+            controller.banner(&mut usb_link, &mut usb);
+        }
+        usb.watch_output(timer.get_counter_low());
+
+        // Lost input (only UART0 loses any) is announced at once, to every link; the line it
+        // cut is refused when the loop reaches the gap.
         if let Some(lost) = serial.take_new_loss() {
             defmt::warn!("serial receive: input lost (at least {} bytes)", lost.bytes);
-            controller.on_input_lost(&mut uart, lost.bytes, lost.in_uart, &mut serial);
+            controller.on_input_lost(&mut uart_link, lost.bytes, lost.in_uart, &mut serial);
+            if usb.takes_notices() {
+                controller.write_notices(&mut usb_link, &mut usb);
+            }
         }
 
         if controller.is_busy() {
             if let Some(write) = controller.take_flash_write() {
                 // `save`: erase the older sector, program its page, read it back. The PWM
                 // holds the pulses meanwhile (nothing moves: save is refused while moving);
-                // input waits in the UART's FIFO. The reply comes in the next pass.
+                // input waits in the UART's FIFO, and in the USB host (interrupts are masked,
+                // so the USB hardware refuses the host's packets with NAK and the host tries
+                // again). The reply comes in the next pass, on the link that sent `save`.
                 watchdog.start(SAVE_WATCHDOG_MS.millis());
                 let result = write.perform(&mut settings_flash);
                 watchdog.start(WATCHDOG_TIMEOUT_MS.millis());
@@ -161,43 +220,67 @@ fn main() -> ! {
                     Err(_) => defmt::error!("settings not saved: the flash did not keep them"),
                 }
                 controller.flash_written(result);
-            } else if serial.has_room_for_step() {
-                // A slice of the work in progress; its reply comes with the last slice.
-                controller.work(&mut uart, &mut serial);
-                write_new_pulses(&mut controller, &mut servos);
-                // The controller's own work (the return home after link loss) may notify.
-                controller.write_notices(&mut uart, &mut serial);
+            } else {
+                // A slice of the work in progress, with the link that sent the command (the
+                // controller's own work, the return home after link loss or an e-stop, goes
+                // with UART0's). Its reply comes with the last slice.
+                let usb_job = usb_link.awaits_reply();
+                let room = if usb_job {
+                    usb.has_room_for_step()
+                } else {
+                    serial.has_room_for_step()
+                };
+                if room {
+                    if usb_job {
+                        controller.work(&mut usb_link, &mut usb);
+                    } else {
+                        controller.work(&mut uart_link, &mut serial);
+                    }
+                    write_new_pulses(&mut controller, &mut servos);
+                    // The controller's own work (the return home after link loss) may notify.
+                    controller.write_notices(&mut uart_link, &mut serial);
+                    if usb.takes_notices() {
+                        controller.write_notices(&mut usb_link, &mut usb);
+                    }
+                }
             }
         } else {
-            // Serial bytes -> controller, up to the end of one line. Input waits in the receive
-            // queue while the transmit buffer lacks room for a step's output, so replies are
-            // never cut.
-            for _ in 0..RX_BYTES_PER_PASS {
-                if !serial.has_room_for_step() {
+            // Received bytes -> controller, up to the end of one line, from one link and then,
+            // if no line ended, the other (stream frames do not end the input). Input waits (in
+            // the receive queue, or for USB in the host) while its link lacks room for a step's
+            // output, so replies are never cut.
+            usb_first = !usb_first;
+            let mut budget = RX_BYTES_PER_PASS;
+            for usb_turn in [usb_first, !usb_first] {
+                let input_ends = if usb_turn {
+                    feed(
+                        &mut controller,
+                        &mut usb_link,
+                        &mut usb,
+                        &mut servos,
+                        &mut budget,
+                    )
+                } else {
+                    feed(
+                        &mut controller,
+                        &mut uart_link,
+                        &mut serial,
+                        &mut servos,
+                        &mut budget,
+                    )
+                };
+                if input_ends {
                     break;
                 }
-                match serial.read() {
-                    Some(Received::Byte(byte)) => {
-                        let fed = controller.on_byte(&mut uart, byte, &mut serial);
-                        // A jump (speed limits off) is written now, not at the next frame; the
-                        // compare registers latch it at the next period start.
-                        write_new_pulses(&mut controller, &mut servos);
-                        if fed == Fed::LineEnded || controller.is_busy() {
-                            break;
-                        }
-                    }
-                    // The gap where bytes were lost: the line it cuts is refused at its end.
-                    Some(Received::Lost(lost)) => controller.on_rx_overflow(&mut uart, lost),
-                    None => break,
-                }
             }
-            // The newest stream frame among those just fed (in pass-through, written now).
+            // The newest stream frame among those just fed, from either link (in pass-through,
+            // written now).
             controller.apply_stream();
             write_new_pulses(&mut controller, &mut servos);
         }
 
         // The e-stop input (read every pass: within a servo frame of it opening) and the
-        // servo-power output.
+        // servo-power output. Its notices go to every open link with the next frame's.
         safety.apply(&controller.settings().safety);
         if let Some(open) = safety.estop_open() {
             controller.set_estop_input(open);
@@ -209,23 +292,29 @@ fn main() -> ! {
         if frames > 0 {
             let pulses_us = controller.on_frame();
             servos.set_frame_pulse_widths_us(&pulses_us, &pulse_windows_us(&controller));
-            controller.write_notices(&mut uart, &mut serial);
+            controller.write_notices(&mut uart_link, &mut serial);
+            if usb.takes_notices() {
+                controller.write_notices(&mut usb_link, &mut usb);
+            }
             if frames > 1 {
                 defmt::warn!("missed {} servo frames", frames - 1);
             }
         }
 
         apply_frame_rate(&controller, &mut servos);
-        // A baud change waits for the reply announcing it to have left the UART at the old
-        // rate; then the prompt held back for it goes out at the new one.
+        // A baud change (UART0's, from either link) waits for the reply announcing it to have
+        // left the UART at the old rate; then the prompt held back for it goes out at the new
+        // one. USB has no rate: a prompt held back there goes out at once.
         let baud = controller.baud();
         if baud != serial.baud() && serial.tx_idle() {
             match serial.set_baud(baud) {
-                Ok(()) => uart.write_deferred_prompt(&mut serial),
+                Ok(()) => uart_link.write_deferred_prompt(&mut serial),
                 Err(_) => defmt::error!("baud rate {} out of range", baud),
             }
         }
+        usb_link.write_deferred_prompt(&mut usb);
         serial.send_some();
+        usb.send_some();
 
         let rx_line_errors = serial.rx_line_errors();
         if rx_line_errors != rx_line_errors_reported {
@@ -233,21 +322,63 @@ fn main() -> ! {
             defmt::warn!("serial receive: {} line errors so far", rx_line_errors);
         }
 
-        // Sleep until an interrupt (bytes received, TX FIFO half empty, a frame) unless there
-        // is something to do now. Output waiting for room in the TX FIFO is no reason to stay
-        // awake: the TX interrupt wakes the loop when the FIFO has drained. A baud change
-        // waiting for the last bytes to leave is: no interrupt says when the UART goes idle,
-        // so the loop stays awake until it has switched (decided after the switch above, so
-        // the UART going idle between the two cannot put the loop to sleep with the switch
-        // still to do).
-        let room = serial.has_room_for_step();
+        // Sleep until an interrupt (bytes received on either link, TX FIFO half empty, USB
+        // output taken, a frame) unless there is something to do now. Output waiting for room
+        // is no reason to stay awake: the UART's TX interrupt, or the USB interrupt when the
+        // host takes a packet, wakes the loop. A baud change waiting for the UART's last bytes
+        // to leave is: no interrupt says when the UART goes idle, so the loop stays awake until
+        // it has switched (decided after the switch above, so the UART going idle between the
+        // two cannot put the loop to sleep with the switch still to do).
+        let uart_room = serial.has_room_for_step();
+        let usb_room = usb.has_room_for_step();
+        let job_can_go = if usb_link.awaits_reply() {
+            usb_room
+        } else {
+            uart_room
+        };
         let waiting_for_tx = controller.baud() != serial.baud() && !serial.tx_pending();
+        let usb_opens_or_closes = usb.open_change_pending(usb_link.awaits_reply());
         sleep_unless(|| {
-            (room && (controller.is_busy() || serial.rx_pending()))
-                || servos.frame_pending()
-                || waiting_for_tx
+            let input_or_work = if controller.is_busy() {
+                job_can_go
+            } else {
+                (uart_room && serial.rx_pending()) || (usb_room && usb.rx_pending())
+            };
+            input_or_work || servos.frame_pending() || waiting_for_tx || usb_opens_or_closes
         });
     }
+}
+
+/// Feeds bytes received on one link to the controller until a line ends (or a command's work
+/// begins), `budget` bytes have been fed, the link lacks room for a step's output or has
+/// nothing more. Stream frames do not end the feeding: binary frames contain line-end bytes,
+/// and the newest of the frames waiting is the one applied. Returns whether the pass's input
+/// ends here (a line ended).
+fn feed(
+    controller: &mut Controller,
+    link: &mut Session,
+    port: &mut impl Port,
+    servos: &mut ServoPwm,
+    budget: &mut usize,
+) -> bool {
+    while *budget > 0 && port.has_room_for_step() {
+        match port.receive() {
+            Some(Received::Byte(byte)) => {
+                *budget -= 1;
+                let fed = controller.on_byte(link, byte, port);
+                // A jump (speed limits off) is written now, not at the next frame; the compare
+                // registers latch it at the next period start.
+                write_new_pulses(controller, servos);
+                if fed == Fed::LineEnded || controller.is_busy() {
+                    return true;
+                }
+            }
+            // The gap where bytes were lost: the line it cuts is refused at its end.
+            Some(Received::Lost(lost)) => controller.on_rx_overflow(link, lost),
+            None => return false,
+        }
+    }
+    false
 }
 
 /// Writes the pulses a command changed outside the frame rhythm (a jump), if any.

@@ -210,8 +210,12 @@ impl Checked {
             slices += 1;
             assert!(slices < 100_000, "a command's work never ends: {out:?}");
         }
-        // As the board does after feeding: the newest stream frame, if one came.
+        // As the board does after feeding: the newest stream frame, if one came (a clamp's
+        // bisection then runs as the controller's own work, a slice per pass).
         self.ctl.apply_stream();
+        while self.ctl.is_busy() && !self.link.awaits_reply() {
+            self.ctl.work(&mut self.link, &mut out);
+        }
         if let Some(pulses) = self.ctl.take_new_pulses() {
             check_pulses(self.ctl.settings(), &pulses, "stream frame");
         }

@@ -36,7 +36,8 @@ pub use errors::{usage, Code};
 pub use format::{degrees, Fixed, PoseText, Six, ValueText, Vector};
 pub use replies::{
     refusal, write_banner, write_echo, write_error, write_notice, write_ok, write_prompt, Fault,
-    Listing, MotionReport, Notice, Saved, StatusReport, StreamCounts, EOL, HELP, PROMPT, VERSION,
+    Listing, MotionReport, Notice, Saved, StatusReport, StreamCounts, EOL, HELP, PROMPT,
+    USB_MANUFACTURER, USB_PRODUCT, VERSION,
 };
 
 #[cfg(test)]

@@ -24,6 +24,12 @@ const ERASE: &str = "\x08 \x08";
 /// Firmware name and version for the banner.
 pub const VERSION: &str = env!("CARGO_PKG_VERSION");
 
+/// The manufacturer the board names to a USB host (`lsusb`, Device Manager, the
+/// `/dev/serial/by-id/` name).
+pub const USB_MANUFACTURER: &str = "hexapod-fw";
+/// The product the board names to a USB host, beside [`USB_MANUFACTURER`].
+pub const USB_PRODUCT: &str = "hexapod control";
+
 /// Writes `ok` (the success reply).
 pub fn write_ok(out: &mut impl Write) {
     let _ = write!(out, "ok{EOL}");

@@ -68,6 +68,17 @@ impl Host {
         out
     }
 
+    /// As the board does after feeding bytes: applies the newest stream frame, and runs the
+    /// controller's own work that may start (a clamp's bisection) to its end.
+    pub fn apply_stream(&mut self) {
+        self.ctl.apply_stream();
+        let mut out = String::new();
+        while self.ctl.is_busy() {
+            self.ctl.work(&mut self.link, &mut out);
+        }
+        assert_eq!(out, "", "applying a stream frame wrote something");
+    }
+
     /// Sends a line with CR LF; returns the output lines (without line ends).
     pub fn send(&mut self, line: &str) -> Vec<String> {
         let out = self.feed(format!("{line}\r\n").as_bytes());

@@ -1,0 +1,429 @@
+//! The build file: one TOML file that describes a user's platform with the firmware's own `set`
+//! names as keys, so that a file the tool accepts is one the board accepts.
+//!
+//! ```toml
+//! frame_hz = 50
+//! rod_mm = 120.0
+//! servos.rate_us_rad = 600    # a dotted key is the same name
+//! [servo3]
+//! trim_us = 1512              # servo3.trim_us
+//! [stream]
+//! z_mm = 15                   # stream.z_mm
+//! ```
+//!
+//! Every key is looked up with `control::settings::SettingId::parse`, every value parsed with
+//! `SettingId::parse_value` and every resulting set of settings checked with
+//! `Settings::with` and `Settings::validate`: the code the firmware runs for `set`. The
+//! settings start from the firmware's defaults (as after `defaults`), so the file says the
+//! whole platform: what it leaves out is the default.
+//!
+//! The board checks each `set` on its own, so each step must leave valid settings (e.g.
+//! `servo1.min_us = 1600` is refused while `servo1.trim_us` is still 1500). The file's keys
+//! are therefore put in an order in which every step is accepted ([`BuildFile::steps`]),
+//! keeping the file's order where it can and never reordering two keys that set the same
+//! value (`servos.trim_us` then `servo3.trim_us`). If no order works, the first key that
+//! cannot be applied is the error, in the board's words, with its file, line and key.
+//!
+//! Values: numbers as typed (TOML's `1_000` and `0x10` are the numbers they mean), words as
+//! strings (`dir = "reversed"`, `speed_mm_s = "off"`). Units are those of the names (`_mm`,
+//! `_deg`, `_us`, `_s`, `_hz`).
+
+use control::command::ParseError;
+use control::report::ValueText;
+use control::settings::{Kind, ServoParam, ServoSel, SettingId, SettingValue, Settings};
+use control::word::word;
+use kinematics_core::LEGS;
+use toml::de::{DeTable, DeValue};
+
+use crate::messages::{KeyProblem, Problem};
+use crate::sizing::{Sizing, SIZING_TABLE};
+
+/// One `set` of a build file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Step {
+    /// The setting.
+    pub id: SettingId,
+    /// Its value as `set` takes it (lowercase).
+    pub value: String,
+    /// The line of its key in the file, from 1.
+    pub line: usize,
+}
+
+impl Step {
+    /// The command line the board is sent: `set <name> <value>`.
+    pub fn command(&self) -> String {
+        format!("set {} {}", self.id, self.value)
+    }
+}
+
+/// A build file read and checked.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BuildFile {
+    /// The `set`s, in an order the board accepts one by one from its defaults.
+    pub steps: Vec<Step>,
+    /// The settings they make.
+    pub settings: Settings,
+    /// The `[sizing]` table: the payload and the servos' rating, for the host's sizing tools
+    /// (not settings of the board, never sent to it).
+    pub sizing: Sizing,
+}
+
+/// Reads and checks a build file's text; `file` names it in errors.
+pub fn parse(file: &str, text: &str) -> Result<BuildFile, Problem> {
+    let line_of = |offset: usize| text[..offset.min(text.len())].matches('\n').count() + 1;
+    let table = DeTable::parse(text).map_err(|e| Problem::Toml {
+        file: file.to_string(),
+        line: e.span().map_or(1, |s| line_of(s.start)),
+        message: e.message().to_string(),
+    })?;
+    let mut found = Vec::new();
+    for (key, value) in table.get_ref() {
+        let line = line_of(key.span().start);
+        match value.get_ref() {
+            DeValue::Table(inner) => {
+                for (sub, value) in inner {
+                    let name = format!("{}.{}", key.get_ref(), sub.get_ref());
+                    found.push((name, line_of(sub.span().start), value.get_ref()));
+                }
+            }
+            other => found.push((key.get_ref().to_string(), line, other)),
+        }
+    }
+    let problem = |name: &str, line, why| Problem::Key {
+        file: file.to_string(),
+        line,
+        key: name.to_string(),
+        why,
+    };
+    let mut pending = Vec::new();
+    let mut sizing = Sizing::default();
+    for (name, line, value) in found {
+        let name = name.to_ascii_lowercase();
+        if let Some(key) = name.strip_prefix(SIZING_TABLE) {
+            let number = match value {
+                DeValue::Integer(_) | DeValue::Float(_) => {
+                    value_text(value).and_then(|t| t.parse::<f32>().ok())
+                }
+                _ => None,
+            };
+            sizing
+                .set(key, number)
+                .map_err(|why| problem(&name, line, KeyProblem::Sizing(why)))?;
+            continue;
+        }
+        let refused = |e: control::Error| problem(&name, line, KeyProblem::Refused(Box::new(e)));
+        let id = SettingId::parse(&name).ok_or_else(|| {
+            refused(control::Error::from(ParseError::UnknownSetting {
+                word: word(&name),
+            }))
+        })?;
+        if id.is_link() {
+            return Err(problem(&name, line, KeyProblem::LinkSetting));
+        }
+        let value = value_text(value).ok_or_else(|| problem(&name, line, KeyProblem::NotAValue))?;
+        let parsed = id
+            .parse_value(&value)
+            .map_err(|e| refused(control::Error::from(e)))?;
+        pending.push((Step { id, value, line }, parsed));
+    }
+    // Apply in an order the board accepts (see the module documentation).
+    let mut settings = Settings::default();
+    let mut steps = Vec::with_capacity(pending.len());
+    while !pending.is_empty() {
+        let next = (0..pending.len()).find(|&i| {
+            let (step, value) = &pending[i];
+            let blocked = pending[..i]
+                .iter()
+                .any(|(earlier, _)| overlap(earlier.id, step.id));
+            !blocked && settings.with(step.id, *value).validate().is_ok()
+        });
+        match next {
+            Some(i) => {
+                let (step, value) = pending.remove(i);
+                settings = settings.with(step.id, value);
+                steps.push(step);
+            }
+            None => {
+                let (step, value) = &pending[0];
+                let error = settings
+                    .with(step.id, *value)
+                    .validate()
+                    .err()
+                    .map(control::Error::from)
+                    // The first key is never blocked, so it failed validation.
+                    .unwrap_or(control::Error::Busy);
+                return Err(problem(
+                    &step.id.to_string(),
+                    step.line,
+                    KeyProblem::Refused(Box::new(error)),
+                ));
+            }
+        }
+    }
+    Ok(BuildFile {
+        steps,
+        settings,
+        sizing,
+    })
+}
+
+/// Whether two settings set a common value (`servos.x` and `servoN.x`).
+fn overlap(a: SettingId, b: SettingId) -> bool {
+    match (a, b) {
+        (SettingId::Servo(sa, pa), SettingId::Servo(sb, pb)) => {
+            pa == pb && (sa == sb || sa == ServoSel::All || sb == ServoSel::All)
+        }
+        _ => a == b,
+    }
+}
+
+/// A TOML value as the text `set` takes, or `None` for what is no setting value.
+fn value_text(value: &DeValue<'_>) -> Option<String> {
+    Some(match value {
+        DeValue::String(s) => s.to_ascii_lowercase(),
+        DeValue::Integer(i) => {
+            let digits: String = i.as_str().chars().filter(|&c| c != '_').collect();
+            let (sign, digits) = match digits.strip_prefix('-') {
+                Some(rest) => ("-", rest.to_string()),
+                None => ("", digits.trim_start_matches('+').to_string()),
+            };
+            let digits = if i.radix() == 10 {
+                digits
+            } else {
+                // 0x, 0o, 0b: the number it means, in decimal.
+                let bare = ["0x", "0o", "0b"]
+                    .iter()
+                    .find_map(|p| digits.strip_prefix(p))
+                    .unwrap_or(&digits);
+                let n = u128::from_str_radix(bare, i.radix()).ok()?;
+                n.to_string()
+            };
+            format!("{sign}{digits}")
+        }
+        DeValue::Float(x) => x
+            .as_str()
+            .chars()
+            .filter(|&c| c != '_')
+            .collect::<String>()
+            .to_ascii_lowercase(),
+        DeValue::Boolean(b) => if *b { "on" } else { "off" }.to_string(),
+        DeValue::Datetime(_) | DeValue::Array(_) | DeValue::Table(_) => return None,
+    })
+}
+
+/// A value as a build file writes it: numbers bare (the shortest text that reads back as the
+/// same `f32`), words quoted.
+fn toml_value(id: SettingId, value: SettingValue) -> String {
+    match (id.kind(), value) {
+        (Kind::Number { off_allowed, .. }, SettingValue::Number(v))
+            if !(off_allowed && v == 0.0) =>
+        {
+            let text = format!("{v}");
+            if text.contains('.') || text.contains('e') {
+                text
+            } else {
+                format!("{text}.0")
+            }
+        }
+        (_, SettingValue::Whole(v)) => v.to_string(),
+        _ => format!("\"{}\"", ValueText(id, value)),
+    }
+}
+
+/// What a setting is, with its range from the firmware's own [`Kind`], for the comments.
+fn describe(id: SettingId) -> String {
+    let what = crate::messages::setting_meaning(id);
+    match id.kind() {
+        Kind::Whole {
+            min,
+            max,
+            list: [],
+            unit,
+        } => {
+            format!("{what}, {min}..{max} {unit}")
+        }
+        Kind::Number {
+            min,
+            max,
+            unit,
+            off_allowed,
+            ..
+        } => {
+            let off = if off_allowed { ", or \"off\"" } else { "" };
+            format!("{what}, {min}..{max} {unit}{off}")
+        }
+        Kind::Dir => format!("{what}: \"normal\" or \"reversed\""),
+        Kind::Choice(words) => {
+            let quoted: Vec<String> = words.iter().map(|w| format!("\"{w}\"")).collect();
+            format!("{what}: {}", quoted.join(" "))
+        }
+        Kind::Pin => format!("{what}: a GPIO (8..22, 26..28) or \"off\""),
+        _ => what.to_string(),
+    }
+}
+
+/// A commented build file of `settings` and `sizing`; `source` says where they come from.
+pub fn write(settings: &Settings, sizing: &Sizing, source: &str) -> String {
+    let mut out = crate::messages::build_file_header(source);
+    let line = |out: &mut String, key: &str, id: SettingId| {
+        if let Some(value) = settings.get(id) {
+            let text = format!("{key} = {}", toml_value(id, value));
+            out.push_str(&format!("{text:<32}# {}\n", describe(id)));
+        }
+    };
+    let mut stream = Vec::new();
+    for id in SettingId::GLOBAL {
+        if id.is_link() {
+            continue;
+        }
+        let name = id.to_string();
+        match name.strip_prefix("stream.") {
+            Some(short) => stream.push((short.to_string(), id)),
+            None => line(&mut out, &name, id),
+        }
+    }
+    out.push_str("\n[stream]\n");
+    for (short, id) in stream {
+        line(&mut out, &short, id);
+    }
+    for servo in 1..=LEGS as u8 {
+        out.push_str(&format!("\n[servo{servo}]\n"));
+        for param in ServoParam::ALL {
+            line(
+                &mut out,
+                param.name(),
+                SettingId::Servo(ServoSel::One(servo), param),
+            );
+        }
+    }
+    out.push_str(crate::messages::SIZING_HEADER);
+    for (key, value) in sizing.entries() {
+        let text = format!("{key} = {value:?}");
+        out.push_str(&format!(
+            "{text:<32}# {}\n",
+            crate::messages::sizing_meaning(key)
+        ));
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ok(text: &str) -> BuildFile {
+        parse("b.toml", text).unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    fn err(text: &str) -> String {
+        parse("b.toml", text).unwrap_err().to_string()
+    }
+
+    #[test]
+    fn keys_are_the_set_names_in_every_toml_form() {
+        let file = ok(
+            "frame_hz = 100\nservos.rate_us_rad = 600\n[servo3]\ntrim_us = 1512\n\
+                       [stream]\nz_mm = 12.5\naxis1 = \"none\"\n",
+        );
+        let s = &file.settings;
+        assert_eq!(s.frame_hz, 100);
+        assert!(s.servos.0.iter().all(|c| c.rate_us_per_rad == 600.0));
+        assert_eq!(s.servos.0[2].home_us, 1512.0);
+        assert_eq!(s.stream.full_scale[2], 12.5);
+        assert_eq!(s.stream.text_order[0], None);
+        let commands: Vec<String> = file.steps.iter().map(Step::command).collect();
+        assert_eq!(
+            commands,
+            [
+                "set frame_hz 100",
+                "set servos.rate_us_rad 600",
+                "set servo3.trim_us 1512",
+                "set stream.z_mm 12.5",
+                "set stream.axis1 none"
+            ]
+        );
+        assert_eq!(file.steps[2].line, 4);
+    }
+
+    #[test]
+    fn errors_name_file_line_and_key_in_the_board_s_words() {
+        assert_eq!(
+            err("frame_hz = 50\n\n[servo2]\ntrim_us = 3000\n"),
+            "b.toml:4: servo2.trim_us: error:out-of-range servo2.trim_us 3000 is outside \
+             400..2600 us"
+        );
+        assert!(err("colour = \"red\"").starts_with("b.toml:1: colour: error:unknown-setting"));
+        assert!(err("[servo7]\ndir = \"normal\"")
+            .starts_with("b.toml:2: servo7.dir: error:unknown-setting"));
+        assert!(err("speed_mm_s = \"fast\"").contains("error:bad-number"));
+        assert!(err("baud = 9600").contains("belongs to the serial link"));
+        assert!(err("rod_mm = [1, 2]").contains("not a setting value"));
+        assert!(err("frame_hz = \n").starts_with("b.toml:1: not a TOML file"));
+        assert!(
+            err("a = 1\na = 2\n").starts_with("b.toml:2: not a TOML file"),
+            "{}",
+            err("a = 1\na = 2\n")
+        );
+        // Valid on its own, but no home height: the board's geometry check.
+        assert!(err("rod_mm = 10").starts_with("b.toml:1: rod_mm: error:bad-geometry"));
+    }
+
+    #[test]
+    fn steps_are_ordered_so_the_board_accepts_each() {
+        // min_us 1600 is refused while trim_us is 1500: trim_us goes first.
+        let file = ok("[servo1]\nmin_us = 1600\nmax_us = 2000\ntrim_us = 1700\n");
+        let names: Vec<String> = file.steps.iter().map(|s| s.id.to_string()).collect();
+        assert_eq!(names, ["servo1.max_us", "servo1.trim_us", "servo1.min_us"]);
+        // The same result as the board: each step from the defaults, validated.
+        let mut s = Settings::default();
+        for step in &file.steps {
+            s = s.with(step.id, step.id.parse_value(&step.value).unwrap());
+            s.validate().unwrap();
+        }
+        assert_eq!(s, file.settings);
+        // Overlapping keys keep their order: servos first, then servo3 wins.
+        let file = ok("[servo3]\ntrim_us = 1510\n[servos]\ntrim_us = 1490\n");
+        assert_eq!(file.settings.servos.0[2].home_us, 1490.0);
+        let file = ok("servos.trim_us = 1490\n[servo3]\ntrim_us = 1510\n");
+        assert_eq!(file.settings.servos.0[2].home_us, 1510.0);
+        assert_eq!(file.settings.servos.0[0].home_us, 1490.0);
+        // Impossible whatever the order: the first key that cannot go.
+        assert!(err("[servo1]\nmin_us = 1600\n")
+            .starts_with("b.toml:2: servo1.min_us: error:bad-servo-config"));
+    }
+
+    #[test]
+    fn numbers_in_toml_forms_mean_what_toml_says() {
+        let file =
+            ok("frame_hz = 0x64\nrod_mm = 1_20.5\nspeed_mm_s = \"OFF\"\nlink_timeout_s = 5e-1\n");
+        assert_eq!(file.settings.frame_hz, 100);
+        assert_eq!(file.settings.layout.rod_mm, 120.5);
+        assert_eq!(file.settings.speed_mm_s, 0.0);
+        assert_eq!(file.settings.link_timeout_s, 0.5);
+        assert!(err("rod_mm = nan").contains("error:not-finite"));
+        assert!(err("rod_mm = 1e39").contains("error:number-too-large"));
+    }
+
+    #[test]
+    fn a_written_file_reads_back_as_the_same_settings() {
+        let defaults = ok(&write(
+            &Settings::default(),
+            &Sizing::default(),
+            "the default platform",
+        ));
+        assert_eq!(defaults.settings, Settings::default());
+        assert_eq!(defaults.sizing, Sizing::default());
+        let custom = ok(
+            "frame_hz = 200\nspeed_mm_s = \"off\"\nestop_pin = 15\n[servo4]\n\
+                         dir = \"normal\"\ntrim_us = 1520.25\n[stream]\naxis1 = \"none\"\n",
+        );
+        let sizing = ok("[sizing]\npayload_kg = 2.5\npayload_z_mm = -4\n").sizing;
+        assert_eq!(sizing.payload_kg, 2.5);
+        let again = ok(&write(&custom.settings, &sizing, "a test"));
+        assert_eq!(again.settings, custom.settings);
+        assert_eq!(again.sizing, sizing);
+        assert!(err("[sizing]\npayload_kg = -1\n").starts_with("b.toml:2: sizing.payload_kg: "));
+        assert!(err("[sizing]\ncolour = 1\n").starts_with("b.toml:2: sizing.colour: "));
+        assert!(err("[sizing]\npayload_kg = \"heavy\"\n").contains("sizing.payload_kg"));
+    }
+}

@@ -1,0 +1,295 @@
+// The host tool `hexapod` (cli/) against the real firmware, as a user runs it: `./dev run --pty
+// --no-view` (src/run.js) boots the firmware ELF in the emulator with UART0 on a pseudo-terminal
+// (and no live view, whose own lines would share it), and the tool talks to that terminal as to
+// a board's serial port. `apply` a build file, read it back,
+// stream a 10-second trajectory as binary frames and a shorter one as `pose` lines (every reply
+// checked), then the final pulse widths, as the firmware reports them and as the emulator
+// measures them on the pins, against the host build of the kinematics. And `uf2 --settings`:
+// the chip booted from that file starts with the build file's settings.
+
+import assert from 'node:assert/strict';
+import { execFileSync, spawn, spawnSync } from 'node:child_process';
+import { mkdtempSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import { dirname, join } from 'node:path';
+import { fileURLToPath } from 'node:url';
+import { after, before, test } from 'node:test';
+
+import { DEFAULT_ELF, EmulatedBoard } from '../src/board.js';
+import { COUNT_US, defaultSettings, firmwareBootrom, numbersIn, ok } from '../src/e2e-support.js';
+import { HostReference } from '../src/host-reference.js';
+
+const REPO = join(dirname(fileURLToPath(import.meta.url)), '..', '..');
+const RUNNER = join(REPO, 'emulator', 'src', 'run.js');
+
+// The build file: speed limits off (stream frames pass straight through), stream full scales
+// that make the trajectory's last row exact in counts (32 mm / 32768 counts: 1/1024 mm), one
+// servo trimmed. The same settings for the host reference.
+const BUILD = `# a test build
+speed_mm_s = "off"
+speed_deg_s = "off"
+[stream]
+x_mm = 32
+y_mm = 32
+z_mm = 16
+roll_deg = 16
+pitch_deg = 16
+yaw_deg = 32
+[servo3]
+trim_us = 1510
+`;
+const END = [5, -3, 4, 2, -1.5, 6];
+
+function referenceSettings() {
+  const settings = defaultSettings();
+  settings.servos[2].trim_us = 1510;
+  return settings;
+}
+
+/** The tool's binary, built once (the path cargo reports). */
+function buildTool() {
+  const output = execFileSync('cargo', ['build', '--quiet', '-p', 'cli', '--message-format=json'], {
+    cwd: REPO,
+    encoding: 'utf8',
+    maxBuffer: 64 * 1024 * 1024,
+    stdio: ['ignore', 'pipe', 'inherit'],
+  });
+  for (const line of output.split('\n')) {
+    if (line.startsWith('{')) {
+      const message = JSON.parse(line);
+      const artifact = message.reason === 'compiler-artifact';
+      if (artifact && message.target?.name === 'hexapod' && message.executable) {
+        return message.executable;
+      }
+    }
+  }
+  throw new Error('cargo build did not report the hexapod executable');
+}
+
+let tool;
+let dir;
+let runner;
+let port;
+let runnerLog = '';
+const reference = () => new HostReference();
+
+before(async () => {
+  firmwareBootrom(); // the ELF is built and the boot ROM cached before the runner needs them
+  tool = buildTool();
+  dir = mkdtempSync(join(tmpdir(), 'hexapod-cli-e2e-'));
+  runner = spawn(process.execPath, [RUNNER, '--pty', '--no-view', '--elf', DEFAULT_ELF], {
+    stdio: ['ignore', 'ignore', 'pipe'],
+  });
+  runner.stderr.setEncoding('utf8');
+  runner.stderr.on('data', (text) => {
+    runnerLog += text;
+  });
+  port = await new Promise((resolve, reject) => {
+    const timer = setTimeout(() => reject(new Error(`no pty after 60 s: ${runnerLog}`)), 60_000);
+    const look = () => {
+      const found = runnerLog.match(/is on (\/\S+)/);
+      if (found) {
+        clearTimeout(timer);
+        runner.stderr.off('data', look);
+        resolve(found[1]);
+      }
+    };
+    runner.stderr.on('data', look);
+    runner.on('exit', (code) => reject(new Error(`the runner exited (${code}): ${runnerLog}`)));
+  });
+});
+
+after(() => {
+  runner?.kill();
+  if (dir) {
+    rmSync(dir, { recursive: true, force: true });
+  }
+});
+
+/** Runs the tool (asynchronously, so the runner keeps emulating); resolves to its outcome. */
+function hexapod(args) {
+  return new Promise((resolve) => {
+    const child = spawn(tool, args, { cwd: dir });
+    let stdout = '';
+    let stderr = '';
+    child.stdout.on('data', (d) => {
+      stdout += d;
+    });
+    child.stderr.on('data', (d) => {
+      stderr += d;
+    });
+    child.on('close', (status) => resolve({ status, stdout, stderr }));
+  });
+}
+
+/** `--port PORT` with a time-out for an emulator that may run slower than real time. */
+function onPort() {
+  return ['--port', port, '--timeout-s', '30'];
+}
+
+/** The pins' widths the runner printed last (`servos us: ...`). */
+function pinsUs() {
+  const lines = runnerLog.split('\n').filter((line) => line.startsWith('servos us:'));
+  return numbersIn(lines.at(-1).replace(/\|.*$/, ''));
+}
+
+/** Waits (generously) until the pins show `expected` within one PWM count. */
+async function pinsReach(expected) {
+  const until = Date.now() + 30_000;
+  const near = () => pinsUs().every((w, i) => Math.abs(w - expected[i]) <= COUNT_US + 1e-9);
+  while (!near() && Date.now() < until) {
+    await new Promise((resolve) => setTimeout(resolve, 100));
+  }
+  return pinsUs();
+}
+
+test('apply a build file through the pty: every setting on the board, saved', async () => {
+  writeFileSync(join(dir, 'build.toml'), BUILD);
+  const apply = await hexapod(['apply', 'build.toml', '--port', port, '--timeout-s', '30']);
+  assert.equal(apply.status, 0, apply.stdout + apply.stderr);
+  assert.match(apply.stdout, /saved in flash/);
+  const config = await hexapod(['send', '--port', port, '--timeout-s', '30', 'config']);
+  assert.equal(config.status, 0, config.stderr);
+  for (const line of [
+    '# speed_mm_s: off',
+    '# stream.x_mm: 32.000',
+    '# stream.yaw_deg: 32.000',
+    '# servo3: trim_us=1510.00 rate_us_rad=509.296 dir=reversed min_us=1100.00 max_us=1900.00',
+    '# servo4: trim_us=1500.00 rate_us_rad=509.296 dir=normal min_us=1100.00 max_us=1900.00',
+    '# saved: yes (these settings are the ones saved in flash)',
+  ]) {
+    assert.ok(config.stdout.split('\n').includes(line), `${line} in ${config.stdout}`);
+  }
+  const pull = await hexapod(['pull', '--port', port, '-o', 'pulled.toml', '--timeout-s', '30']);
+  assert.equal(pull.status, 0, pull.stderr);
+  const pulled = readFileSync(join(dir, 'pulled.toml'), 'utf8');
+  assert.match(pulled, /\[servo3\]\ntrim_us = 1510\.0 /);
+  assert.match(pulled, /\nz_mm = 16\.0 /);
+  assert.doesNotMatch(pulled, /saved/);
+});
+
+test('a text stream: a pose line per row, every reply ok', async () => {
+  // 2 s at 50 rows/s: a sway there and back.
+  const rows = ['time,x,y,z,roll,pitch,yaw'];
+  for (let i = 0; i <= 100; i++) {
+    const t = i / 50;
+    rows.push(`${t},0,${(6 * Math.sin(Math.PI * t)).toFixed(3)},0,0,0,0`);
+  }
+  writeFileSync(join(dir, 'sway.csv'), `${rows.join('\n')}\n`);
+  const stream = await hexapod(['stream', 'sway.csv', '--text', ...onPort()]);
+  assert.equal(stream.status, 0, stream.stdout + stream.stderr);
+  assert.match(stream.stdout, /lines sent: 101, ok: 101, refused: 0/);
+  assert.match(stream.stdout, /\(each pose line to its reply\): 101 samples/);
+  assert.match(stream.stdout, /errors: 0$/m);
+});
+
+test('a 10-second binary stream arrives whole; the pins end at the host IK\'s pulses', async () => {
+  // 10 s at 50 rows/s: from home to END along a smooth step, with a circle on the way.
+  const rows = ['time,x,y,z,roll,pitch,yaw'];
+  for (let i = 0; i <= 500; i++) {
+    const t = i / 50;
+    const u = t / 10;
+    const s = u * u * (3 - 2 * u);
+    const wiggle = Math.sin(Math.PI * u);
+    const pose = END.map((e) => e * s);
+    pose[0] += 4 * wiggle * Math.sin(2 * Math.PI * t / 2.5);
+    pose[1] += 4 * wiggle * (1 - Math.cos(2 * Math.PI * t / 2.5));
+    rows.push([t.toFixed(2), ...pose.map((v) => v.toFixed(4))].join(','));
+  }
+  writeFileSync(join(dir, 'ten.csv'), `${rows.join('\n')}\n`);
+  const stream = await hexapod(['stream', 'ten.csv', '--port', port, '--timeout-s', '30']);
+  assert.equal(stream.status, 0, stream.stdout + stream.stderr);
+  assert.match(stream.stdout, /501 rows sent to \S+ as binary frames/);
+  assert.match(
+    stream.stdout,
+    /the board counted frames=501 applied=\d+ damaged=0 clamped=0 refused=0/,
+  );
+  assert.match(stream.stdout, /round trip \(status lines[^)]*\): \d+ samples/);
+  assert.match(stream.stdout, /errors: 0$/m);
+
+  const [expected] = reference().solve(referenceSettings(), [END]);
+  assert.ok(expected.ok, JSON.stringify(expected));
+  const status = await hexapod(['send', '--port', port, '--timeout-s', '30', 'status']);
+  assert.equal(status.status, 0, status.stderr);
+  assert.match(
+    status.stdout,
+    /# pose: x=5\.000 y=-3\.000 z=4\.000 roll=2\.000 pitch=-1\.500 yaw=6\.000/,
+  );
+  const reported = numbersIn(status.stdout.split('\n').find((l) => l.startsWith('# pulse_us:')));
+  reported.forEach((w, i) => {
+    const want = expected.pulse_us[i];
+    assert.ok(Math.abs(w - want) <= 0.01, `servo ${i + 1}: ${w} vs ${want}`);
+  });
+  const pins = await pinsReach(expected.pulse_us);
+  pins.forEach((w, i) => {
+    assert.ok(
+      Math.abs(w - expected.pulse_us[i]) <= COUNT_US + 1e-9,
+      `servo ${i + 1}: pin ${w} us, host IK ${expected.pulse_us[i]} us`,
+    );
+  });
+});
+
+test('a text stream: a row the board refuses is reported, the rows after it still go', async () => {
+  // With speed limits (the board checks the straight path of each move): from the first pose
+  // the path to the second leaves the workspace (README, "Error codes", path-blocked); each pose
+  // alone is reachable, so the host's check passes them and the board refuses the second.
+  const limits = await hexapod(['send', ...onPort(), 'set speed_mm_s 50', 'set speed_deg_s 60']);
+  assert.equal(limits.status, 0, limits.stderr);
+  writeFileSync(
+    join(dir, 'blocked.csv'),
+    'time,x,y,z,roll,pitch,yaw\n0,-28,19,-2.5,11,2,-20\n3,30,-12,-13.5,5,-13,28\n3.1,0,0,2,0,0,0\n',
+  );
+  const stream = await hexapod(['stream', 'blocked.csv', '--text', ...onPort()]);
+  assert.notEqual(stream.status, 0);
+  const refused = "line 3: the board refused 'pose 30.000 -12.000 -13.500 5.000 -13.000 28.000': ";
+  assert.ok(stream.stderr.includes(`${refused}error:path-blocked `), stream.stderr);
+  assert.match(stream.stdout, /lines sent: 3, ok: 2, refused: 1/);
+  assert.match(stream.stderr, /blocked\.csv: the stream did not go through whole: 1 lines refused/);
+  const status = await hexapod(['send', '--port', port, '--timeout-s', '30', 'status']);
+  assert.match(
+    status.stdout,
+    /# target: x=0\.000 y=0\.000 z=2\.000 roll=0\.000 pitch=0\.000 yaw=0\.000/,
+  );
+});
+
+test('uf2 --settings: the chip booted from the file starts with the build file saved', () => {
+  writeFileSync(join(dir, 'build.toml'), BUILD);
+  execFileSync(tool, ['uf2', DEFAULT_ELF, '-o', 'fw.uf2', '--settings', 'build.toml'], {
+    cwd: dir,
+  });
+  const file = readFileSync(join(dir, 'fw.uf2'));
+  // The UF2 specification's blocks: 256-byte payloads at their target addresses.
+  const view = new DataView(file.buffer, file.byteOffset, file.byteLength);
+  const segments = Array.from({ length: file.length / 512 }, (_, i) => ({
+    address: view.getUint32(i * 512 + 12, true),
+    bytes: file.subarray(i * 512 + 32, i * 512 + 32 + view.getUint32(i * 512 + 16, true)),
+  }));
+  const board = new EmulatedBoard({ bootrom: firmwareBootrom(), segments });
+  const { offset } = board.settingsStorage;
+  const sector = 0x10000000 + offset;
+  assert.ok(segments.some((s) => s.address === sector), 'the settings sector is in the file');
+  board.boot();
+  board.runMs(50);
+  assert.doesNotMatch(board.output, /# warning/);
+  assert.equal(board.request('set echo off').reply, 'ok');
+  const config = ok(board, 'config');
+  for (const line of [
+    'speed_deg_s: off',
+    'stream.z_mm: 16.000',
+    'servo3: trim_us=1510.00 rate_us_rad=509.296 dir=reversed min_us=1100.00 max_us=1900.00',
+    'saved: yes (these settings are the ones saved in flash)',
+  ]) {
+    assert.ok(config.includes(line), `${line} in ${JSON.stringify(config)}`);
+  }
+  // And the pins: servo 3 at its new home pulse.
+  board.runMs(60);
+  assert.ok(Math.abs(board.pulseWidthsUs()[2] - 1510) <= COUNT_US, `${board.pulseWidthsUs()}`);
+});
+
+test('a missing port is named; nothing is left running', async () => {
+  const missing = await hexapod(['send', '--port', `${port}-none`, 'status']);
+  assert.notEqual(missing.status, 0);
+  assert.match(missing.stderr, /^hexapod: \S+-none: cannot open the serial port/);
+  const spare = spawnSync(tool, ['--help'], { encoding: 'utf8' });
+  assert.match(spare.stdout, /apply/);
+});

@@ -1,0 +1,144 @@
+// The live 3D view in a real browser: `./dev run` started as a user starts it, its page opened
+// in headless Chromium (Debian's `chromium` package, driven by playwright-core; nothing
+// downloads a browser of its own) and commands typed into the page's own terminal line.
+// Expected values come from the commands typed, never from the view's code:
+// - after `pose 0 0 10 0 0 0` the readout's forward-kinematics pose is that pose within
+//   0.05 mm / 0.05 degree (it is computed from the measured pins only);
+// - after a roll the platform in a screenshot is visibly tilted (the plate's top is drawn in one
+//   known colour, #f28c28: its top edge is compared at the left and right of the picture);
+// - when the emulator stops, the page says so and keeps working (no script error).
+// Where Chromium is missing the test is skipped with a message saying so (`./dev test` installs
+// it with apt-get); CHROMIUM=path picks another binary.
+
+import assert from 'node:assert/strict';
+import { test } from 'node:test';
+
+import {
+  CHROMIUM,
+  haveChromium,
+  launchChromium,
+  readPose,
+  startRunner,
+  typeLine,
+  waitForPose,
+} from '../src/view-browser.js';
+
+/** The plate's top colour (emulator/view/scene.js, PLATFORM_COLOUR). */
+const PLATE_RGB = [0xf2, 0x8c, 0x28];
+/** Generous time-outs for what takes well under a second in real time, ms. */
+const SETTLE_TIMEOUT_MS = 30_000;
+
+/**
+ * Where the plate's top edge is in a screenshot of the 3D stage: per column, the first row of
+ * plate colour; the medians over the leftmost and rightmost 15% of the plate's columns (px,
+ * rows count down). Decoded in a blank page of its own, not in the page under test.
+ */
+async function plateEdges(page, decoder) {
+  const png = await page.locator('#stage canvas').screenshot();
+  return decoder.evaluate(
+    async ({ base64, rgb }) => {
+      const image = new Image();
+      image.src = `data:image/png;base64,${base64}`;
+      await image.decode();
+      const canvas = document.createElement('canvas');
+      canvas.width = image.width;
+      canvas.height = image.height;
+      const context = canvas.getContext('2d');
+      context.drawImage(image, 0, 0);
+      const { data, width, height } = context.getImageData(0, 0, image.width, image.height);
+      const top = [];
+      for (let x = 0; x < width; x++) {
+        for (let y = 0; y < height; y++) {
+          const p = 4 * (y * width + x);
+          if ([0, 1, 2].every((c) => Math.abs(data[p + c] - rgb[c]) <= 24)) {
+            top.push([x, y]);
+            break;
+          }
+        }
+      }
+      if (top.length === 0) {
+        return null;
+      }
+      const [first, last] = [top[0][0], top.at(-1)[0]];
+      const band = 0.15 * (last - first);
+      const median = (rows) => rows.sort((a, b) => a - b)[Math.floor(rows.length / 2)];
+      return {
+        columns: top.length,
+        left: median(top.filter(([x]) => x <= first + band).map(([, y]) => y)),
+        right: median(top.filter(([x]) => x >= last - band).map(([, y]) => y)),
+      };
+    },
+    { base64: png.toString('base64'), rgb: PLATE_RGB },
+  );
+}
+
+test('the 3D view shows the pose the pins carry, tilts with a roll, and says when the emulator stops', async (t) => {
+  if (!haveChromium()) {
+    const why =
+      `SKIPPED: no Chromium at ${CHROMIUM}, so the browser test of the 3D view did not run ` +
+      `(./dev test installs Debian's chromium package with apt-get; CHROMIUM=path picks another)`;
+    console.error(why);
+    t.skip(why);
+    return;
+  }
+  const runner = startRunner();
+  let browser;
+  t.after(async () => {
+    await browser?.close();
+    runner.kill('SIGKILL');
+  });
+  const url = await runner.url;
+  browser = await launchChromium();
+  const page = await browser.newPage({ viewport: { width: 1200, height: 800 } });
+  const pageErrors = [];
+  page.on('pageerror', (error) => pageErrors.push(error.message));
+  const decoder = await browser.newPage();
+
+  // The side camera looks along -x from +x: the base y axis points right on the screen.
+  await page.goto(`${url}?camera=side`);
+  await page.waitForSelector('#fk-status[data-status="solved"]', { timeout: SETTLE_TIMEOUT_MS });
+  const level = await plateEdges(page, decoder);
+  assert.ok(level && level.columns > 100, `the plate is on screen: ${JSON.stringify(level)}`);
+  assert.ok(Math.abs(level.left - level.right) <= 2, `level plate: ${JSON.stringify(level)}`);
+
+  await t.test('pose 0 0 10 0 0 0: the readout shows it within 0.05 mm and 0.05 degree', async () => {
+    await typeLine(page, 'pose 0 0 10 0 0 0');
+    await waitForPose(page, [0, 0, 10, 0, 0, 0], 0.05, SETTLE_TIMEOUT_MS);
+    // Still there once the move has ended (the platform holds the pose).
+    await page.waitForTimeout(500);
+    const pose = await readPose(page);
+    [0, 0, 10, 0, 0, 0].forEach((v, i) => assert.ok(Math.abs(pose[i] - v) <= 0.05, `pose ${pose}`));
+    // The page's line went over the one UART: the shell's terminal saw its echo and reply too.
+    await page.waitForFunction(() => /pose 0 0 10 0 0 0\s+ok/.test(document.querySelector('#terminal').innerText), null, { timeout: SETTLE_TIMEOUT_MS });
+    assert.match(runner.stdoutText, /pose 0 0 10 0 0 0\r?\nok/);
+  });
+
+  await t.test('a roll tilts the platform in the picture, +y side up', async () => {
+    await typeLine(page, 'pose 0 0 0 8 0 0');
+    await waitForPose(page, [0, 0, 0, 8, 0, 0], 0.05, SETTLE_TIMEOUT_MS);
+    await page.waitForTimeout(300);
+    const rolled = await plateEdges(page, decoder);
+    assert.ok(rolled && rolled.columns > 100, JSON.stringify(rolled));
+    // Rows count downwards: the right (+y) edge is higher, i.e. at a smaller row.
+    assert.ok(rolled.left - rolled.right >= 10, `rolled plate: ${JSON.stringify({ level, rolled })}`);
+    t.diagnostic(`plate top edge left/right, px: level ${level.left}/${level.right}, rolled ${rolled.left}/${rolled.right}`);
+  });
+
+  await t.test('when the emulator stops the page shows it, without a script error', async () => {
+    const before = await readPose(page);
+    runner.kill('SIGINT'); // as Ctrl-C would
+    const { code } = await runner.exited;
+    assert.equal(code, 0, runner.stderrText);
+    await page.waitForFunction(
+      () => /stopped/.test(document.getElementById('link-state').textContent) &&
+        !document.getElementById('overlay').hidden,
+      null,
+      { timeout: SETTLE_TIMEOUT_MS },
+    );
+    assert.match(await page.textContent('#overlay'), /emulator stopped/);
+    // The last picture and readout stay.
+    assert.deepEqual(await readPose(page), before);
+    assert.equal(await page.locator('#stage canvas').count(), 1);
+    assert.deepEqual(pageErrors, []);
+  });
+});
