@@ -41,13 +41,14 @@
 //! binary stream frames (`control::stream`) whose counts encode the poses given:
 //! - `c X Y Z ROLL PITCH YAW DZ` -> `c n=N`: in pass-through (speed limits off), a frame at the
 //!   pose, applied (not measured), then one `DZ` mm higher, out of reach: the measured bracket
-//!   is `Controller::apply_stream` clamping it (1 + `CLAMP_STEPS` IK solutions, bisection on the
-//!   straight line); `N` clamps counted (1 if it clamped);
+//!   is `Controller::apply_stream` and the clamp job it starts, run to its end with
+//!   `Controller::work` (1 + `CLAMP_STEPS` IK solutions, bisection on the straight line, up to
+//!   `CHECKS_PER_SLICE` per slice); `N` clamps counted (1 if it clamped);
 //! - `k X Y Z ROLL PITCH YAW F` -> `k FLAGS`: with the tracker's default limits (speeds, and
 //!   accelerations of 1000 mm/s^2 and 1000 deg/s^2), a frame at the pose becomes the tracker's
-//!   goal, then `F` measured brackets of `Controller::on_frame` (the tracker's step and one IK;
-//!   a clamp if the step leaves the workspace), a flag per frame: `m` moved, `c` clamped (the
-//!   step left the workspace), `s` still.
+//!   goal, then `F` measured brackets of `Controller::on_frame` (the tracker's step and one IK),
+//!   a flag per frame: `m` moved, `c` clamped (the step left the workspace: the tracker holds a
+//!   step short of the edge, no bisection in the frame), `s` still.
 
 #![no_std]
 #![no_main]
@@ -548,6 +549,9 @@ impl Streams {
         bracket_empty(marker, pose);
         let _ = marker.set_high();
         ctl.apply_stream();
+        while ctl.is_busy() {
+            ctl.work(&mut self.session, &mut Sink);
+        }
         let _ = marker.set_low();
         black_box(ctl.pose());
         ctl.stream_counts().clamped.wrapping_sub(before)
