@@ -147,44 +147,20 @@ export function symbolSizes(elfPath, keep) {
   return sizes;
 }
 
-/** `_ZN8firmware5flash10BOOT2_COPY17h...E` -> `firmware::flash::BOOT2_COPY`. */
 /**
  * The address ranges of the symbols whose (mangled) names `keep` accepts:
  * `[{ name, start, end }]` by demangled-looking name, `end` exclusive, Thumb bit cleared.
  */
 export function symbolRanges(elfPath, keep) {
-  const file = readFileSync(elfPath);
-  const view = new DataView(file.buffer, file.byteOffset, file.byteLength);
-  const sectionHeaderOffset = view.getUint32(0x20, true);
-  const sectionHeaderSize = view.getUint16(0x2e, true);
-  const sectionCount = view.getUint16(0x30, true);
-  const header = (i) => sectionHeaderOffset + i * sectionHeaderSize;
-  const ranges = [];
-  for (let i = 0; i < sectionCount; i++) {
-    if (view.getUint32(header(i) + 0x04, true) !== SHT_SYMTAB) {
-      continue;
-    }
-    const offset = view.getUint32(header(i) + 0x10, true);
-    const size = view.getUint32(header(i) + 0x14, true);
-    const entrySize = view.getUint32(header(i) + 0x24, true);
-    const strings = view.getUint32(header(view.getUint32(header(i) + 0x18, true)) + 0x10, true);
-    for (let entry = offset; entry < offset + size; entry += entrySize) {
-      let end = strings + view.getUint32(entry, true);
-      const start = end;
-      while (file[end] !== 0) {
-        end++;
-      }
-      const name = file.toString('latin1', start, end);
-      const bytes = view.getUint32(entry + 8, true);
-      if (bytes > 0 && keep(name)) {
-        const address = view.getUint32(entry + 4, true) & ~1;
-        ranges.push({ name: readableName(name), start: address, end: address + bytes });
-      }
-    }
-  }
-  return ranges;
+  return sizedSymbols(elfPath)
+    .filter(({ name }) => keep(name))
+    .map(({ name, value, size }) => {
+      const address = value & ~1;
+      return { name: readableName(name), start: address, end: address + size };
+    });
 }
 
+/** `_ZN8firmware5flash10BOOT2_COPY17h...E` -> `firmware::flash::BOOT2_COPY`. */
 function readableName(mangled) {
   const parts = [];
   let at = mangled.startsWith('_ZN') ? 3 : -1;

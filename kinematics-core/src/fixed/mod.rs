@@ -286,6 +286,20 @@ mod tests {
     use super::*;
     use crate::test_support::xorshift;
 
+    /// `from_fixed` of `w` and `from_fixed32` of its low half are Rust's own `as f32`
+    /// conversions (one rounding, to nearest even) scaled by an exact power of two.
+    fn assert_converts_as_rust_rounds(w: i64) {
+        let expected = w as f32 * (-(SQ_FRAC as f32)).exp2();
+        assert_eq!(from_fixed(w, SQ_FRAC).to_bits(), expected.to_bits(), "{w}");
+        let v = w as i32;
+        let expected = v as f32 * (-(ARM_FRAC as f32)).exp2();
+        assert_eq!(
+            from_fixed32(v, ARM_FRAC).to_bits(),
+            expected.to_bits(),
+            "{v}"
+        );
+    }
+
     #[test]
     fn fixed_point_conversions_and_products_are_exact() {
         let mut seed = 0x1234_5678_u32;
@@ -299,15 +313,7 @@ mod tests {
             let scale = f64::from(1u32 << MM_FRAC);
             // `i64 as f32` rounds once, to nearest even; the power of two scales exactly.
             let w = ((u64::from(next()) << 32 | u64::from(next())) as i64) >> (next() % 64);
-            let expected = w as f32 * (-(SQ_FRAC as f32)).exp2();
-            assert_eq!(from_fixed(w, SQ_FRAC).to_bits(), expected.to_bits(), "{w}");
-            let v = w as i32;
-            let expected = v as f32 * (-(ARM_FRAC as f32)).exp2();
-            assert_eq!(
-                from_fixed32(v, ARM_FRAC).to_bits(),
-                expected.to_bits(),
-                "{v}"
-            );
+            assert_converts_as_rust_rounds(w);
             let x = f32::from_bits(next()) % MAX_FIXED_MM;
             if x.is_finite() {
                 let expected = (f64::from(x) * scale).round() as i32;
@@ -394,15 +400,7 @@ mod tests {
             (1 << 32) - 1,
             1 << 32,
         ] {
-            let expected = w as f32 * (-(SQ_FRAC as f32)).exp2();
-            assert_eq!(from_fixed(w, SQ_FRAC).to_bits(), expected.to_bits(), "{w}");
-            let v = w as i32;
-            let expected = v as f32 * (-(ARM_FRAC as f32)).exp2();
-            assert_eq!(
-                from_fixed32(v, ARM_FRAC).to_bits(),
-                expected.to_bits(),
-                "{v}"
-            );
+            assert_converts_as_rust_rounds(w);
         }
     }
 }
