@@ -115,9 +115,9 @@ pub const LINK_LOSS_SPEED_MM_S: f32 = 10.0;
 /// Angular speed for returning home after link loss when `speed_deg_s` is off, deg/s.
 pub const LINK_LOSS_SPEED_DEG_S: f32 = 15.0;
 /// Most IK solutions of a path check in one slice of work ([`Controller::work`]): on the
-/// RP2040 one takes about 0.15 ms, so a slice stays under half a millisecond. With a payload
-/// and torque ratings, each pose checked also needs its holding torques (about three IK
-/// solutions' worth): then a slice checks one pose.
+/// RP2040 one takes about 0.09 ms, so a slice stays well under half a millisecond. With a
+/// payload and torque ratings, each pose checked also needs its holding torques (about
+/// 0.47 ms, five IK solutions' worth): then a slice checks one pose.
 pub const CHECKS_PER_SLICE: u32 = 3;
 
 /// Halvings of a clamp's bisection: the clamped pose is within 1/64 of the way from the

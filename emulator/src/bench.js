@@ -25,7 +25,7 @@ import {
   stackHighWaterBytes,
 } from './firmware-bench.js';
 import { BULK_PACKETS_PER_FRAME } from './rp2040js-gaps.js';
-import { benchPoses, profileIk, runIkBench, runKinematicsBench } from './ik-bench.js';
+import { benchPoses, profileIk, runIkBench, runKinematicsBench, runStreamBench } from './ik-bench.js';
 import { highestFrameRate, measureFrameLatency, measureStreamCpu } from './stream-bench.js';
 
 const REPO = join(dirname(fileURLToPath(import.meta.url)), '..', '..');
@@ -38,6 +38,40 @@ const STREAM_BAUD = 921600;
  * this harness on the same 200 poses (seed 1).
  */
 const BEFORE = { commit: '2e2bad8', mean: 40582, min: 40325, max: 40872 };
+/**
+ * The IK on the boot ROM's float routines called directly (commit eb271cd, the last before the
+ * fixed-point routines: `fatan2`, `fsin`, `fsqrt`, `fadd`, `fmul`), measured once with this
+ * harness on the same 200 poses (seed 1): cycles, largest error against the f64 reference (us)
+ * and where the cycles went.
+ */
+const BEFORE_ROM = {
+  commit: 'eb271cd',
+  mean: 18079,
+  min: 17968,
+  max: 18228,
+  worstUs: 2.85e-4,
+  profile: 'firmware code 8,253, `fatan2` 4,075 (6 calls), `fadd` 2,185 (32), `fsin` 1,729 (3), `fmul` 1,502 (27), `fsqrt` 374 (6)',
+};
+/** The largest pulse error the IK may have against the f64 reference, us. */
+const TARGET_US = 0.01;
+/** Cycles in one servo frame at the highest frame rate (333 Hz) at 125 MHz. */
+const FRAME_333_CYCLES = 125e6 / 333;
+/** What each variant of the IK benchmark is, for its row. */
+const VARIANT_ROWS = {
+  rom: 'the boot ROM\'s `f32` `fsin`, `fsqrt`, `fatan2` in place of the integer routines',
+  libm: '`libm`\'s `f32` routines in their place (straightforward port)',
+  micromath: '`micromath`\'s (2.1) sin/cos, sqrt and atan2 in their place',
+  'micromath-sin-cos': '`micromath`\'s sin/cos alone',
+  'micromath-sqrt': '`micromath`\'s sqrt alone',
+  'micromath-atan2': '`micromath`\'s atan2 alone',
+};
+/** The variant with `micromath`'s routine alone, by routine. */
+const MICROMATH_ALONE = {
+  sin: 'micromath-sin-cos',
+  cos: 'micromath-sin-cos',
+  sqrt: 'micromath-sqrt',
+  atan2: 'micromath-atan2',
+};
 /**
  * The firmware just before the settings storage (`save`, the store, the flash routines) was
  * merged in (commit b7187c2: streaming and the safety pins, UART0 only), measured once with
@@ -92,7 +126,24 @@ if (ik.failures.length > 0) {
   throw new Error(`the chip refused ${ik.failures.length} poses the host solved: ${JSON.stringify(ik.failures[0])}`);
 }
 
-const profile = profileIk(poses.slice(0, 5));
+const PROFILE_POSES = 5;
+const profile = profileIk(poses.slice(0, PROFILE_POSES));
+const variant = (name) => ik.variants.find((v) => v.name === name);
+const [firmware] = ik.variants;
+const romProfile = profileIk(poses.slice(0, PROFILE_POSES), { variant: ik.variants.indexOf(variant('rom')) });
+if (!variant('micromath')) {
+  throw new Error('the benchmark firmware was built without `micromath`: cargo fw --features micromath');
+}
+if (firmware.worstVsRef > TARGET_US) {
+  throw new Error(`the firmware's IK is off by ${firmware.worstVsRef} us, beyond ${TARGET_US} us`);
+}
+
+// ---- the stream pipeline: clamping and tracking ----
+log('stream: clamps and tracker frames ...');
+const STREAM_POSES = 40;
+const TRACK_FRAMES = 3;
+const CLAMP_DZ_MM = 60;
+const stream = runStreamBench(poses.slice(0, STREAM_POSES), { frames: TRACK_FRAMES, dzMm: CLAMP_DZ_MM });
 
 // ---- the rest of the kinematics ----
 const LIMITS_POSES = 20;
@@ -253,31 +304,89 @@ runs; the harness reads the emulator's cycle counter at its edges and subtracts 
 (the marker's own cost). ${ik.poses} random poses reachable within the default servo limits
 (seed ${args.seed}, from \`cargo run -p host-tests --example bench_poses\`).
 
-| | cycles per IK, mean | min | max | us at 125 MHz (mean) |
-|---|---:|---:|---:|---:|
-| ROM path (firmware) | ${fmt(ik.rom.mean)} | ${fmt(ik.rom.min)} | ${fmt(ik.rom.max)} | ${fmt(us(ik.rom.mean), 1)} |
-| before: ROM through rp2040-hal's wrappers (commit ${BEFORE.commit}, measured once) | ${fmt(BEFORE.mean)} | ${fmt(BEFORE.min)} | ${fmt(BEFORE.max)} | ${fmt(us(BEFORE.mean), 1)} |
-| same IK with \`libm\` (straightforward port) | ${fmt(ik.libm.mean)} | ${fmt(ik.libm.min)} | ${fmt(ik.libm.max)} | ${fmt(us(ik.libm.mean), 1)} |
+The IK runs in fixed point (\`kinematics_core::fixed\`): the pose's sines and cosines (table and
+sum formulas), the leg terms of eq. 9 scaled to 29 bits, the discriminant exactly, its square
+root (Newton-Raphson) and the half-angle arc tangent (table, exact rotation, series), the pulses
+of eq. 13, 14: integer instructions only, no float routine at all. The other rows are the same
+IK with another library's routines in place of the three integer ones
+(\`kinematics_core::FloatRoutines\`: arguments converted to \`f32\` and back), each with its own
+solver (home angles from its own routines), so the choice of routines is a measured one.
 
-Speed-up: ${fmt(BEFORE.mean / ik.rom.mean, 2)}x over the firmware before, ${fmt(ik.libm.mean / ik.rom.mean, 2)}x over the \`libm\` build. (Both builds already route \`f32\` add/sub/mul/div to the boot ROM
-through rp2040-hal's intrinsics; a build without them is slower still.)
+| | cycles per IK, mean | min | max | us at 125 MHz (mean) | max error vs f64 |
+|---|---:|---:|---:|---:|---:|
+| **firmware: the core's fixed-point routines** | **${fmt(firmware.mean)}** | **${fmt(firmware.min)}** | **${fmt(firmware.max)}** | **${fmt(us(firmware.mean), 1)}** | **${firmware.worstVsRef.toExponential(2)} us** |
+| before: boot ROM float routines called directly (commit ${BEFORE_ROM.commit}, measured once) | ${fmt(BEFORE_ROM.mean)} | ${fmt(BEFORE_ROM.min)} | ${fmt(BEFORE_ROM.max)} | ${fmt(us(BEFORE_ROM.mean), 1)} | ${BEFORE_ROM.worstUs.toExponential(2)} us |
+| before that: ROM through rp2040-hal's wrappers (commit ${BEFORE.commit}, measured once) | ${fmt(BEFORE.mean)} | ${fmt(BEFORE.min)} | ${fmt(BEFORE.max)} | ${fmt(us(BEFORE.mean), 1)} | |
+${ik.variants
+  .slice(1)
+  .map((v) => `| ${VARIANT_ROWS[v.name] ?? v.name} | ${fmt(v.mean)} | ${fmt(v.min)} | ${fmt(v.max)} | ${fmt(us(v.mean), 1)} | ${v.worstVsRef.toExponential(2)} us${v.worstVsRef > TARGET_US ? ' (beyond the target)' : ''}${v.refused ? `, ${v.refused} poses refused` : ''} |`)
+  .join('\n')}
 
-Where the ROM path's cycles go (per IK, ${Math.min(5, ik.poses)} poses, instruction by instruction):
+Speed-up: ${fmt(BEFORE_ROM.mean / firmware.mean, 2)}x over the ROM routines (commit ${BEFORE_ROM.commit}), ${fmt(BEFORE.mean / firmware.mean, 2)}x over the firmware before them. Target: at most 12,000 cycles, at no loss of accuracy (at most ${TARGET_US} us against the f64 reference; it was ${BEFORE_ROM.worstUs.toExponential(2)} us).
+
+Where the firmware's cycles go (per IK, ${PROFILE_POSES} poses, instruction by instruction; the
+routines by their symbols' address ranges):
 
 | | cycles | calls |
 |---|---:|---:|
 ${profile.map((row) => `| ${row.name} | ${fmt(row.cycles)} | ${row.calls ? fmt(row.calls, 1) : ''} |`).join('\n')}
 
+The same IK on the boot ROM's float routines (the \`rom\` row), for comparison:
+
+| | cycles | calls |
+|---|---:|---:|
+${romProfile.map((row) => `| ${row.name} | ${fmt(row.cycles)} | ${row.calls ? fmt(row.calls, 1) : ''} |`).join('\n')}
+
+(At commit ${BEFORE_ROM.commit}, with float arithmetic in the hot loop too: ${BEFORE_ROM.profile}.)
+
 Accuracy, largest pulse-width difference over the ${ik.poses} poses:
 
 | | max error |
 |---|---:|
-| ROM path on the chip vs independent f64 reference (\`host-tests/src/reference.rs\`, numeric) | ${ik.worst.romVsRef.toExponential(2)} us |
-| \`libm\` path on the chip vs the f64 reference | ${ik.worst.libmVsRef.toExponential(2)} us |
-| ROM path on the chip vs the host's f32 \`libm\` IK (same algorithm) | ${ik.worst.romVsHost.toExponential(2)} us |
+| firmware on the chip vs independent f64 reference (\`host-tests/src/reference.rs\`, numeric) | ${firmware.worstVsRef.toExponential(2)} us |
+| firmware on the chip vs the host's IK (\`libm\` build, same fixed-point path) | ${ik.firmwareVsHost.differing === 0 ? 'identical bits for every pose' : `${ik.firmwareVsHost.differing} poses differ, by up to ${ik.firmwareVsHost.worst.toExponential(2)} us`} |
 
-Target: at most 0.01 us (one PWM count is 0.32 us). The ROM's routines against \`libm\` on the
-chip: sin ${ik.mathDiff.sin.toExponential(1)}, cos (left in r1 by \`fsin\`) ${ik.mathDiff.cos.toExponential(1)}, sqrt ${ik.mathDiff.sqrt.toExponential(1)} (relative), atan2 ${ik.mathDiff.atan2.toExponential(1)} rad.
+Target: at most ${TARGET_US} us (one PWM count is 0.32 us). An \`f32\` pulse near 1500 us has steps
+of 1.2e-4 us, so half a step, 6.1e-5 us, is the least any \`f32\` result can be off.
+
+The routines themselves on the chip, largest error against \`libm\`'s \`f64\` over a grid
+(\`m\` in \`firmware/src/bin/bench.rs\`; sin and cos on [-pi, pi], sqrt relative (the integer
+one's absolute), atan2 all round the circle), and the IK's error with each of \`micromath\`'s
+alone in place of the integer one (the rows above):
+
+| routine | fixed point (firmware; bound tested on the host) | boot ROM \`f32\` | \`micromath\` | IK with \`micromath\`'s alone | enough for ${TARGET_US} us? |
+|---|---:|---:|---:|---:|---|
+${['sin', 'cos', 'sqrt', 'atan2']
+  .map((routine, k) => {
+    const alone = variant(MICROMATH_ALONE[routine]);
+    const fixed =
+      k === 2
+        ? `${ik.mathErrors.fixed[k].toFixed(2)} (bound: 1)`
+        : `${ik.mathErrors.fixed[k].toExponential(1)} (bound: 1.9e-9)`;
+    const sqrtUnit = k === 2 ? ' (relative)' : '';
+    return `| ${routine} | ${fixed} | ${ik.mathErrors.rom[k].toExponential(1)}${sqrtUnit} | ${ik.mathErrors.micromath[k].toExponential(1)}${sqrtUnit} | ${alone.worstVsRef.toExponential(1)} us | ${alone.worstVsRef <= TARGET_US ? 'yes' : 'no'} |`;
+  })
+  .join('\n')}
+
+\`micromath\` (2.1) is not accurate enough for the IK anywhere: each of its routines alone puts
+the pulses microseconds off (its sines are off by about 1e-3, its square root by several per
+cent), hundreds of times the target; nor is it faster here, since its routines compute in \`f32\`
+(library calls on this chip) where the integer ones need none. The firmware does not use it; it
+is an optional dependency of the benchmark only (feature \`micromath\` of the \`firmware\` crate).
+
+## The stream pipeline: clamping and tracking
+
+The firmware's own \`control::Controller<RomMath>\` in the benchmark firmware, fed binary stream
+frames (\`c\` and \`k\` in \`firmware/src/bin/bench.rs\`), on the first ${stream.poses} poses:
+
+| | cycles, mean | min | max | us at 125 MHz (mean) | share of a 333 Hz frame (max) |
+|---|---:|---:|---:|---:|---:|
+| clamp: a frame ${CLAMP_DZ_MM} mm above the pose, out of reach, in pass-through (\`Controller::apply_stream\` and the clamp job it starts, run to its end: 1 + \`CLAMP_STEPS\` = 7 IK solutions, bisection on the straight line, at most \`CHECKS_PER_SLICE\` = 3 per main-loop pass; ${stream.clamp.clamped} of ${stream.poses} clamped) | ${fmt(stream.clamp.mean)} | ${fmt(stream.clamp.min)} | ${fmt(stream.clamp.max)} | ${fmt(us(stream.clamp.mean), 1)} | ${fmt((100 * stream.clamp.max) / FRAME_333_CYCLES, 1)}% |
+| tracker frame: \`Controller::on_frame\` while streaming with the tracker's limits on (\`Tracker::step\` on six axes and one IK; ${stream.track.moved} of ${stream.track.frames} frames) | ${fmt(stream.track.mean)} | ${fmt(stream.track.min)} | ${fmt(stream.track.max)} | ${fmt(us(stream.track.mean), 1)} | ${fmt((100 * stream.track.max) / FRAME_333_CYCLES, 1)}% |
+${stream.trackClamped.frames > 0 ? `| tracker frame whose step left the workspace: the step and its IK, which fails, so the tracker holds a step short of the edge (the goal itself was clamped when it came; ${stream.trackClamped.frames} of ${stream.track.frames} frames) | ${fmt(stream.trackClamped.mean)} | ${fmt(stream.trackClamped.min)} | ${fmt(stream.trackClamped.max)} | ${fmt(us(stream.trackClamped.mean), 1)} | ${fmt((100 * stream.trackClamped.max) / FRAME_333_CYCLES, 1)}% |\n` : ''}
+A clamp's IK solutions that fail stop at the first leg that cannot reach, so a clamp costs less
+than 7 full IKs. The tracker's step computes in \`f32\` through \`RomMath\` (six axes, each a
+square root, divisions and a few multiplications: boot ROM calls), most of a frame's cycles.
 
 ## The rest of the kinematics
 
@@ -418,7 +527,7 @@ No command keeps the main loop: work that is long is done a slice per pass (a pa
 \`control::controller::CHECKS_PER_SLICE\` poses at a time, a listing a line at a time), so frames, the
 watchdog and the links are served between slices, and a command's reply comes when its work
 is done. The bound a pass must stay under is **1 ms** (125,000 cycles): a third of the 3 ms
-frame at the highest frame rate (333 Hz), so a frame's new pulses (one IK, 0.15 ms) are always
+frame at the highest frame rate (333 Hz), so a frame's new pulses (one IK, ${fmt(us(firmware.mean) / 1000, 2)} ms) are always
 written well before the next period starts; the ${WATCHDOG_MS} ms watchdog is 500 times as long.
 
 | | longest pass | frames | missed |
@@ -518,7 +627,8 @@ ${Object.entries(storageSymbols)
 node emulator/src/bench.js --poses 1000 --seed 7   # more poses, another seed
 \`\`\`
 
-Files: \`firmware/src/bin/bench.rs\` (IK and kinematics benchmark firmware),
+Files: \`firmware/src/bin/bench.rs\` (IK, kinematics and stream benchmark firmware; \`./dev bench\`
+builds it with \`--features micromath\`),
 \`host-tests/examples/bench_poses.rs\` (poses, f64 reference pulses, Jacobians and torques), \`emulator/src/ik-bench.js\`, \`emulator/src/firmware-bench.js\`,
 \`emulator/src/bench.js\` (this report). \`emulator/test/rom-math.test.js\` runs a small IK
 comparison in \`./dev test\` (no timing assertions).
@@ -530,4 +640,4 @@ log(
     `Jacobian ${fmt(kin.jacobian.mean)}, torque ${fmt(kin.torque.mean)}, limits ${fmt(kin.limits.mean)}`,
 );
 log(`servo/limits/torque: longest pass ${fmt(kinLongest)} cycles`);
-log(`IK ${fmt(ik.rom.mean)} cycles (libm ${fmt(ik.libm.mean)}), max error ${ik.worst.romVsRef.toExponential(2)} us; latency ${fmt(small.mean)} us (USB ${fmt(smallUsb.mean)} us); sustained ${best ? fmt(best.linesPerSecond) : 'none'} lines/s (USB ${usbBest ? fmt(usbBest.linesPerSecond) : 'none'}); worst command ${fmt(worst.micros / 1000, 1)} ms`);
+log(`IK ${fmt(firmware.mean)} cycles (max ${fmt(firmware.max)}; micromath ${fmt(variant('micromath').mean)}), max error ${firmware.worstVsRef.toExponential(2)} us; clamp ${fmt(stream.clamp.mean)}, tracker frame ${fmt(stream.track.mean)} cycles; latency ${fmt(small.mean)} us (USB ${fmt(smallUsb.mean)} us); sustained ${best ? fmt(best.linesPerSecond) : 'none'} lines/s (USB ${usbBest ? fmt(usbBest.linesPerSecond) : 'none'}); worst command ${fmt(worst.micros / 1000, 1)} ms`);

@@ -122,10 +122,16 @@ export function poseText(pose) {
   return pose.join(' ');
 }
 
-/** Boots the firmware, turns echo off (as a program would) and runs until every pin pulsed. */
-export function bootQuiet(bootrom) {
+/** Boots the firmware as it comes (echo on, the banner read). */
+export function bootedBoard(bootrom) {
   const board = new EmulatedBoard({ bootrom });
   board.boot();
+  return board;
+}
+
+/** Boots the firmware, turns echo off (as a program would) and runs until every pin pulsed. */
+export function bootQuiet(bootrom) {
+  const board = bootedBoard(bootrom);
   assert.equal(board.request('set echo off').reply, 'ok');
   board.runUntil(() => board.servos().every((servo) => servo.live), { timeoutMs: 100 });
   return board;

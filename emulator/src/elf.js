@@ -147,6 +147,19 @@ export function symbolSizes(elfPath, keep) {
   return sizes;
 }
 
+/**
+ * The address ranges of the symbols whose (mangled) names `keep` accepts:
+ * `[{ name, start, end }]` by demangled-looking name, `end` exclusive, Thumb bit cleared.
+ */
+export function symbolRanges(elfPath, keep) {
+  return sizedSymbols(elfPath)
+    .filter(({ name }) => keep(name))
+    .map(({ name, value, size }) => {
+      const address = value & ~1;
+      return { name: readableName(name), start: address, end: address + size };
+    });
+}
+
 /** `_ZN8firmware5flash10BOOT2_COPY17h...E` -> `firmware::flash::BOOT2_COPY`. */
 function readableName(mangled) {
   const parts = [];

@@ -6,6 +6,7 @@ import { dirname, join } from 'node:path';
 import { fileURLToPath } from 'node:url';
 
 import { EmulatedBoard } from './board.js';
+import { symbolRanges } from './elf.js';
 
 const REPO = join(dirname(fileURLToPath(import.meta.url)), '..', '..');
 /** The benchmark ELF `cargo fw` builds next to the firmware; BENCH_ELF=path overrides. */
@@ -46,20 +47,38 @@ const summary = (values) => {
   return { mean: sum / values.length, min: Math.min(...values), max: Math.max(...values) };
 };
 
+/** The variants of the IK the benchmark firmware runs, from its ready line. */
+function readyVariants(board) {
+  const ready = board.waitForLine(/^bench ready/, { timeoutMs: 1000 });
+  const match = / variants=(\S+)/.exec(ready);
+  if (!match) {
+    throw new Error(`no variants in the benchmark firmware's ready line: ${ready}`);
+  }
+  return match[1].split(',');
+}
+
+const f32Bits = (x) => {
+  const view = new DataView(new ArrayBuffer(4));
+  view.setFloat32(0, x);
+  return view.getUint32(0);
+};
+
 /**
- * Runs every pose through the benchmark firmware. Returns per-IK cycle statistics for the ROM
- * path and the `libm` path, and the largest pulse differences (us) of the ROM path against the
- * f64 reference and against the host's f32 IK (and of `libm` on the chip against f64).
+ * Runs every pose through the benchmark firmware: each variant of the IK (`firmware` first:
+ * the firmware's own maths; then the same IK with other libraries' routines, see
+ * `firmware/src/bin/bench.rs`). Returns, per variant, cycle statistics, the largest pulse
+ * difference (us) against the f64 reference and the poses it refused that the host solved;
+ * the firmware's pulses against the host's own IK bit for bit (`firmwareVsHost`: poses that
+ * differ, largest difference); and the routines' errors on the chip (`mathErrors`: for
+ * `rom`, `fixed` and, if built with it, `micromath`: [sin, cos, sqrt (relative), atan2]).
  */
 export function runIkBench(poses, { elf = BENCH_ELF } = {}) {
   const board = new EmulatedBoard({ elf });
   const edges = [];
   board.mcu.gpio[MARKER_GPIO].addListener((state) => edges.push({ state, cycles: board.cycles }));
-  board.waitForLine(/^bench ready/, { timeoutMs: 1000 });
-
-  const romCycles = [];
-  const libmCycles = [];
-  const worst = { romVsRef: 0, romVsHost: 0, libmVsRef: 0 };
+  const names = readyVariants(board);
+  const variants = names.map((name) => ({ name, cycles: [], worstVsRef: 0, refused: [] }));
+  const firmwareVsHost = { differing: 0, worst: 0 };
   const failures = [];
   for (const [index, pose] of poses.entries()) {
     edges.length = 0;
@@ -67,60 +86,84 @@ export function runIkBench(poses, { elf = BENCH_ELF } = {}) {
       final: /^(r |error)/,
       timeoutMs: 1000,
     }).reply;
-    const words = line.split(' ');
+    let words = line.split(' ');
     if (words[0] !== 'r') {
       throw new Error(`pose ${index}: ${line}`);
     }
-    const rom = parsePulses(words.slice(1));
-    const libm = parsePulses(rom.rest.slice(1));
-    if (!rom.pulses || !libm.pulses) {
-      failures.push({ index, pose: pose.pose, line });
-      continue;
-    }
-    // Three brackets: empty (the marker's own cost), ROM IK, libm IK.
+    words = words.slice(1);
     const highs = [];
     for (let i = 0; i + 1 < edges.length; i += 2) {
       highs.push(edges[i + 1].cycles - edges[i].cycles);
     }
-    if (highs.length !== 3) {
-      throw new Error(`pose ${index}: expected 3 marker pulses, saw ${highs.length}`);
+    if (highs.length !== names.length + 1) {
+      throw new Error(`pose ${index}: expected ${names.length + 1} marker pulses, saw ${highs.length}`);
     }
-    romCycles.push(highs[1] - highs[0]);
-    libmCycles.push(highs[2] - highs[0]);
-    for (let i = 0; i < 6; i++) {
-      worst.romVsRef = Math.max(worst.romVsRef, Math.abs(rom.pulses[i] - pose.ref_us[i]));
-      worst.romVsHost = Math.max(worst.romVsHost, Math.abs(rom.pulses[i] - pose.host_us[i]));
-      worst.libmVsRef = Math.max(worst.libmVsRef, Math.abs(libm.pulses[i] - pose.ref_us[i]));
+    for (const [v, variant] of variants.entries()) {
+      const parsed = parsePulses(words);
+      words = parsed.rest;
+      variant.cycles.push(highs[v + 1] - highs[0]);
+      if (!parsed.pulses) {
+        variant.refused.push(index);
+        continue;
+      }
+      for (let i = 0; i < 6; i++) {
+        variant.worstVsRef = Math.max(variant.worstVsRef, Math.abs(parsed.pulses[i] - pose.ref_us[i]));
+      }
+      if (v === 0) {
+        const bits = parsed.pulses.map(f32Bits);
+        if (bits.some((b, i) => b !== parseInt(pose.host_us_bits[i], 16))) {
+          firmwareVsHost.differing++;
+        }
+        for (let i = 0; i < 6; i++) {
+          firmwareVsHost.worst = Math.max(firmwareVsHost.worst, Math.abs(parsed.pulses[i] - pose.host_us[i]));
+        }
+      }
+    }
+    if (variants[0].refused.at(-1) === index) {
+      failures.push({ index, pose: pose.pose, line });
     }
   }
-  const math = board.request('m', { final: /^m /, timeoutMs: 20000 }).reply;
-  const mathDiff = Object.fromEntries(
+  const math = board.request('m', { final: /^m /, timeoutMs: 60000 }).reply;
+  const mathErrors = Object.fromEntries(
     math
       .split(' ')
       .slice(1)
       .map((kv) => kv.split('='))
-      .map(([k, v]) => [k, Number(v)]),
+      .map(([k, v]) => [k, v.split(',').map(Number)]),
   );
   return {
     poses: poses.length,
     failures,
-    rom: summary(romCycles),
-    libm: summary(libmCycles),
-    worst,
-    mathDiff,
+    variants: variants.map(({ name, cycles, worstVsRef, refused }) => ({
+      name,
+      ...summary(cycles),
+      worstVsRef,
+      refused: refused.length,
+    })),
+    firmwareVsHost,
+    mathErrors,
   };
 }
 
 const ROM_END = 0x4000;
 
+/** The core's fixed-point routines the IK calls, by the path in their symbol's name. */
+const FIXED_ROUTINES = [
+  ['fixed::sin_cos::sin_cos', 'sin/cos (`fixed::sin_cos`)'],
+  ['fixed::sqrt::sqrt', 'sqrt (`fixed::sqrt`)'],
+  ['fixed::atan2::atan2', 'atan2 (`fixed::atan2`)'],
+];
+
 /**
- * Where the ROM-path IK's cycles go, per IK over `poses`: each boot ROM routine it calls
- * (cycles and calls, attributed by the routine entered from flash) and the firmware's own code.
+ * Where one variant's IK cycles go, per IK over `poses` (`variant`: its index in the ready
+ * line's list, 0 = the firmware's): each boot ROM routine it calls (attributed by the routine
+ * entered from flash), each of the core's fixed-point routines (by their symbols' address
+ * ranges; a routine the compiler inlined would show no row), and the firmware's own code.
  * Steps the emulator instruction by instruction while the marker is high: slow, use few poses.
  */
-export function profileIk(poses, { elf = BENCH_ELF } = {}) {
+export function profileIk(poses, { elf = BENCH_ELF, variant = 0 } = {}) {
   const board = new EmulatedBoard({ elf });
-  board.waitForLine(/^bench ready/, { timeoutMs: 1000 });
+  const variants = readyVariants(board);
   const names = new Map(
     board
       .request('t', { final: /^t /, timeoutMs: 1000 })
@@ -129,35 +172,49 @@ export function profileIk(poses, { elf = BENCH_ELF } = {}) {
       .map((kv) => kv.split('='))
       .map(([name, address]) => [parseInt(address, 16), name]),
   );
+  const ranges = symbolRanges(elf, () => true).flatMap(({ name, start, end }) => {
+    const routine = FIXED_ROUTINES.find(([path]) => name.endsWith(path));
+    return routine ? [{ name: routine[1], start, end }] : [];
+  });
+  const inRoutine = (pc) => ranges.find((r) => pc >= r.start && pc < r.end);
   let high = false;
   let brackets = 0;
   board.mcu.gpio[MARKER_GPIO].addListener((state) => {
     high = state === 1;
     brackets += high ? 1 : 0;
   });
+  const perPose = variants.length + 1;
   const core = board.mcu.core;
   const execute = core.executeInstruction.bind(core);
   const rows = new Map();
+  const count = (name, cycles, call) => {
+    const row = rows.get(name) ?? { cycles: 0, calls: 0 };
+    row.cycles += cycles;
+    row.calls += call ? 1 : 0;
+    rows.set(name, row);
+  };
   let entered = 'firmware code';
   let previousPc = ROM_END;
+  let previousRoutine;
   core.executeInstruction = () => {
     const pc = core.PC;
     const before = core.cycles;
     const result = execute();
-    if (high && brackets % 3 === 2) {
-      let name = 'firmware code (IK, calls, loads)';
+    if (high && brackets % perPose === (variant + 2) % perPose) {
+      const cycles = core.cycles - before;
+      const routine = pc >= ROM_END ? inRoutine(pc) : undefined;
       if (pc < ROM_END) {
-        if (previousPc >= ROM_END) {
-          entered = names.get(pc) ?? 'other ROM routines (first call: table look-up)';
-          const row = rows.get(entered) ?? { cycles: 0, calls: 0 };
-          row.calls++;
-          rows.set(entered, row);
+        const call = previousPc >= ROM_END;
+        if (call) {
+          entered = names.get(pc) ?? 'other ROM routines (int/float conversions; a first call\'s table look-up)';
         }
-        name = entered;
+        count(entered, cycles, call);
+      } else if (routine) {
+        count(routine.name, cycles, routine !== previousRoutine);
+      } else {
+        count('firmware code (IK, calls, loads)', cycles, false);
       }
-      const row = rows.get(name) ?? { cycles: 0, calls: 0 };
-      row.cycles += core.cycles - before;
-      rows.set(name, row);
+      previousRoutine = routine;
     }
     previousPc = pc;
     return result;
@@ -168,6 +225,60 @@ export function profileIk(poses, { elf = BENCH_ELF } = {}) {
   return [...rows]
     .map(([name, { cycles, calls }]) => ({ name, cycles: cycles / poses.length, calls: calls / poses.length }))
     .sort((a, b) => b.cycles - a.cycles);
+}
+
+/**
+ * The stream pipeline of the firmware's controller on the chip (`c`, `k` in
+ * `firmware/src/bin/bench.rs`): per pose, a clamp in pass-through of a target `dzMm` above the
+ * pose (`Controller::apply_stream`: 1 + `CLAMP_STEPS` IK solutions), and `frames` tracker
+ * frames towards the pose (`Controller::on_frame`: the tracker's step and one IK). Returns
+ * cycle statistics of the clamps and how many clamped, of the tracker frames that moved
+ * (`track`) and of those whose step left the workspace and was clamped (`trackClamped`).
+ */
+export function runStreamBench(poses, { elf = BENCH_ELF, dzMm = 60, frames = 3 } = {}) {
+  const board = new EmulatedBoard({ elf });
+  const edges = [];
+  board.mcu.gpio[MARKER_GPIO].addListener((state) => edges.push({ state, cycles: board.cycles }));
+  readyVariants(board);
+  const clamp = { cycles: [], clamped: 0 };
+  const track = { cycles: [], clamped: [], still: 0 };
+  const f32Hex = (x) => f32Bits(x).toString(16).padStart(8, '0');
+  for (const pose of poses) {
+    edges.length = 0;
+    const c = board.request(`c ${[...pose.pose_bits, f32Hex(dzMm)].join(' ')}`, {
+      final: /^(c |error)/,
+      timeoutMs: 2000,
+    }).reply;
+    if (!c.startsWith('c ')) {
+      throw new Error(`clamp: ${c}`);
+    }
+    clamp.cycles.push(...measuredBrackets(edges, 1, 'clamp'));
+    clamp.clamped += Number(c.split('n=')[1]);
+    edges.length = 0;
+    const k = board.request(`k ${[...pose.pose_bits, f32Hex(frames)].join(' ')}`, {
+      final: /^(k |error)/,
+      timeoutMs: 2000,
+    }).reply;
+    if (!k.startsWith('k ')) {
+      throw new Error(`tracker: ${k}`);
+    }
+    const flags = k.split(' ')[1];
+    measuredBrackets(edges, frames, 'tracker').forEach((cycles, i) => {
+      if (flags[i] === 'c') {
+        track.clamped.push(cycles);
+      } else if (flags[i] === 'm') {
+        track.cycles.push(cycles);
+      } else {
+        track.still++;
+      }
+    });
+  }
+  return {
+    poses: poses.length,
+    clamp: { ...summary(clamp.cycles), clamped: clamp.clamped },
+    track: { ...summary(track.cycles), frames: poses.length * frames, moved: track.cycles.length },
+    trackClamped: { ...summary(track.clamped), frames: track.clamped.length },
+  };
 }
 
 /** Cycles of each marker bracket after the first, minus the first (the empty one). */

@@ -12,8 +12,8 @@
 import assert from 'node:assert/strict';
 import { before, test } from 'node:test';
 
-import { EmulatedBoard, FINAL_REPLY } from '../src/board.js';
-import { firmwareBootrom, FRAME_MS, steadyPulses } from '../src/e2e-support.js';
+import { FINAL_REPLY } from '../src/board.js';
+import { bootedBoard, firmwareBootrom, FRAME_MS, steadyPulses } from '../src/e2e-support.js';
 
 const MAX_LINE = 128; // documented line buffer
 const BYTE_MS = (10 / 115_200) * 1000; // 8N1 at the default baud rate
@@ -23,9 +23,8 @@ before(() => {
   bootrom = firmwareBootrom();
 });
 
-function bootedBoard() {
-  const board = new EmulatedBoard({ bootrom });
-  board.boot();
+function bootedAndPulsing() {
+  const board = bootedBoard(bootrom);
   board.runMs(3 * FRAME_MS);
   return board;
 }
@@ -60,7 +59,7 @@ let referenceBoard = null;
 const referenceCache = new Map();
 function referencePulses(command) {
   if (!referenceCache.has(command)) {
-    referenceBoard ??= bootedBoard();
+    referenceBoard ??= bootedAndPulsing();
     assert.equal(referenceBoard.request(command).reply, 'ok', command);
     referenceCache.set(command, settle(referenceBoard));
   }
@@ -176,7 +175,7 @@ function accountForEveryLine(board, from, sent, expectedReply) {
 }
 
 test('lines ten times the buffer get one line-too-long each and nothing moves', () => {
-  const board = bootedBoard();
+  const board = bootedAndPulsing();
   const held = steadyPulses(board);
   const from = board.lines.length;
   for (const line of [
@@ -194,7 +193,7 @@ test('lines ten times the buffer get one line-too-long each and nothing moves', 
 });
 
 test('binary garbage (seeded) is refused and never moves a servo', () => {
-  const board = bootedBoard();
+  const board = bootedAndPulsing();
   const held = steadyPulses(board);
 
   // Without line ends: one line, refused once when it ends.
@@ -225,7 +224,7 @@ test('binary garbage (seeded) is refused and never moves a servo', () => {
 });
 
 test('a burst at the line rate is answered in order, one final reply per line', () => {
-  const board = bootedBoard();
+  const board = bootedAndPulsing();
   const held = steadyPulses(board);
   // Valid and invalid commands back to back with no pause; expected replies from the docs.
   const kinds = [
@@ -266,7 +265,7 @@ test('a burst at the line rate is answered in order, one final reply per line', 
 });
 
 test('faster than the firmware can act: lost bytes are reported, never lost silently', () => {
-  const board = bootedBoard();
+  const board = bootedAndPulsing();
   // Long moves make the firmware check ~120 poses on each path while the rest of the burst
   // keeps arriving at the line rate, and the error replies to the junk lines are far longer
   // than the lines: the firmware takes input only as fast as its replies leave, and its
@@ -315,7 +314,7 @@ test('faster than the firmware can act: lost bytes are reported, never lost sile
 });
 
 test('bytes the hardware FIFO could not take (interrupts held off) are reported', () => {
-  const board = bootedBoard();
+  const board = bootedAndPulsing();
   const sent = [];
   for (let i = 1; i <= 12; i++) {
     sent.push(`pose 0 0 ${i} 0 0 0`);
@@ -351,7 +350,7 @@ test('bytes the hardware FIFO could not take (interrupts held off) are reported'
 });
 
 test('after a UART overrun, a lone line end closes the cut line and a resync works as documented', () => {
-  const board = bootedBoard();
+  const board = bootedAndPulsing();
   assert.equal(board.request('set echo off').reply, 'ok');
   const from = board.lines.length;
   // Half a line, then, with every interrupt held off (a long critical section), more than the
@@ -383,7 +382,7 @@ test('after a UART overrun, a lone line end closes the cut line and a resync wor
 });
 
 test('a line split across long pauses is one line', () => {
-  const board = bootedBoard();
+  const board = bootedAndPulsing();
   const held = steadyPulses(board);
   const from = board.lines.length;
   board.sendBytes('pose 0 0 ');
@@ -402,7 +401,7 @@ test('a line split across long pauses is one line', () => {
 });
 
 test('CR, LF, CRLF and LF CR each end exactly one line', () => {
-  const board = bootedBoard();
+  const board = bootedAndPulsing();
   const held = steadyPulses(board);
   const from = board.lines.length;
   const cases = [
@@ -430,7 +429,7 @@ test('CR, LF, CRLF and LF CR each end exactly one line', () => {
 });
 
 test('NUL bytes are ignored like other control bytes and move nothing on their own', () => {
-  const board = bootedBoard();
+  const board = bootedAndPulsing();
   const held = steadyPulses(board);
   const from = board.lines.length;
   board.sendBytes('\0\0\0\n\0\r\n');
@@ -444,7 +443,7 @@ test('NUL bytes are ignored like other control bytes and move nothing on their o
 });
 
 test('UTF-8 and other non-ASCII bytes refuse the line', () => {
-  const board = bootedBoard();
+  const board = bootedAndPulsing();
   const held = steadyPulses(board);
   for (const line of [
     'pose 0 0 5 0 0 0°',
@@ -466,7 +465,7 @@ test('UTF-8 and other non-ASCII bytes refuse the line', () => {
 });
 
 test('numbers that are not decimals are refused with the right code', () => {
-  const board = bootedBoard();
+  const board = bootedAndPulsing();
   const held = steadyPulses(board);
   for (const [line, code] of [
     ['pose 1e39 0 0 0 0 0', 'number-too-large'],

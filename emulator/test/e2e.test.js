@@ -5,7 +5,7 @@ import assert from 'node:assert/strict';
 import { before, test } from 'node:test';
 
 import { EmulatedBoard, FINAL_REPLY } from '../src/board.js';
-import { firmwareBootrom } from '../src/e2e-support.js';
+import { bootedBoard, firmwareBootrom } from '../src/e2e-support.js';
 
 // The wiring and timing the firmware promises (docs: CONTEXT "Wiring"), restated here from
 // the spec rather than taken from the firmware: 125 MHz / divider 40 -> 320 ns per count.
@@ -18,12 +18,6 @@ let bootrom;
 before(() => {
   bootrom = firmwareBootrom();
 });
-
-function bootedBoard() {
-  const board = new EmulatedBoard({ bootrom });
-  board.boot();
-  return board;
-}
 
 /** Final replies (`ok` / `error:...`) received after the banner. */
 function finalReplies(board) {
@@ -39,7 +33,7 @@ test('boot prints the banner as its first line', () => {
 });
 
 test('at boot all six servos get 1500 us pulses at 50 Hz, exact to the count', () => {
-  const board = bootedBoard();
+  const board = bootedBoard(bootrom);
   board.runMs(3.5 * (1000 / DEFAULT_FRAME_HZ)); // at least two whole frames on every pin
 
   const periodNanos = (COUNTS_PER_SECOND / DEFAULT_FRAME_HZ) * NANOS_PER_COUNT;
@@ -62,7 +56,7 @@ test('at boot all six servos get 1500 us pulses at 50 Hz, exact to the count', (
 });
 
 test('a line gets exactly one final reply', () => {
-  const board = bootedBoard();
+  const board = bootedBoard(bootrom);
   const { reply, lines } = board.request('frobnicate 1 2 3');
   assert.match(reply, /^error:unknown-command\b.*\bfrobnicate\b/);
   assert.equal(lines.at(-1), reply);
@@ -72,7 +66,7 @@ test('a line gets exactly one final reply', () => {
 });
 
 test('LF and CRLF each end one line; back-to-back lines are answered in order', () => {
-  const board = bootedBoard();
+  const board = bootedBoard(bootrom);
   board.sendBytes('one\r\ntwo\nthree\r\n');
   board.waitForLine(/three/);
   board.runMs(20);
@@ -85,7 +79,7 @@ test('LF and CRLF each end one line; back-to-back lines are answered in order', 
 });
 
 test('input is paced at the baud rate: a line of n bytes takes n byte times', () => {
-  const board = bootedBoard();
+  const board = bootedBoard(bootrom);
   // Echo off: the reply is then only sent after the whole line is in, and the reply's own
   // bytes take their byte times on the way back (the same rate both ways).
   assert.equal(board.request('set echo off').reply, 'ok');
@@ -102,7 +96,7 @@ test('input is paced at the baud rate: a line of n bytes takes n byte times', ()
 
 test('runs are deterministic', () => {
   const script = () => {
-    const board = bootedBoard();
+    const board = bootedBoard(bootrom);
     const replies = ['help', 'pose 1 2 3', 'xyzzy'].map((line) => board.request(line).reply);
     board.runMs(45);
     return { replies, nanos: board.nanos, cycles: board.cycles, output: board.output, servos: board.servos() };
@@ -111,7 +105,7 @@ test('runs are deterministic', () => {
 });
 
 test('the watchdog runs: a main loop that stops feeding it fails the run', () => {
-  const board = bootedBoard();
+  const board = bootedBoard(bootrom);
   board.runMs(1000); // an idle second: fed every frame, no expiry
   // Mask every interrupt in the emulated NVIC: the main loop sleeps in WFI for good.
   board.mcu.core.enabledInterrupts = 0;

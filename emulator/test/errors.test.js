@@ -252,9 +252,11 @@ test('rx-overflow: bytes lost while the firmware was busy refuse the line they f
   ok(board, 'set speed_mm_s 1');
   const pulses = capture(board, () => {
     // A check of a slow 20 mm move: its path checked at all 1,000 frames, a few poses per
-    // pass, keeps the firmware from taking input for about 150 ms while `stop` lines arrive
-    // at 921,600 baud: far more than the 4,096-byte receive queue holds.
-    board.sendBytes(`check 20 0 0 0 0 0\n${'stop\n'.repeat(3000)}`);
+    // pass, keeps the firmware from taking lines for about 90 ms (1,000 IKs and their
+    // slices) while 6,000 bytes of `stop` lines arrive at 921,600 baud in 65 ms: more than the
+    // 4,096-byte receive queue holds, and all of them before the check's reply, so the loss
+    // runs to the burst's end and the line it fell into stays open.
+    board.sendBytes(`check 20 0 0 0 0 0\n${'stop\n'.repeat(1200)}`);
     board.runMs(600);
   }, 10);
   const lines = board.lines.slice(first);

@@ -7,7 +7,7 @@ import assert from 'node:assert/strict';
 import { before, test } from 'node:test';
 
 import { EmulatedBoard } from '../src/board.js';
-import { firmwareBootrom, FRAME_MS, steadyPulses } from '../src/e2e-support.js';
+import { bootedBoard, firmwareBootrom, FRAME_MS, steadyPulses } from '../src/e2e-support.js';
 
 const COUNT_US = 0.32; // one PWM count
 
@@ -17,9 +17,8 @@ before(() => {
 });
 
 
-function bootedBoard() {
-  const board = new EmulatedBoard({ bootrom });
-  board.boot();
+function bootedAndPulsing() {
+  const board = bootedBoard(bootrom);
   board.runMs(3 * FRAME_MS);
   return { board, home: steadyPulses(board) };
 }
@@ -38,7 +37,7 @@ function record(board, ms) {
 const same = (a, b) => a.every((w, i) => w === b[i]);
 
 test('link loss is off by default: a silent host leaves the platform where it is', () => {
-  const { board, home } = bootedBoard();
+  const { board, home } = bootedAndPulsing();
   assert.equal(board.request('pose 0 0 10 0 0 0').reply, 'ok');
   board.runMs(1000);
   const held = steadyPulses(board);
@@ -49,7 +48,7 @@ test('link loss is off by default: a silent host leaves the platform where it is
 });
 
 test('after link_timeout_s of silence the platform eases home at the configured speed', (t) => {
-  const { board, home } = bootedBoard();
+  const { board, home } = bootedAndPulsing();
   const TIMEOUT_S = 1;
   const SPEED_MM_S = 20;
   const DISTANCE_MM = 10;
@@ -115,7 +114,7 @@ test('after link_timeout_s of silence the platform eases home at the configured 
 });
 
 test('every completed line, even a refused one, restarts the link timer', () => {
-  const { board, home } = bootedBoard();
+  const { board, home } = bootedAndPulsing();
   assert.equal(board.request('set link_timeout_s 1').reply, 'ok');
   assert.equal(board.request('pose 0 0 10 0 0 0').reply, 'ok'); // 0.2 s at 50 mm/s
   board.runMs(600);
@@ -134,7 +133,7 @@ test('every completed line, even a refused one, restarts the link timer', () => 
 });
 
 test('link loss never comes before link_timeout_s, wherever in a frame the last line ended', () => {
-  const { board } = bootedBoard();
+  const { board } = bootedAndPulsing();
   assert.equal(board.request('set echo off').reply, 'ok');
   assert.equal(board.request('set link_timeout_s 0.1').reply, 'ok');
   // When each line's last byte reached the chip.

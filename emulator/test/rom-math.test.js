@@ -1,7 +1,9 @@
-// The firmware's ROM-backed maths on the emulated chip agree with the host: the IK benchmark
-// firmware (`firmware/src/bin/bench.rs`, the firmware's own IK code) solves a few random poses
-// and its pulses are compared with the host's f32 `libm` IK (the same algorithm) and with the
-// independent f64 reference (`host-tests`). Accuracy only; timing is `./dev bench`'s job.
+// The firmware's maths on the emulated chip agree with the host: the IK benchmark firmware
+// (`firmware/src/bin/bench.rs`, the firmware's own IK code) solves a few random poses and its
+// pulses are compared with the host's IK (the same fixed-point path: the same bits) and with
+// the independent f64 reference (`host-tests`); so are the same IK on the boot ROM's and
+// `libm`'s float routines, and the routines themselves. Accuracy only; timing is
+// `./dev bench`'s job.
 
 import assert from 'node:assert/strict';
 import { existsSync } from 'node:fs';
@@ -26,19 +28,29 @@ test('the chip solves every pose the host solves', () => {
   assert.deepEqual(result.failures, []);
 });
 
-test('ROM-backed IK on the chip agrees with the host libm IK and the f64 reference', () => {
-  assert.ok(result.worst.romVsHost <= PULSE_TOL_US, `vs host: ${result.worst.romVsHost} us`);
-  assert.ok(result.worst.romVsRef <= PULSE_TOL_US, `vs f64: ${result.worst.romVsRef} us`);
-  assert.ok(result.worst.libmVsRef <= PULSE_TOL_US, `libm on chip vs f64: ${result.worst.libmVsRef} us`);
+test('the firmware IK on the chip computes the host IK bit for bit, within 0.01 us of f64', () => {
+  assert.equal(result.variants[0].name, 'firmware');
+  assert.deepEqual(result.firmwareVsHost, { differing: 0, worst: result.firmwareVsHost.worst });
+  for (const name of ['firmware', 'rom', 'libm']) {
+    const variant = result.variants.find((v) => v.name === name);
+    assert.equal(variant.refused, 0, name);
+    assert.ok(variant.worstVsRef <= PULSE_TOL_US, `${name} vs f64: ${variant.worstVsRef} us`);
+  }
 });
 
-test('fsin leaves the cosine in r1, and the ROM routines match libm', () => {
-  // Over a grid: sin and cos on [-2 pi, 2 pi] (cos is the r1 result of the sin call), sqrt
-  // relative, atan2 all round the circle. The ROM is documented accurate to ~1e-7.
-  const { sin, cos, sqrt, atan2 } = result.mathDiff;
+test('fsin leaves the cosine in r1; the ROM and the fixed-point routines match libm', () => {
+  // Over a grid: sin and cos on [-pi, pi] (cos is the r1 result of the sin call), sqrt, atan2
+  // all round the circle. The ROM is documented accurate to ~1e-7; the fixed-point routines'
+  // bounds (kinematics-core/src/fixed/) are 2^-29 for sin, cos and atan2 (rad) and 1 for the
+  // integer square root.
+  const [sin, cos, sqrt, atan2] = result.mathErrors.rom;
   for (const [name, value] of Object.entries({ sin, cos, sqrt, atan2 })) {
-    assert.ok(Number.isFinite(value) && value <= 1e-6, `${name}: ${value}`);
+    assert.ok(Number.isFinite(value) && value <= 1e-6, `ROM ${name}: ${value}`);
   }
+  const bounds = [2 ** -29, 2 ** -29, 1, 2 ** -29].map((b) => b * 1.01);
+  result.mathErrors.fixed.forEach((value, k) => {
+    assert.ok(Number.isFinite(value) && value <= bounds[k], `fixed-point routine ${k}: ${value}`);
+  });
 });
 
 test('the rest of the kinematics on the chip agrees with the f64 reference', () => {

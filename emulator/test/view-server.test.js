@@ -9,7 +9,7 @@ import { before, test } from 'node:test';
 
 import { ListingReader, listingsChangedBy } from '../src/board-listings.js';
 import { EmulatedBoard } from '../src/board.js';
-import { firmwareBootrom } from '../src/e2e-support.js';
+import { bootedBoard, firmwareBootrom } from '../src/e2e-support.js';
 import { SharedInput } from '../src/shared-input.js';
 import { startViewServer } from '../src/view-server.js';
 
@@ -18,19 +18,13 @@ before(() => {
   bootrom = firmwareBootrom();
 });
 
-function bootedBoard() {
-  const board = new EmulatedBoard({ bootrom });
-  board.boot();
-  return board;
-}
-
 /** Feeds every line of `lines` to a reader; returns the listings it finished. */
 function read(lines, reader = new ListingReader()) {
   return lines.map((line) => reader.line(line)).filter(Boolean);
 }
 
 test('the board\'s geometry and config listings are read as the README documents them', () => {
-  const board = bootedBoard();
+  const board = bootedBoard(bootrom);
   const { lines } = board.request('geometry', { timeoutMs: 2000 });
   const [geometry] = read(lines);
   assert.equal(geometry.kind, 'geometry');
@@ -77,7 +71,7 @@ test('the board\'s geometry and config listings are read as the README documents
 });
 
 test('a listing cut short or refused counts for nothing', () => {
-  const board = bootedBoard();
+  const board = bootedBoard(bootrom);
   const { lines } = board.request('geometry', { timeoutMs: 2000 });
   assert.deepEqual(read(lines.filter((line) => !/^# leg 3/.test(line))), [], 'a leg missing');
   assert.deepEqual(read([...lines.slice(0, -1), 'error:busy']), [], 'ended by an error');

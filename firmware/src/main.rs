@@ -7,7 +7,8 @@
 //! ([`usb_serial`]), each with its own [`control::Session`], the six servo outputs
 //! ([`servo_pwm`]), the e-stop input and servo-power output ([`safety_pins`]), the settings
 //! saved in flash ([`flash`]) and the hardware-independent [`control::Controller`], which runs
-//! on the boot ROM's float routines ([`firmware::rom_math`]).
+//! on the boot ROM's float routines ([`firmware::rom_math`]) where it computes in `f32` (its IK
+//! runs in fixed point, `kinematics_core::fixed`).
 
 #![no_std]
 #![no_main]

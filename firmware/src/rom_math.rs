@@ -4,10 +4,17 @@
 //! call; the ROM routines are accurate to about 1e-7 and several times faster. rp2040-hal's
 //! wrappers (and the `__aeabi_f*` intrinsics the compiler calls for `+ - *`) add a table look-up
 //! and finiteness checks around every ROM call, about 40 cycles on top of a 55-70 cycle `fadd`
-//! or `fmul`. The IK's hot loop calls the ROM through [`Math`] instead, as the Pico SDK does:
+//! or `fmul`. The kinematics call the ROM through [`Math`] instead, as the Pico SDK does:
 //! the soft-float table's address is looked up once and kept in RAM ([`table`]), and the
-//! addresses of `fadd` and `fmul` (about 215 calls per IK) are kept in RAM themselves
-//! ([`ADD`], [`MUL`]), so each call is two loads and a `blx`. Subtraction is `fadd` with the
+//! addresses of `fadd` and `fmul` (the most called) are kept in RAM themselves ([`ADD`],
+//! [`MUL`]), so each call is two loads and a `blx`.
+//!
+//! The IK's hot loop calls none of them: it runs in fixed point, with the core's integer sine,
+//! square root and arc tangent (`kinematics_core::fixed`, [`Math`]'s default fixed-point
+//! functions, which this implementation keeps: faster than these routines and more accurate
+//! than `f32`; `./dev bench` measures both). These routines serve the rest: the IK's float
+//! path (builds beyond the fixed-point bounds), Jacobians, forward kinematics, statics, the
+//! stream tracker. Subtraction is `fadd` with the
 //! second operand's sign flipped (IEEE defines `a - b` as `a + (-b)`; both are correctly
 //! rounded): the ROM's `fsub` costs about 9 cycles more per call.
 //!

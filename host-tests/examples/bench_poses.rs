@@ -5,7 +5,8 @@
 //! for `COUNT` random poses, all reachable by the default build within the default servo
 //! limits: the pose as f32 bit patterns (mm, rad, what the chip is sent), the independent f64
 //! reference's pulses (`ref_us`, see `host_tests::reference`) and the host's own f32 IK with
-//! `libm` (`host_us`, what the ROM-backed path on the chip must agree with).
+//! `libm` (`host_us`, and as f32 bit patterns `host_us_bits`: the firmware's fixed-point path
+//! computes the very same bits on the chip).
 //!
 //! For the rest of the kinematics, also: the reference pulses as f32 bit patterns
 //! (`ref_us_bits`, what the forward kinematics starts from), a reachable pose a frame's step
@@ -100,11 +101,13 @@ fn main() {
         let ref_bits: Vec<f32> = expected.pulse_us.iter().map(|v| *v as f32).collect();
         println!(
             "{{\"pose_bits\":[{}],\"pose\":[{}],\"ref_us\":[{}],\"host_us\":[{}],\
+             \"host_us_bits\":[{}],\
              \"ref_us_bits\":[{}],\"start_bits\":[{}],\"ref_j\":[{}],\"ref_torque\":[{}]}}",
             bits(&pose.to_array()),
             values.join(","),
             refs.join(","),
             hosts.join(","),
+            bits(&host.pulse_us),
             bits(&ref_bits),
             bits(&start.to_array()),
             numbers(j.as_flattened()),

@@ -28,19 +28,27 @@
 //! pose gives exactly the home pulses) and holds what it needs on every pose: per-leg
 //! constants (mm, rad), in `f32` and, where the build allows, in fixed point (module `fixed`).
 //! Build it once per geometry.
+//!
+//! Two paths compute the same equations. Every usual build (a planar platform within the
+//! bounds of module `fixed`) and pose takes the fixed-point path: integer instructions only,
+//! from the rotation to the pulses, with `M`'s fixed-point sine and cosine, square root and arc
+//! tangent (by default the core's own: then the host and the chip compute the same bits). Other
+//! builds and poses take the float path, `f32` arithmetic through `M`. Each has its own home
+//! angles, so each gives exactly the home pulses at home.
 
 use core::f32::consts::PI;
 use core::fmt;
 
 use crate::configuration::{check_centre, Anchors, ConfigurationError};
 use crate::fixed::{
-    from_fixed_sq, mul_mm, rotate_mm, to_fixed, to_fixed_sq, MAX_FIXED_MM, MAX_FIXED_ROD_TERM_MM2,
-    MAX_FIXED_TWO_ARM_MM, MAX_ROTATION_ENTRY, MM_FRAC, ROT_FRAC,
+    from_fixed, from_fixed32, leading_zeros, mul_mm, rotate_mm, square, square_mm, to_fixed,
+    to_fixed_sq, wide_mul, ARM_FRAC, MAX_FIXED_MM, MAX_FIXED_ROD_TERM_MM2, MAX_FIXED_TWO_ARM_MM,
+    MAX_ROTATION_ENTRY, MM_FRAC, ROT_FRAC,
 };
 use crate::geometry::{Geometry, GeometryError};
 use crate::math::{Libm, Math, Real};
 use crate::pose::{Axis, Pose};
-use crate::servo::ServoSet;
+use crate::servo::{ServoConfig, ServoSet};
 use crate::{Vec3, LEGS};
 
 /// Largest rotation accepted about any axis, rad (180 degrees). Larger angles describe the same
@@ -194,8 +202,16 @@ struct LegConstants {
     /// `2a cos(beta)`, `2a sin(beta)`: `N = n_x l_x + n_y l_y` (eq. 9), mm.
     n_x_mm: f32,
     n_y_mm: f32,
-    /// Home arm angle alpha0 (eq. 12), rad.
+    /// Home arm angle alpha0 (eq. 12), rad: the fixed-point path's (below) where the geometry
+    /// takes it, else the float path's.
     alpha0_rad: f32,
+    /// alpha0 as the float path finds it, rad (for the poses that take that path: home stays
+    /// exact there too).
+    alpha0_float_rad: f32,
+    /// alpha0 as the fixed-point path finds it, in steps of 2^-28 rad (`fixed::ARM_FRAC`), and
+    /// wrapped into `(-pi, pi]`.
+    alpha0_q: i32,
+    alpha0_wrapped_q: i32,
     /// `p_i` (x, y) and `offset` in fixed point, 2^-20 mm (`fixed::MM_FRAC`).
     platform_q: [i32; 2],
     offset_q: [i32; 3],
@@ -233,6 +249,9 @@ pub struct Solver {
     /// `c != 0`: the IK adds `c - R c` to the pose's translation (one rotation of `c` per
     /// pose); with `c = 0` it does nothing more than before.
     centred: bool,
+    /// `c` in fixed point, 2^-20 mm, when every coordinate is within `fixed::MAX_FIXED_MM`
+    /// (else the fixed-point path is not taken with this centre).
+    centre_q: Option<[i32; 3]>,
     /// The IK needs `R`'s third column: the platform is not planar or `c` has a `z`.
     full_rotation: bool,
     /// `(cos(beta_i), sin(beta_i))` with the `M` of [`Solver::new_with`]: the direction of arm
@@ -241,10 +260,125 @@ pub struct Solver {
 }
 
 /// The pose's part of eq. 2, 3 in fixed point: the first two columns of `R` (`fixed::ROT_FRAC`
-/// fraction bits) and `(x, y, z)` (`fixed::MM_FRAC`).
+/// fraction bits) and the translation `(x, y, z)` (with the centre's `c - R c`; `fixed::MM_FRAC`).
 struct FixedPose {
     rows: [[i32; 2]; 3],
     position: [i32; 3],
+}
+
+/// Eq. 9's arm angles of all six legs, from either path.
+#[cfg(test)]
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Angles {
+    /// The fixed-point path's: rad, in steps of 2^-28 (`fixed::ARM_FRAC`).
+    Fixed([i32; LEGS]),
+    /// The float path's, rad.
+    Float([f32; LEGS]),
+}
+
+#[cfg(test)]
+impl Angles {
+    /// The angles in rad.
+    pub(crate) fn rad(&self) -> [f32; LEGS] {
+        match *self {
+            Angles::Fixed(a) => a.map(|a| from_fixed(i64::from(a), ARM_FRAC)),
+            Angles::Float(a) => a,
+        }
+    }
+}
+
+/// `pi` and `2 pi` in steps of 2^-28 rad (`fixed::ARM_FRAC`), rounded.
+const PI_ARM: i32 = 843_314_857;
+const TWO_PI_ARM: i32 = 1_686_629_713;
+
+/// An angle in steps of 2^-28 rad within `(-2 pi, 2 pi]` wrapped into `(-pi, pi]` (one turn
+/// added or taken away at most).
+#[inline(always)]
+fn wrap_fixed(a: i32) -> i32 {
+    if a > PI_ARM {
+        a - TWO_PI_ARM
+    } else if a <= -PI_ARM {
+        a + TWO_PI_ARM
+    } else {
+        a
+    }
+}
+
+/// The arm angle `alpha0 + offset` (steps of 2^-28 rad) in rad, rounded once to `f32` (in 32
+/// bits unless the sum leaves them: only for a home angle beyond `pi`).
+#[inline(always)]
+fn arm_rad_fixed(alpha0: i32, offset: i32) -> f32 {
+    match alpha0.checked_add(offset) {
+        Some(alpha) => from_fixed32(alpha, ARM_FRAC),
+        None => from_fixed(i64::from(alpha0) + i64::from(offset), ARM_FRAC),
+    }
+}
+
+/// `alpha - alpha0` wrapped into `(-pi, pi]` for an arm angle `alpha` (steps of 2^-28 rad,
+/// within `(-2 pi, 2 pi]`) and a home angle already wrapped: after wrapping `alpha`, their
+/// difference is within `(-2 pi, 2 pi)`, so one more wrap does, all in 32 bits.
+#[inline(always)]
+fn offset_fixed(alpha: i32, alpha0_wrapped: i32) -> i32 {
+    wrap_fixed(wrap_fixed(alpha) - alpha0_wrapped)
+}
+
+/// `M`, `L - N` and `L + N` of eq. 9 (steps of 2^-36 mm^2) scaled by one power of two, rounded
+/// to nearest, so that the largest magnitude is in `[2^28, 2^29]` (all zero stay zero): their
+/// ratios, all the root of eq. 9 needs, to about 2^-29 of the largest. Then
+/// `M^2 - (L - N)(L + N)` is exact in an `i64` and `M + sqrt(D)` fits an `i32`. In 32-bit
+/// words: a variable 64-bit shift is a library call on the M0+.
+#[inline(always)]
+fn scale_terms(terms: [i64; 3]) -> [i32; 3] {
+    // The width of the largest magnitude from the high words (`h ^ (h >> 31)` is `|h|`, or
+    // `|h| - 1` for a negative one: the width of `|t|` but for a power of two, whose scaled
+    // magnitude is then 2^29 exactly: still within the bound).
+    let magnitude_bits = |t: i64| {
+        let high = (t >> 32) as i32;
+        (high ^ (high >> 31)) as u32
+    };
+    let high_bits = magnitude_bits(terms[0]) | magnitude_bits(terms[1]) | magnitude_bits(terms[2]);
+    let width = if high_bits != 0 {
+        64 - leading_zeros(high_bits)
+    } else {
+        // Every |t| <= 2^32 (rare: only far from any usual pose).
+        let magnitudes = terms.map(|t| t.unsigned_abs());
+        if magnitudes.iter().any(|&m| m >> 32 != 0) {
+            33
+        } else {
+            let low_bits = magnitudes.iter().fold(0u32, |bits, &m| bits | m as u32);
+            if low_bits == 0 {
+                return [0; 3];
+            }
+            32 - leading_zeros(low_bits)
+        }
+    };
+    if width <= 29 {
+        // Below 2^29 already: exact.
+        let up = 29 - width;
+        return [
+            (terms[0] as i32) << up,
+            (terms[1] as i32) << up,
+            (terms[2] as i32) << up,
+        ];
+    }
+    // t >> shift rounded (half up): the floor, plus the bit below it.
+    let shift = width - 29;
+    let scale = |t: i64| {
+        let (high, low) = ((t >> 32) as i32, t as u32);
+        if shift >= 32 {
+            let s = shift - 32;
+            let below = if s == 0 {
+                (low >> 31) as i32
+            } else {
+                (high >> (s - 1)) & 1
+            };
+            (high >> s) + below
+        } else {
+            let floor = ((low >> shift) | ((high as u32) << (32 - shift))) as i32;
+            floor + ((low >> (shift - 1)) & 1) as i32
+        }
+    };
+    [scale(terms[0]), scale(terms[1]), scale(terms[2])]
 }
 
 impl Solver {
@@ -273,6 +407,7 @@ impl Solver {
             fixed_point: false,
             centre_mm: [0.0; 3],
             centred: false,
+            centre_q: Some([0; 3]),
             full_rotation: false,
             arm_planes: [[1.0, 0.0]; LEGS],
         };
@@ -305,8 +440,15 @@ impl Solver {
             c.platform_q = [0, 1].map(|k| to_fixed(c.platform_mm[k], MM_FRAC));
             c.offset_q = [0, 1, 2].map(|k| to_fixed(c.offset_mm[k], MM_FRAC));
             if fixed_lengths {
-                // |n_x|, |n_y| <= 2a: within `to_fixed`'s range.
-                c.n_q = [c.n_x_mm, c.n_y_mm].map(|v| to_fixed(v, MM_FRAC));
+                // 2a (cos(beta), sin(beta)) from `M`'s fixed-point sine and cosine, exactly
+                // rounded to 2^-20 mm (|n| <= 2a: within range): the same bits on every
+                // machine, like the rest of the fixed-point path.
+                let (sin_q, cos_q) = M::sin_cos_fixed(leg.beta_rad);
+                let round = |v: i64| ((v + (1 << (ROT_FRAC - 1))) >> ROT_FRAC) as i32;
+                c.n_q = [
+                    round(wide_mul(solver.two_arm_q, cos_q)),
+                    round(wide_mul(solver.two_arm_q, sin_q)),
+                ];
             }
         }
         solver.fixed_point = solver.planar_platform
@@ -319,12 +461,23 @@ impl Solver {
             });
         // Eq. 12 is eq. 9 at the home pose (with eq. 9's naming: M0 = 2a(h0 + z_p - z_b),
         // N0 = 2a[cos(beta)(x_p - x_b) + sin(beta)(y_p - y_b)], L0 = 2a^2 when the legs agree
-        // exactly). Evaluating eq. 9 itself at home gives the exact alpha0 of every leg.
-        let home = solver
-            .arm_angles_raw::<M>(&Pose::HOME)
-            .map_err(|leg| GeometryError::HomeUnreachable { leg })?;
-        for (c, alpha0) in solver.constants.iter_mut().zip(home) {
+        // exactly). Evaluating eq. 9 itself at home gives the exact alpha0 of every leg: with
+        // each path (fixed point, float), so that each gives exactly the home pulses at home.
+        let unreachable = |leg| GeometryError::HomeUnreachable { leg };
+        let float_home = solver
+            .float_arm_angles::<M>(&Pose::HOME)
+            .map_err(unreachable)?;
+        for (c, alpha0) in solver.constants.iter_mut().zip(float_home) {
+            c.alpha0_float_rad = alpha0;
             c.alpha0_rad = alpha0;
+        }
+        if let Some(fixed) = solver.fixed_pose::<M>(&Pose::HOME) {
+            let home = solver.fixed_arm_angles::<M>(&fixed).map_err(unreachable)?;
+            for (c, alpha0) in solver.constants.iter_mut().zip(home) {
+                c.alpha0_q = alpha0;
+                c.alpha0_wrapped_q = wrap_fixed(alpha0);
+                c.alpha0_rad = from_fixed(i64::from(alpha0), ARM_FRAC);
+            }
         }
         Ok(solver)
     }
@@ -362,6 +515,11 @@ impl Solver {
         let c = check_centre(centre_mm)?;
         self.centre_mm = c.into();
         self.centred = c != Vec3::zeros();
+        self.centre_q = self
+            .centre_mm
+            .iter()
+            .all(|v| below(v.abs(), MAX_FIXED_MM))
+            .then(|| self.centre_mm.map(|v| to_fixed(v, MM_FRAC)));
         self.full_rotation = !self.planar_platform || c.z != 0.0;
         Ok(())
     }
@@ -387,41 +545,114 @@ impl Solver {
         }
     }
 
-    /// The fixed-point pose, or `None` where the float path must run: a geometry that is not
-    /// planar or too large ([`Solver::fixed_point`]), or a position or rotation beyond the
-    /// bounds of `fixed::MAX_FIXED_MM`.
-    fn fixed_pose(&self, position: [f32; 3], r: &crate::Mat3) -> Option<FixedPose> {
+    /// The pose's part of eq. 2, 3 in fixed point, or `None` where the float path must run: a
+    /// geometry that is not planar or too large ([`Solver::fixed_point`]), a position beyond
+    /// `fixed::MAX_FIXED_MM`, a rotation centre beyond it, or a translation with `c - R c`
+    /// beyond it. `R` (eq. 1) comes from `M`'s fixed-point sines and cosines
+    /// ([`Pose::rotation_fixed`]); the pose must be finite.
+    #[inline(always)]
+    fn fixed_pose<M: Math>(&self, pose: &Pose) -> Option<FixedPose> {
         if !self.fixed_point {
             return None;
         }
-        let rows: [[f32; 2]; 3] = core::array::from_fn(|k| [r[(k, 0)], r[(k, 1)]]);
-        let in_bounds = position.iter().all(|v| below(v.abs(), MAX_FIXED_MM))
-            && rows
-                .iter()
-                .flatten()
-                .all(|v| below(v.abs(), MAX_ROTATION_ENTRY));
-        in_bounds.then(|| FixedPose {
-            rows: rows.map(|row| row.map(|v| to_fixed(v, ROT_FRAC))),
-            position: position.map(|v| to_fixed(v, MM_FRAC)),
+        let position = [pose.x_mm, pose.y_mm, pose.z_mm];
+        if !position.iter().all(|v| below(v.abs(), MAX_FIXED_MM)) {
+            return None;
+        }
+        let r = pose.rotation_fixed::<M>(self.full_rotation);
+        // (A check against the `Math` in use, whatever its sines: the bounds of `fixed` hold.)
+        if !r
+            .iter()
+            .flatten()
+            .all(|v| v.unsigned_abs() < MAX_ROTATION_ENTRY as u32)
+        {
+            return None;
+        }
+        let mut position = position.map(|v| to_fixed(v, MM_FRAC));
+        if self.centred {
+            // About the rotation centre c: q = T + c + R (p - c) = (T + c - R c) + R p, with
+            // R c exact and rounded once to 2^-20 mm (|c_k| < 384 mm: no overflow).
+            let c = self.centre_q?;
+            for (k, t) in position.iter_mut().enumerate() {
+                let rc =
+                    wide_mul(r[k][0], c[0]) + wide_mul(r[k][1], c[1]) + wide_mul(r[k][2], c[2]);
+                *t += c[k] - (((rc >> (ROT_FRAC - 1)) + 1) >> 1) as i32;
+            }
+            let bound = to_fixed(MAX_FIXED_MM, MM_FRAC).unsigned_abs();
+            if !position.iter().all(|t| t.unsigned_abs() < bound) {
+                return None;
+            }
+        }
+        Some(FixedPose {
+            rows: r.map(|row| [row[0], row[1]]),
+            position,
         })
     }
 
     /// Eq. 9 for all legs without the pose checks; `Err(leg number)` if a leg cannot reach.
+    /// The fixed-point path where [`Solver::fixed_pose`] allows it (every usual build and
+    /// pose), else the float path (the steps [`Solver::solve`] takes, for the tests).
+    #[cfg(test)]
+    pub(crate) fn arm_angles_raw<M: Math>(&self, pose: &Pose) -> Result<Angles, u8> {
+        match self.fixed_pose::<M>(pose) {
+            Some(fixed) => self.fixed_arm_angles::<M>(&fixed).map(Angles::Fixed),
+            None => self.float_arm_angles::<M>(pose).map(Angles::Float),
+        }
+    }
+
+    /// The firmware's hot loop: eq. 2, 3 and 9 for all legs in fixed point (module
+    /// [`crate::fixed`]), arm angles in steps of 2^-28 rad; `Err(leg number)` if a leg cannot
+    /// reach.
     ///
-    /// The hot loop of the firmware: per leg, `l = R p + (x, y, z) + ((0, 0, h0) - b)` (eq. 2,
-    /// 3), then `L`, `M`, `N` and the half-angle root, float arithmetic through `M` ([`Real`]).
-    /// With `L - N` and `L + N` at hand, the discriminant is `D = M^2 - (L - N)(L + N)`.
-    ///
-    /// For a planar platform within `fixed::MAX_FIXED_MM` (every usual build) and a pose within
-    /// it, `l` (eq. 2, 3) and then `|l|^2`, `M`, `L - N`, `L + N` are computed in fixed point
-    /// ([`crate::fixed`]) instead: `R` with 30 fraction bits, lengths with 20 (2^-20 mm),
-    /// squared lengths with 36, exact integer products and sums but for one rounding of `l` to
-    /// 2^-20 mm and one cut of each product to 2^-36 mm^2, then one rounding to `f32` of each
-    /// of the three terms. That is more accurate than the `f32` arithmetic it replaces (an
-    /// `f32` of ~100 mm has steps of 7.6e-6 mm, one of ~1e4 mm^2 steps of 1e-3 mm^2) and on
-    /// the chip several times cheaper than the 3 conversions, 6 `fmul` and 6 `fadd` per leg.
-    /// Integer arithmetic is the same everywhere, so the host runs it too.
-    pub(crate) fn arm_angles_raw<M: Math>(&self, pose: &Pose) -> Result<[f32; LEGS], u8> {
+    /// Per leg: `l = R p + (x, y, z) + ((0, 0, h0) - b)` (eq. 2, 3) in steps of 2^-20 mm (`R p`
+    /// exact, rounded once); `|l|^2`, `L`, `N`, `M` of eq. 9 in steps of 2^-36 mm^2 (exact
+    /// products cut once); then `M`, `L - N`, `L + N` scaled by one power of two to about 29
+    /// bits (the root depends only on their ratios), the discriminant
+    /// `D = M^2 - (L - N)(L + N) = M^2 + N^2 - L^2` exactly, and the half-angle root (module
+    /// docs) from `M`'s fixed-point square root and arc tangent ([`Math::sqrt_fixed`],
+    /// [`Math::atan2_fixed`]: by default the core's integer routines, so the host runs exactly
+    /// what the chip runs). No float arithmetic at all: on the RP2040 each float operation is a
+    /// library call.
+    #[inline(always)]
+    fn fixed_arm_angles<M: Math>(&self, fixed: &FixedPose) -> Result<[i32; LEGS], u8> {
+        let mut alpha = [0i32; LEGS];
+        for (i, c) in self.constants.iter().enumerate() {
+            // l (eq. 2, 3) in 2^-20 mm: R p rounded to nearest (halves up), then the
+            // translation, exactly.
+            let (rows, position) = (&fixed.rows, &fixed.position);
+            let l_x = rotate_mm(rows[0], c.platform_q) + position[0] + c.offset_q[0];
+            let l_y = rotate_mm(rows[1], c.platform_q) + position[1] + c.offset_q[1];
+            let l_z = rotate_mm(rows[2], c.platform_q) + position[2] + c.offset_q[2];
+            // L = |l|^2 - (s^2 - a^2), N = 2a (cos(beta) l_x + sin(beta) l_y), M = 2a l_z
+            // (eq. 9): products of two 2^-20 mm numbers, cut to 2^-36 mm^2.
+            let leg_sq = square_mm(l_x) + square_mm(l_y) + square_mm(l_z);
+            let big_l = leg_sq - self.rod_term_q;
+            let big_n = mul_mm(c.n_q[0], l_x) + mul_mm(c.n_q[1], l_y);
+            let big_m = mul_mm(self.two_arm_q, l_z);
+            let [m, l_minus_n, l_plus_n] = scale_terms([big_m, big_l - big_n, big_l + big_n]);
+            // D < 0: |L| > sqrt(M^2 + N^2), no arm angle reaches (eq. 9 has no root).
+            let discriminant = square(m) - wide_mul(l_minus_n, l_plus_n);
+            if discriminant < 0 {
+                return Err(i as u8 + 1);
+            }
+            // |M|, |L +- N| <= 2^29: D < 2^59, sqrt(D) < 2^29.5, and the sums below fit.
+            let root = M::sqrt_fixed(discriminant as u64) as i32;
+            // The form that cannot be 0/0 (module docs); alpha = 2 atan2(..) is the half-angle
+            // in steps of 2^-29 rad read in steps of 2^-28.
+            alpha[i] = if m >= 0 {
+                M::atan2_fixed(l_minus_n, m + root)
+            } else {
+                M::atan2_fixed(m - root, l_plus_n)
+            };
+        }
+        Ok(alpha)
+    }
+
+    /// The float path of eq. 2, 3 and 9, for builds and poses beyond the fixed-point bounds:
+    /// per leg, `l = R p + (x, y, z) + ((0, 0, h0) - b)`, then `L`, `M`, `N` and the half-angle
+    /// root, float arithmetic through `M` ([`Real`]). With `L - N` and `L + N` at hand, the
+    /// discriminant is `D = M^2 - (L - N)(L + N)`. `Err(leg number)` if a leg cannot reach.
+    pub(crate) fn float_arm_angles<M: Math>(&self, pose: &Pose) -> Result<[f32; LEGS], u8> {
         let r = pose.rotation_columns::<M>(self.full_rotation);
         let real = Real::<M>::new;
         let row = |i: usize| [real(r[(i, 0)]), real(r[(i, 1)]), real(r[(i, 2)])];
@@ -440,57 +671,35 @@ impl Solver {
         let two_arm = real(self.two_arm_mm);
         // With a flat base every leg has the same z offset: `z + offset_z` once for all legs
         // (the same sum each leg would compute).
-        let fixed = self.fixed_pose(translation, &r);
-        let shared_z = if fixed.is_none() {
-            position[2] + real(self.constants[0].offset_mm[2])
-        } else {
-            real(0.0) // unused
-        };
+        let shared_z = position[2] + real(self.constants[0].offset_mm[2]);
         let mut alpha = [0.0f32; LEGS];
         for (i, c) in self.constants.iter().enumerate() {
             // `M`, `L - N` and `L + N` of eq. 9, mm^2.
-            let (big_m, l_minus_n, l_plus_n) = if let Some(fixed) = &fixed {
-                // l (eq. 2, 3) in 2^-20 mm: R p rounded to nearest (halves up), then the
-                // translation, exactly.
-                let l: [i32; 3] = core::array::from_fn(|k| {
-                    rotate_mm(fixed.rows[k], c.platform_q) + fixed.position[k] + c.offset_q[k]
-                });
-                // Products of two 2^-20 mm numbers, cut to 2^-36 mm^2.
-                let leg_sq = mul_mm(l[0], l[0]) + mul_mm(l[1], l[1]) + mul_mm(l[2], l[2]);
-                let big_l = leg_sq - self.rod_term_q;
-                let big_n = mul_mm(c.n_q[0], l[0]) + mul_mm(c.n_q[1], l[1]);
-                (
-                    real(from_fixed_sq(mul_mm(self.two_arm_q, l[2]))),
-                    real(from_fixed_sq(big_l - big_n)),
-                    real(from_fixed_sq(big_l + big_n)),
-                )
-            } else {
-                let p = c.platform_mm.map(real);
-                let l: [Real<M>; 3] = core::array::from_fn(|k| {
-                    let rp = if self.planar_platform {
-                        rows[k][0] * p[0] + rows[k][1] * p[1]
-                    } else {
-                        rows[k][0] * p[0] + rows[k][1] * p[1] + rows[k][2] * p[2]
-                    };
-                    let translation = if k == 2 && self.flat_base {
-                        shared_z
-                    } else {
-                        position[k] + real(c.offset_mm[k])
-                    };
-                    rp + translation
-                });
-                let leg_sq = l[0] * l[0] + l[1] * l[1] + l[2] * l[2];
-                let big_m = two_arm * l[2];
-                let big_n = real(c.n_x_mm) * l[0] + real(c.n_y_mm) * l[1];
-                let bounded = below(leg_sq.0, MAX_TERM_MM2)
-                    && below(big_m.0.abs(), MAX_TERM_MM2)
-                    && below(big_n.0.abs(), MAX_TERM_MM2);
-                if !bounded {
-                    return Err(i as u8 + 1);
-                }
-                let big_l = leg_sq - rod_sq_minus_arm_sq;
-                (big_m, big_l - big_n, big_l + big_n)
-            };
+            let p = c.platform_mm.map(real);
+            let l: [Real<M>; 3] = core::array::from_fn(|k| {
+                let rp = if self.planar_platform {
+                    rows[k][0] * p[0] + rows[k][1] * p[1]
+                } else {
+                    rows[k][0] * p[0] + rows[k][1] * p[1] + rows[k][2] * p[2]
+                };
+                let translation = if k == 2 && self.flat_base {
+                    shared_z
+                } else {
+                    position[k] + real(c.offset_mm[k])
+                };
+                rp + translation
+            });
+            let leg_sq = l[0] * l[0] + l[1] * l[1] + l[2] * l[2];
+            let big_m = two_arm * l[2];
+            let big_n = real(c.n_x_mm) * l[0] + real(c.n_y_mm) * l[1];
+            let bounded = below(leg_sq.0, MAX_TERM_MM2)
+                && below(big_m.0.abs(), MAX_TERM_MM2)
+                && below(big_n.0.abs(), MAX_TERM_MM2);
+            if !bounded {
+                return Err(i as u8 + 1);
+            }
+            let big_l = leg_sq - rod_sq_minus_arm_sq;
+            let (l_minus_n, l_plus_n) = (big_l - big_n, big_l + big_n);
             let discriminant = big_m * big_m - l_minus_n * l_plus_n;
             if !below(discriminant.0, f32::INFINITY) {
                 return Err(i as u8 + 1);
@@ -512,32 +721,20 @@ impl Solver {
         Ok(alpha)
     }
 
-    /// Each arm's angle from its home angle, `alpha_i - alpha0_i` wrapped into `(-pi, pi]`, rad.
-    /// Only [`Solver::solve`] calls it, so it is inlined there: [`Solver::arm_angles`] repeats
-    /// the same steps rather than call it, because a second caller made the compiler keep it
-    /// as a function of its own, which cost the firmware's IK about 400 cycles per pose on the
-    /// RP2040 (measured with `./dev bench`).
-    fn arm_offsets<M: Math>(&self, pose: &Pose) -> Result<[f32; LEGS], IkError> {
-        check_pose(pose)?;
-        let mut alpha = self
-            .arm_angles_raw::<M>(pose)
-            .map_err(|leg| IkError::Unreachable { leg })?;
-        for (i, a) in alpha.iter_mut().enumerate() {
-            let alpha0 = Real::<M>::new(self.constants[i].alpha0_rad);
-            *a = wrap_angle_rad::<M>((Real::new(*a) - alpha0).0);
-        }
-        Ok(alpha)
-    }
-
     /// Arm angles `alpha_i` for a pose (eq. 9), rad, each within `(-pi, pi]` of its `alpha0`.
     pub fn arm_angles<M: Math>(&self, pose: &Pose) -> Result<[f32; LEGS], IkError> {
-        // The steps of `arm_offsets`, then back from the offsets (the same operations).
         check_pose(pose)?;
-        let mut alpha = self
-            .arm_angles_raw::<M>(pose)
-            .map_err(|leg| IkError::Unreachable { leg })?;
+        let unreachable = |leg| IkError::Unreachable { leg };
+        if let Some(fixed) = self.fixed_pose::<M>(pose) {
+            let alpha = self.fixed_arm_angles::<M>(&fixed).map_err(unreachable)?;
+            return Ok(core::array::from_fn(|i| {
+                let c = &self.constants[i];
+                arm_rad_fixed(c.alpha0_q, offset_fixed(alpha[i], c.alpha0_wrapped_q))
+            }));
+        }
+        let mut alpha = self.float_arm_angles::<M>(pose).map_err(unreachable)?;
         for (i, a) in alpha.iter_mut().enumerate() {
-            let alpha0 = Real::<M>::new(self.constants[i].alpha0_rad);
+            let alpha0 = Real::<M>::new(self.constants[i].alpha0_float_rad);
             let offset = wrap_angle_rad::<M>((Real::new(*a) - alpha0).0);
             *a = (alpha0 + Real::new(offset)).0;
         }
@@ -545,25 +742,46 @@ impl Solver {
     }
 
     /// Arm angles and pulse widths for a pose (eq. 9, 13, 14): all six or an error naming the
-    /// first leg or servo that cannot follow. The pulses come from the offsets from home (eq.
-    /// 13, 14 use `alpha - alpha0`), not from the angles, which saves a subtraction per servo.
+    /// first leg or servo that cannot follow. The pulses come from each arm's offset from home,
+    /// `alpha_i - alpha0_i` wrapped into `(-pi, pi]` (eq. 13, 14 use it), not from the angles,
+    /// which saves a subtraction per servo. On the fixed-point path they are computed in fixed
+    /// point too (`ServoConfig::pulse_us_for_fixed_offset`), each pulse and angle rounded once to
+    /// `f32`: no float operation at all (each is a library call on the RP2040).
     pub fn solve<M: Math>(&self, servos: &ServoSet, pose: &Pose) -> Result<Solution, IkError> {
-        let offset_rad = self.arm_offsets::<M>(pose)?;
+        check_pose(pose)?;
+        let unreachable = |leg| IkError::Unreachable { leg };
+        let limit = |i: usize, servo: &ServoConfig, pulse_us: f32| IkError::ServoLimit {
+            servo: i as u8 + 1,
+            pulse_us,
+            min_us: servo.min_us,
+            max_us: servo.max_us,
+        };
         let mut arm_rad = [0.0f32; LEGS];
         let mut pulse_us = [0.0f32; LEGS];
-        for (i, servo) in servos.0.iter().enumerate() {
-            let pulse = servo.pulse_us_for_offset::<M>(offset_rad[i]);
-            if !servo.allows(pulse) {
-                return Err(IkError::ServoLimit {
-                    servo: i as u8 + 1,
-                    pulse_us: pulse,
-                    min_us: servo.min_us,
-                    max_us: servo.max_us,
-                });
+        if let Some(fixed) = self.fixed_pose::<M>(pose) {
+            let alpha = self.fixed_arm_angles::<M>(&fixed).map_err(unreachable)?;
+            for (i, servo) in servos.0.iter().enumerate() {
+                let c = &self.constants[i];
+                let offset = offset_fixed(alpha[i], c.alpha0_wrapped_q);
+                let pulse = servo.pulse_us_for_fixed_offset::<M>(offset);
+                if !servo.allows(pulse) {
+                    return Err(limit(i, servo, pulse));
+                }
+                pulse_us[i] = pulse;
+                arm_rad[i] = arm_rad_fixed(c.alpha0_q, offset);
             }
-            pulse_us[i] = pulse;
-            arm_rad[i] =
-                (Real::<M>::new(self.constants[i].alpha0_rad) + Real::new(offset_rad[i])).0;
+        } else {
+            let alpha = self.float_arm_angles::<M>(pose).map_err(unreachable)?;
+            for (i, servo) in servos.0.iter().enumerate() {
+                let alpha0 = Real::<M>::new(self.constants[i].alpha0_float_rad);
+                let offset = wrap_angle_rad::<M>((Real::new(alpha[i]) - alpha0).0);
+                let pulse = servo.pulse_us_for_offset::<M>(offset);
+                if !servo.allows(pulse) {
+                    return Err(limit(i, servo, pulse));
+                }
+                pulse_us[i] = pulse;
+                arm_rad[i] = (alpha0 + Real::new(offset)).0;
+            }
         }
         Ok(Solution { arm_rad, pulse_us })
     }
@@ -637,6 +855,8 @@ mod tests {
                 float.arm_angles_raw::<Libm>(&pose),
             ) {
                 (Ok(a), Ok(b)) => {
+                    assert!(matches!((a, b), (Angles::Fixed(_), Angles::Float(_))));
+                    let (a, b) = (a.rad(), b.rad());
                     for leg in 0..LEGS {
                         let exact = arm_angle_f64(&g, &pose, leg);
                         worst_fixed = worst_fixed.max((f64::from(a[leg]) - exact).abs());
@@ -646,6 +866,7 @@ mod tests {
                 (a, b) => assert_eq!(a.is_ok(), b.is_ok(), "{pose:?}"),
             }
         }
+        eprintln!("fixed {worst_fixed:e} rad, float {worst_float:e} rad");
         // Measured: 1.8e-6 rad fixed point, 1.0e-5 rad float (the rest is the f32 rotation,
         // discriminant and atan2). 1e-5 rad is ~0.005 us of pulse.
         assert!(worst_fixed < 3e-6, "fixed point: {worst_fixed:e} rad");
@@ -705,7 +926,7 @@ mod tests {
                 );
                 if let Ok(alpha) = solver.arm_angles_raw::<Libm>(&pose) {
                     ok += 1;
-                    for (leg, a) in alpha.iter().enumerate() {
+                    for (leg, a) in alpha.rad().iter().enumerate() {
                         let d = (f64::from(*a) - arm_angle_f64(&g, &pose, leg)).abs();
                         worst = worst.max(d.min((d - 2.0 * core::f64::consts::PI).abs()));
                     }

@@ -29,10 +29,13 @@
 //! - [`forward`]: forward kinematics, approximate and by Newton's method, a step at a time.
 //! - [`workspace`]: the reach along each axis, a test at a time, and sampled grids.
 //! - [`linalg`]: the 6x6 linear algebra; [`error`]: [`KinematicsError`].
-//! - [`math`]: the few transcendental functions the IK needs, behind a trait so the firmware can
-//!   supply the RP2040 boot ROM's fast routines while the host uses `libm`.
-//! - `fixed` (private): the fixed-point arithmetic of the IK's hot loop (integer instructions for
-//!   a chip without an FPU).
+//! - [`math`]: the few transcendental functions the kinematics need, behind a trait so the
+//!   firmware can supply the RP2040 boot ROM's fast routines while the host uses `libm`; and
+//!   their fixed-point forms for the IK's hot loop (by default [`fixed`]'s, the same bits
+//!   everywhere).
+//! - [`fixed`]: the fixed-point arithmetic of the IK's hot loop (integer instructions for a chip
+//!   without an FPU): its sine and cosine, square root and arc tangent, each with its method
+//!   and error bound (the defaults of [`Math`]'s fixed-point functions).
 //!
 //! Lengths are mm, angles rad, forces N, moments and servo torques N mm, masses kg, unless a
 //! name says otherwise. Legs and servos are numbered 1..=6 in everything a user sees (errors,
@@ -43,7 +46,7 @@
 pub mod configuration;
 pub mod dynamics;
 pub mod error;
-mod fixed;
+pub mod fixed;
 pub mod forward;
 pub mod geometry;
 pub mod ik;
@@ -60,7 +63,7 @@ pub mod workspace;
 pub use error::KinematicsError;
 pub use geometry::{Geometry, GeometryError, Leg};
 pub use ik::{IkError, Solution, Solver};
-pub use math::{Libm, Math};
+pub use math::{FloatRoutines, Libm, Math};
 pub use pose::Pose;
 pub use servo::{Direction, ServoConfig, ServoError, ServoSet};
 

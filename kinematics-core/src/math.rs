@@ -1,4 +1,4 @@
-//! The transcendental functions the IK needs, behind a trait.
+//! The transcendental functions the kinematics need, behind a trait.
 //!
 //! The core is generic over [`Math`] so that the same algorithm runs with `libm` on the host (and
 //! in host tests) and with the RP2040 boot ROM's faster float routines in the firmware. All
@@ -9,10 +9,18 @@
 //! compiler-inserted float routines are slow (the RP2040's add finiteness checks around each
 //! boot ROM call) may call its float routines directly. The operations and their order are the
 //! same either way, so the host runs the very algorithm the board runs.
+//!
+//! The IK's fixed-point path (module [`crate::fixed`]: every usual build) asks for its sine
+//! and cosine, square root and arc tangent in fixed point ([`Math::sin_cos_fixed`],
+//! [`Math::sqrt_fixed`], [`Math::atan2_fixed`]). By default these are the core's integer
+//! routines, the same bits on every machine, so the host and the chip solve a pose alike;
+//! [`FloatRoutines`] puts a [`Math`]'s own `f32` routines there instead (converted there and
+//! back), which is how the benchmark measures other libraries in the same IK.
 
 use core::marker::PhantomData;
 use core::ops::{Add, Mul, Neg, Sub};
 
+use crate::fixed::{self, to_fixed, ANGLE_FRAC, ROT_FRAC};
 use crate::{Mat3, Vec3};
 
 /// Scalar functions used by the kinematics. Implementations must return NaN (never panic) for
@@ -43,6 +51,89 @@ pub trait Math {
     #[inline]
     fn mul(a: f32, b: f32) -> f32 {
         a * b
+    }
+
+    /// `(sin x, cos x)` in steps of 2^-30 (the IK's rotation entries) for `|x| < 4` rad: the
+    /// pose's angles in the IK's fixed-point path. By default [`fixed::sin_cos`]: integer
+    /// instructions, within 2^-29.
+    #[inline]
+    fn sin_cos_fixed(x_rad: f32) -> (i32, i32) {
+        fixed::sin_cos(x_rad)
+    }
+
+    /// `sqrt(d)` within 1: the root of eq. 9's discriminant in the IK's fixed-point path (`d`
+    /// below 2^60 there). By default [`fixed::sqrt`]: integer instructions.
+    #[inline]
+    fn sqrt_fixed(d: u64) -> u32 {
+        fixed::sqrt(d)
+    }
+
+    /// `atan2(y, x)` in steps of 2^-29 rad within `(-pi, pi]` (0 for `(0, 0)`): the half-angle
+    /// of eq. 9 in the IK's fixed-point path (`|y|, |x| < 2^31` there). By default
+    /// [`fixed::atan2`]: integer instructions, within 2^-29 rad.
+    #[inline]
+    fn atan2_fixed(y: i32, x: i32) -> i32 {
+        fixed::atan2(y, x)
+    }
+}
+
+/// `M` with its own `f32` sine and cosine, square root and arc tangent in the IK's fixed-point
+/// path too, in place of the integer routines (the arguments converted to `f32` and the results
+/// back to fixed point): the same IK with `M`'s routines, to measure them (the benchmark's
+/// boot ROM, `libm` and `micromath` rows). Everything else is `M`'s.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct FloatRoutines<M>(PhantomData<M>);
+
+impl<M: Math> Math for FloatRoutines<M> {
+    #[inline]
+    fn sin_cos(x: f32) -> (f32, f32) {
+        M::sin_cos(x)
+    }
+
+    #[inline]
+    fn sqrt(x: f32) -> f32 {
+        M::sqrt(x)
+    }
+
+    #[inline]
+    fn atan2(y: f32, x: f32) -> f32 {
+        M::atan2(y, x)
+    }
+
+    #[inline]
+    fn add(a: f32, b: f32) -> f32 {
+        M::add(a, b)
+    }
+
+    #[inline]
+    fn sub(a: f32, b: f32) -> f32 {
+        M::sub(a, b)
+    }
+
+    #[inline]
+    fn mul(a: f32, b: f32) -> f32 {
+        M::mul(a, b)
+    }
+
+    fn sin_cos_fixed(x_rad: f32) -> (i32, i32) {
+        // |sin|, |cos| of any library stay far below 2, the bound of `to_fixed` here.
+        let (s, c) = M::sin_cos(x_rad);
+        (to_fixed(s, ROT_FRAC), to_fixed(c, ROT_FRAC))
+    }
+
+    fn sqrt_fixed(d: u64) -> u32 {
+        // `as` saturates (and takes NaN to 0).
+        M::sqrt(d as f32) as u32
+    }
+
+    fn atan2_fixed(y: i32, x: i32) -> i32 {
+        let angle = M::atan2(y as f32, x as f32);
+        // Within (-4, 4) rad, the bound of `to_fixed` here (NaN: 0).
+        if abs_bits(angle) < 4.0f32.to_bits() {
+            to_fixed(angle, ANGLE_FRAC)
+        } else {
+            0
+        }
     }
 }
 

@@ -4,6 +4,7 @@
 //! `R = Rz(yaw) * Ry(pitch) * Rx(roll)` (eq. 1 of "The Mathematics of the Stewart Platform"): yaw
 //! about z, then pitch about the new y, then roll about the new x.
 
+use crate::fixed::wide_mul;
 use crate::math::{Math, Real};
 use crate::Mat3;
 
@@ -184,6 +185,44 @@ impl Pose {
             r22,
         )
     }
+
+    /// [`Pose::rotation`] in fixed point, entries in steps of 2^-30 (eq. 1, the same symbols),
+    /// from `M`'s fixed-point sines and cosines ([`Math::sin_cos_fixed`]). Each entry is the
+    /// exact sum of exact products rounded once (to nearest); `c_psi s_theta` and
+    /// `s_psi s_theta`, each shared by two entries, are rounded first. With `third_column` false
+    /// that column is left zero, as in [`Pose::rotation_columns`]. The angles must be finite.
+    #[inline(always)]
+    pub(crate) fn rotation_fixed<M: Math>(&self, third_column: bool) -> [[i32; 3]; 3] {
+        let (s_phi, c_phi) = M::sin_cos_fixed(self.roll_rad);
+        let (s_theta, c_theta) = M::sin_cos_fixed(self.pitch_rad);
+        let (s_psi, c_psi) = M::sin_cos_fixed(self.yaw_rad);
+        // A sum of products in steps of 2^-60, rounded to 2^-30.
+        let round = |v: i64| ((v + (1 << 29)) >> 30) as i32;
+        let cs = round(wide_mul(c_psi, s_theta));
+        let ss = round(wide_mul(s_psi, s_theta));
+        let (r02, r12, r22) = if third_column {
+            (
+                round(wide_mul(s_psi, s_phi) + wide_mul(cs, c_phi)),
+                round(wide_mul(ss, c_phi) - wide_mul(c_psi, s_phi)),
+                round(wide_mul(c_theta, c_phi)),
+            )
+        } else {
+            (0, 0, 0)
+        };
+        [
+            [
+                round(wide_mul(c_psi, c_theta)),
+                round(wide_mul(cs, s_phi) - wide_mul(s_psi, c_phi)),
+                r02,
+            ],
+            [
+                round(wide_mul(s_psi, c_theta)),
+                round(wide_mul(c_psi, c_phi) + wide_mul(ss, s_phi)),
+                r12,
+            ],
+            [-s_theta, round(wide_mul(c_theta, s_phi)), r22],
+        ]
+    }
 }
 
 #[cfg(test)]
@@ -208,6 +247,25 @@ mod tests {
         let expected = rz(pose.yaw_rad) * ry(pose.pitch_rad) * rx(pose.roll_rad);
         let r = pose.rotation::<Libm>();
         assert!((r - expected).abs().max() < 1e-6, "{r} vs {expected}");
+    }
+
+    #[test]
+    fn fixed_point_rotation_matches_the_float_one() {
+        for (roll, pitch, yaw) in [(10.0, -20.0, 35.0), (-179.0, 90.0, 180.0), (0.0, 0.0, 0.0)] {
+            let pose = Pose::from_degrees(0.0, 0.0, 0.0, roll, pitch, yaw);
+            let expected = pose.rotation::<Libm>();
+            let r = pose.rotation_fixed::<Libm>(true);
+            for (k, row) in r.iter().enumerate() {
+                for (j, &entry) in row.iter().enumerate() {
+                    let entry = f64::from(entry) / f64::from(1u32 << 30);
+                    assert!(
+                        (entry - f64::from(expected[(k, j)])).abs() < 1e-6,
+                        "({k}, {j})"
+                    );
+                }
+            }
+            assert_eq!(pose.rotation_fixed::<Libm>(false)[1][2], 0);
+        }
     }
 
     #[test]

@@ -9,7 +9,8 @@
 use core::f32::consts::PI;
 use core::fmt;
 
-use crate::math::{Libm, Math, Real};
+use crate::fixed::{from_fixed, from_fixed32, to_fixed, wide_mul, ARM_FRAC};
+use crate::math::{abs_bits, Libm, Math, Real};
 use crate::LEGS;
 
 /// Default home pulse `W0`, us ("nominally 1500 us" in "The Mathematics of the Stewart
@@ -114,6 +115,34 @@ impl ServoConfig {
             Direction::Reversed => -offset_rad,
         };
         (Real::new(self.home_us) + signed_rad * Real::new(self.rate_us_per_rad)).0
+    }
+
+    /// [`ServoConfig::pulse_us_for_offset`] for an offset from the IK's fixed-point path, in
+    /// steps of 2^-28 rad (`|offset| <= pi`), in fixed point: `d r (alpha - alpha0)` exactly
+    /// (`r` in steps of 2^-18 us/rad: every valid rate is exact there) and `W0` (steps of 2^-16
+    /// us: every valid one is exact), their sum rounded to 2^-16 us and then to the nearest
+    /// `f32`: within 0.6 of an `f32` step (at 1500 us, 1.2e-4 us) of the exact pulse of that
+    /// offset, with no float operation (library calls on the chip). A servo whose `W0` or `r`
+    /// is beyond 4096 us or 8192 us/rad (no valid one is) or not finite takes `M`'s float
+    /// arithmetic instead.
+    #[inline]
+    pub(crate) fn pulse_us_for_fixed_offset<M: Math>(&self, offset: i32) -> f32 {
+        const RATE_FRAC: u32 = 18;
+        const PULSE_FRAC: u32 = 16;
+        let (home_us, rate) = (self.home_us, self.rate_us_per_rad);
+        if abs_bits(home_us) < 4096.0f32.to_bits() && abs_bits(rate) < 8192.0f32.to_bits() {
+            // |offset r| < pi 2^28 2^31 in steps of 2^-46 us, below 2^30.7 steps of 2^-16 us;
+            // |W0| < 2^28 of them: the sum fits an i32.
+            let product = wide_mul(offset, to_fixed(rate, RATE_FRAC));
+            let product = ((product + (1 << 29)) >> (ARM_FRAC + RATE_FRAC - PULSE_FRAC)) as i32;
+            let signed = match self.direction {
+                Direction::Normal => product,
+                Direction::Reversed => -product,
+            };
+            from_fixed32(to_fixed(home_us, PULSE_FRAC) + signed, PULSE_FRAC)
+        } else {
+            self.pulse_us_for_offset::<M>(from_fixed(i64::from(offset), ARM_FRAC))
+        }
     }
 
     /// Arm angle for a pulse width, rad (the inverse of [`ServoConfig::pulse_us`]).
@@ -281,6 +310,35 @@ impl core::error::Error for ServoError {}
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn allows_is_ieee_within_the_limits() {
+        let values = [
+            f32::NEG_INFINITY,
+            -1500.0,
+            -0.0,
+            0.0,
+            1e-45,
+            1100.0,
+            1500.0,
+            1900.0,
+            f32::INFINITY,
+            f32::NAN,
+        ];
+        for min_us in values {
+            for max_us in values {
+                let servo = ServoConfig {
+                    min_us,
+                    max_us,
+                    ..ServoConfig::default_for(1)
+                };
+                for pulse in values {
+                    let ieee = min_us <= pulse && pulse <= max_us;
+                    assert_eq!(servo.allows(pulse), ieee, "{min_us} <= {pulse} <= {max_us}");
+                }
+            }
+        }
+    }
 
     #[test]
     fn defaults_follow_the_source_document() {

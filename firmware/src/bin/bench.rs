@@ -1,19 +1,25 @@
 //! IK benchmark firmware (`./dev bench`; `emulator/src/bench.js` drives it).
 //!
 //! Runs the firmware's own IK, `kinematics_core::ik::Solver::solve` with the firmware's
-//! [`RomMath`] (the code path `control::Controller` runs for every pose), on poses sent over
-//! UART0, and for comparison the same IK with `libm` (a straightforward port). GP16 is a
-//! marker: it is high exactly while one IK runs, so the emulator reads the CPU cycle counter at
-//! its edges. Each pose gets three brackets: an empty one (the marker's own cost, subtracted),
-//! the ROM IK and the `libm` IK.
+//! [`RomMath`] (the code path `control::Controller` runs for every pose: its fixed-point path,
+//! with the core's integer sine, square root and arc tangent), on poses sent over UART0, and
+//! for comparison the same IK with other libraries' routines in their place
+//! ([`FloatRoutines`]): the boot ROM's float routines (what the firmware used before), `libm`'s
+//! and, built with the `micromath` feature (`./dev bench` does), `micromath`'s: all three, and
+//! each alone. Every variant has its own solver (its home angles from its own routines, as a
+//! firmware built on them would). GP16 is a marker: it is high exactly while one computation
+//! runs, so the emulator reads the CPU cycle counter at its edges. Each pose gets an empty
+//! bracket first (the marker's own cost, subtracted), then one per variant.
 //!
 //! Protocol (921,600 baud 8N1, lines end in LF; numbers are f32 bit patterns in hex, so
-//! nothing is lost in decimal conversion):
-//! - `p X Y Z ROLL PITCH YAW` (mm, rad) -> `r W1..W6 l W1..W6`: the six pulse widths (us)
-//!   from the ROM path and from `libm`; an IK error gives `x` in place of the six widths.
+//! nothing is lost in decimal conversion). At start: `bench ready rom=vN variants=A,B,...`.
+//! - `p X Y Z ROLL PITCH YAW` (mm, rad) -> `r W1..W6 W1..W6 ...`: the six pulse widths (us)
+//!   of each variant in the order of `variants`; an IK error gives `x` in place of six widths.
 //! - `t` -> `t fadd=ADDR ...`: the ROM addresses of the soft-float routines the IK uses.
-//! - `m` -> `m sin=E cos=E sqrt=E atan2=E`: the largest difference between [`RomMath`] and
-//!   `libm` on the chip over a grid of arguments (absolute; sqrt relative).
+//! - `m` -> `m rom=S,C,Q,A fixed=S,C,Q,A [micromath=S,C,Q,A]`: the largest errors on the chip
+//!   against `libm`'s `f64` over a grid of arguments (sin, cos absolute; sqrt relative, but
+//!   the fixed-point one's absolute, in units; atan2 rad): of the boot ROM's `f32` routines, of
+//!   the IK's fixed-point ones, of `micromath`'s.
 //!
 //! The rest of the kinematics, all with [`RomMath`], each bracketed like the IK (an empty
 //! bracket, then the one measured):
@@ -30,6 +36,19 @@
 //! - `w X Y Z ROLL PITCH YAW` -> `w D1..D12 n=N`: the reach along the twelve
 //!   axis-directions from the pose within the default servo limits (`workspace::Limits`, what
 //!   a `limits` command does), `N` IKs.
+//!
+//! The stream pipeline, through a real `control::Controller<RomMath>` (the firmware's) fed
+//! binary stream frames (`control::stream`) whose counts encode the poses given:
+//! - `c X Y Z ROLL PITCH YAW DZ` -> `c n=N`: in pass-through (speed limits off), a frame at the
+//!   pose, applied (not measured), then one `DZ` mm higher, out of reach: the measured bracket
+//!   is `Controller::apply_stream` and the clamp job it starts, run to its end with
+//!   `Controller::work` (1 + `CLAMP_STEPS` IK solutions, bisection on the straight line, up to
+//!   `CHECKS_PER_SLICE` per slice); `N` clamps counted (1 if it clamped);
+//! - `k X Y Z ROLL PITCH YAW F` -> `k FLAGS`: with the tracker's default limits (speeds, and
+//!   accelerations of 1000 mm/s^2 and 1000 deg/s^2), a frame at the pose becomes the tracker's
+//!   goal, then `F` measured brackets of `Controller::on_frame` (the tracker's step and one IK),
+//!   a flag per frame: `m` moved, `c` clamped (the step left the workspace: the tracker holds a
+//!   step short of the edge, no bisection in the frame), `s` still.
 
 #![no_std]
 #![no_main]
@@ -37,6 +56,8 @@
 use core::fmt::Write as _;
 use core::hint::black_box;
 
+use control::stream::{BINARY_HEADER, BINARY_TRAILER};
+use control::{Controller, Session, Settings};
 use defmt_rtt as _;
 use embedded_hal::digital::OutputPin;
 use firmware::rom_math::RomMath;
@@ -45,7 +66,7 @@ use kinematics_core::forward::{self, Closure};
 use kinematics_core::jacobian::Jacobian;
 use kinematics_core::statics::{holding_loads, servo_holding_torques, Payload};
 use kinematics_core::workspace::{self, Limits};
-use kinematics_core::{ik, Geometry, Libm, Math, Pose, ServoSet, Vec3, LEGS};
+use kinematics_core::{ik, FloatRoutines, Geometry, Libm, Math, Pose, ServoSet, Vec3, LEGS};
 use panic_probe as _;
 use rp2040_hal::{
     self as hal,
@@ -93,16 +114,22 @@ fn main() -> ! {
     let mut marker = pins.gpio16.into_push_pull_output();
     let _ = marker.set_low();
 
-    let solver = ik::Solver::new(Geometry::default()).expect("a valid geometry");
+    let solver = ik::Solver::new_with::<RomMath>(Geometry::default()).expect("a valid geometry");
+    let variants = Variants::new();
     let servos = ServoSet::default();
+    let mut streams = Streams::new();
     let mut line = [0u8; MAX_LINE];
     let mut len = 0;
     let mut out: String<512> = String::new();
-    let _ = writeln!(
+    let _ = write!(
         out,
-        "bench ready rom=v{}",
+        "bench ready rom=v{} variants=",
         hal::rom_data::rom_version_number()
     );
+    for (i, name) in Variants::NAMES.iter().enumerate() {
+        let _ = write!(out, "{}{name}", if i == 0 { "" } else { "," });
+    }
+    let _ = out.push('\n');
     uart.write_full_blocking(out.as_bytes());
     loop {
         let mut byte = [0u8];
@@ -125,25 +152,34 @@ fn main() -> ! {
         {
             ("p", args) => match parse_pose(args) {
                 Some(pose) => {
-                    // Empty bracket: what the marker itself costs.
-                    let _ = marker.set_high();
-                    black_box(&pose);
-                    let _ = marker.set_low();
-                    let _ = marker.set_high();
-                    let rom = solver.solve::<RomMath>(&servos, black_box(&pose));
-                    black_box(&rom);
-                    let _ = marker.set_low();
-                    let _ = marker.set_high();
-                    let libm = solver.solve::<Libm>(&servos, black_box(&pose));
-                    black_box(&libm);
-                    let _ = marker.set_low();
+                    bracket_empty(&mut marker, &pose);
                     let _ = out.push('r');
-                    write_pulses(&mut out, rom.map(|s| s.pulse_us).ok());
-                    let _ = out.push_str(" l");
-                    write_pulses(&mut out, libm.map(|s| s.pulse_us).ok());
+                    let firmware = timed::<RomMath>(&mut marker, &solver, &servos, &pose);
+                    write_pulses(&mut out, firmware);
+                    variants.run(&mut marker, &servos, &pose, &mut out);
                 }
                 None => {
                     let _ = out.push_str("error: bad pose");
+                }
+            },
+            ("c", args) => match parse_floats::<7>(args) {
+                Some(v) => {
+                    let pose = Pose::from_array(core::array::from_fn(|i| v[i]));
+                    let clamps = streams.clamp(&mut marker, &pose, v[6]);
+                    let _ = write!(out, "c n={clamps}");
+                }
+                None => {
+                    let _ = out.push_str("error: bad arguments");
+                }
+            },
+            ("k", args) => match parse_floats::<7>(args) {
+                Some(v) => {
+                    let pose = Pose::from_array(core::array::from_fn(|i| v[i]));
+                    let _ = out.push_str("k ");
+                    streams.track(&mut marker, &pose, v[6] as u32, &mut out);
+                }
+                None => {
+                    let _ = out.push_str("error: bad arguments");
                 }
             },
             ("f", args) => match parse_floats::<12>(args) {
@@ -266,12 +302,11 @@ fn main() -> ! {
                 }
             }
             ("m", _) => {
-                let e = math_differences();
-                let _ = write!(
-                    out,
-                    "m sin={:e} cos={:e} sqrt={:e} atan2={:e}",
-                    e[0], e[1], e[2], e[3]
-                );
+                let _ = out.push('m');
+                write_errors(&mut out, "rom", float_errors::<RomMath>());
+                write_errors(&mut out, "fixed", fixed_errors::<RomMath>());
+                #[cfg(feature = "micromath")]
+                write_errors(&mut out, "micromath", float_errors::<micro::Micromath>());
             }
             _ => {
                 let _ = out.push_str("error: unknown");
@@ -281,6 +316,282 @@ fn main() -> ! {
         uart.write_full_blocking(out.as_bytes());
     }
 }
+
+/// One IK in a marker bracket, with `M`: the six pulse widths, or `None` if refused.
+fn timed<M: Math>(
+    marker: &mut impl OutputPin,
+    solver: &ik::Solver,
+    servos: &ServoSet,
+    pose: &Pose,
+) -> Option<[f32; LEGS]> {
+    let _ = marker.set_high();
+    let solution = solver.solve::<M>(servos, black_box(pose));
+    black_box(&solution);
+    let _ = marker.set_low();
+    solution.ok().map(|s| s.pulse_us)
+}
+
+/// The IK with other libraries' routines in the fixed-point path, each with its own solver.
+struct Variants {
+    rom: ik::Solver,
+    libm: ik::Solver,
+    #[cfg(feature = "micromath")]
+    micromath: [ik::Solver; 4],
+}
+
+impl Variants {
+    /// The variants' names, in the order of the reply to `p` (after the firmware's).
+    #[cfg(not(feature = "micromath"))]
+    const NAMES: &[&str] = &["firmware", "rom", "libm"];
+    #[cfg(feature = "micromath")]
+    const NAMES: &[&str] = &[
+        "firmware",
+        "rom",
+        "libm",
+        "micromath",
+        "micromath-sin-cos",
+        "micromath-sqrt",
+        "micromath-atan2",
+    ];
+
+    fn new() -> Variants {
+        fn solver<M: Math>() -> ik::Solver {
+            ik::Solver::new_with::<M>(Geometry::default()).expect("a valid geometry")
+        }
+        Variants {
+            rom: solver::<FloatRoutines<RomMath>>(),
+            libm: solver::<FloatRoutines<Libm>>(),
+            #[cfg(feature = "micromath")]
+            micromath: [
+                solver::<FloatRoutines<micro::Micromath>>(),
+                solver::<micro::SinCosOnly>(),
+                solver::<micro::SqrtOnly>(),
+                solver::<micro::Atan2Only>(),
+            ],
+        }
+    }
+
+    /// One bracket per variant; their pulses appended to `out`.
+    fn run(&self, marker: &mut impl OutputPin, servos: &ServoSet, pose: &Pose, out: &mut Out) {
+        let rom = timed::<FloatRoutines<RomMath>>(marker, &self.rom, servos, pose);
+        write_pulses(out, rom);
+        let libm = timed::<FloatRoutines<Libm>>(marker, &self.libm, servos, pose);
+        write_pulses(out, libm);
+        #[cfg(feature = "micromath")]
+        {
+            let [all, sin_cos, sqrt, atan2] = &self.micromath;
+            let m = timed::<FloatRoutines<micro::Micromath>>(marker, all, servos, pose);
+            write_pulses(out, m);
+            write_pulses(
+                out,
+                timed::<micro::SinCosOnly>(marker, sin_cos, servos, pose),
+            );
+            write_pulses(out, timed::<micro::SqrtOnly>(marker, sqrt, servos, pose));
+            write_pulses(out, timed::<micro::Atan2Only>(marker, atan2, servos, pose));
+        }
+    }
+}
+
+/// `micromath`'s routines, as the IK's [`Math`] (the `micromath` feature).
+#[cfg(feature = "micromath")]
+mod micro {
+    use firmware::rom_math::RomMath;
+    use kinematics_core::{FloatRoutines, Math};
+    use micromath::F32Ext;
+
+    /// `micromath`'s sine, cosine, square root and arc tangent; the arithmetic the boot ROM's.
+    pub struct Micromath;
+
+    impl Math for Micromath {
+        fn sin_cos(x: f32) -> (f32, f32) {
+            F32Ext::sin_cos(x)
+        }
+        fn sqrt(x: f32) -> f32 {
+            F32Ext::sqrt(x)
+        }
+        fn atan2(y: f32, x: f32) -> f32 {
+            F32Ext::atan2(y, x)
+        }
+        fn add(a: f32, b: f32) -> f32 {
+            RomMath::add(a, b)
+        }
+        fn sub(a: f32, b: f32) -> f32 {
+            RomMath::sub(a, b)
+        }
+        fn mul(a: f32, b: f32) -> f32 {
+            RomMath::mul(a, b)
+        }
+    }
+
+    /// The firmware's maths with one of `micromath`'s routines in the IK's fixed-point path.
+    macro_rules! one_routine {
+        ($name:ident, $doc:literal, $($routine:tt)*) => {
+            #[doc = $doc]
+            pub struct $name;
+
+            impl Math for $name {
+                fn sin_cos(x: f32) -> (f32, f32) {
+                    RomMath::sin_cos(x)
+                }
+                fn sqrt(x: f32) -> f32 {
+                    RomMath::sqrt(x)
+                }
+                fn atan2(y: f32, x: f32) -> f32 {
+                    RomMath::atan2(y, x)
+                }
+                fn add(a: f32, b: f32) -> f32 {
+                    RomMath::add(a, b)
+                }
+                fn sub(a: f32, b: f32) -> f32 {
+                    RomMath::sub(a, b)
+                }
+                fn mul(a: f32, b: f32) -> f32 {
+                    RomMath::mul(a, b)
+                }
+                $($routine)*
+            }
+        };
+    }
+
+    one_routine!(
+        SinCosOnly,
+        "`micromath`'s sine and cosine only.",
+        fn sin_cos_fixed(x_rad: f32) -> (i32, i32) {
+            FloatRoutines::<Micromath>::sin_cos_fixed(x_rad)
+        }
+    );
+    one_routine!(
+        SqrtOnly,
+        "`micromath`'s square root only.",
+        fn sqrt_fixed(d: u64) -> u32 {
+            FloatRoutines::<Micromath>::sqrt_fixed(d)
+        }
+    );
+    one_routine!(
+        Atan2Only,
+        "`micromath`'s arc tangent only.",
+        fn atan2_fixed(y: i32, x: i32) -> i32 {
+            FloatRoutines::<Micromath>::atan2_fixed(y, x)
+        }
+    );
+}
+
+/// The stream pipeline of the firmware's own controller (see the module docs), two of them:
+/// one in pass-through, one tracking.
+struct Streams {
+    pass_through: Controller<RomMath>,
+    tracking: Controller<RomMath>,
+    session: Session,
+}
+
+/// Full scales of the bench's stream frames (`stream.*` settings: mm, degrees): the bench
+/// poses and clamp targets well inside them.
+const STREAM_SCALES: [(&str, f32); 6] = [
+    ("stream.x_mm", 100.0),
+    ("stream.y_mm", 100.0),
+    ("stream.z_mm", 100.0),
+    ("stream.roll_deg", 45.0),
+    ("stream.pitch_deg", 45.0),
+    ("stream.yaw_deg", 45.0),
+];
+
+impl Streams {
+    fn new() -> Streams {
+        let mut streams = Streams {
+            pass_through: Controller::with_math(Settings::default()),
+            tracking: Controller::with_math(Settings::default()),
+            session: Session::default(),
+        };
+        let mut sink = Sink;
+        let mut set = |ctl: &mut Controller<RomMath>, line: &str| {
+            ctl.execute_line(&mut streams.session, line, &mut sink);
+        };
+        let mut text: String<64> = String::new();
+        for ctl in [&mut streams.pass_through, &mut streams.tracking] {
+            for (name, scale) in STREAM_SCALES {
+                text.clear();
+                let _ = write!(text, "set {name} {scale}");
+                set(ctl, &text);
+            }
+        }
+        set(&mut streams.pass_through, "set speed_mm_s off");
+        set(&mut streams.pass_through, "set speed_deg_s off");
+        set(&mut streams.tracking, "set accel_mm_s2 1000");
+        set(&mut streams.tracking, "set accel_deg_s2 1000");
+        streams
+    }
+
+    /// A binary stream frame for `pose` (mm, rad) at [`STREAM_SCALES`], fed to `ctl`.
+    fn feed(ctl: &mut Controller<RomMath>, session: &mut Session, pose: &Pose) {
+        let mut frame = [0u8; 16];
+        frame[..2].copy_from_slice(&BINARY_HEADER);
+        for (k, value) in pose.to_array().into_iter().enumerate() {
+            let (_, scale) = STREAM_SCALES[k];
+            let full = if k < 3 { scale } else { scale.to_radians() };
+            let count = (32768.0 + value / full * 32768.0 + 0.5).clamp(0.0, 65535.0) as u16;
+            frame[2 + 2 * k..4 + 2 * k].copy_from_slice(&count.to_be_bytes());
+        }
+        frame[14..].copy_from_slice(&BINARY_TRAILER);
+        for byte in frame {
+            let _ = ctl.on_byte(session, byte, &mut Sink);
+        }
+    }
+
+    /// Pass-through to `pose`, then a clamp of a target `dz_mm` above it (measured).
+    fn clamp(&mut self, marker: &mut impl OutputPin, pose: &Pose, dz_mm: f32) -> u32 {
+        let ctl = &mut self.pass_through;
+        Streams::feed(ctl, &mut self.session, pose);
+        ctl.apply_stream();
+        let before = ctl.stream_counts().clamped;
+        let mut target = *pose;
+        target.z_mm += dz_mm;
+        Streams::feed(ctl, &mut self.session, &target);
+        bracket_empty(marker, pose);
+        let _ = marker.set_high();
+        ctl.apply_stream();
+        while ctl.is_busy() {
+            ctl.work(&mut self.session, &mut Sink);
+        }
+        let _ = marker.set_low();
+        black_box(ctl.pose());
+        ctl.stream_counts().clamped.wrapping_sub(before)
+    }
+
+    /// `pose` as the tracker's goal, then `frames` servo frames (each measured), a flag each
+    /// in `out` (see the module docs).
+    fn track(&mut self, marker: &mut impl OutputPin, pose: &Pose, frames: u32, out: &mut Out) {
+        let ctl = &mut self.tracking;
+        Streams::feed(ctl, &mut self.session, pose);
+        ctl.apply_stream();
+        bracket_empty(marker, pose);
+        for _ in 0..frames {
+            let (before, clamps) = (*ctl.pose(), ctl.stream_counts().clamped);
+            let _ = marker.set_high();
+            let pulses = ctl.on_frame();
+            let _ = marker.set_low();
+            black_box(pulses);
+            let flag = if ctl.stream_counts().clamped != clamps {
+                'c'
+            } else if *ctl.pose() != before {
+                'm'
+            } else {
+                's'
+            };
+            let _ = out.push(flag);
+        }
+    }
+}
+
+/// Discards the controllers' replies.
+struct Sink;
+
+impl core::fmt::Write for Sink {
+    fn write_str(&mut self, _: &str) -> core::fmt::Result {
+        Ok(())
+    }
+}
+
+type Out = String<512>;
 
 /// Six f32 bit patterns in hex.
 fn parse_pose(args: &str) -> Option<Pose> {
@@ -310,7 +621,7 @@ fn write_floats(out: &mut String<512>, values: &[f32]) {
     }
 }
 
-fn write_pulses(out: &mut String<512>, pulses: Option<[f32; LEGS]>) {
+fn write_pulses(out: &mut Out, pulses: Option<[f32; LEGS]>) {
     match pulses {
         Some(w) => {
             for x in w {
@@ -323,27 +634,67 @@ fn write_pulses(out: &mut String<512>, pulses: Option<[f32; LEGS]>) {
     }
 }
 
-/// Largest |RomMath - libm| over a grid: sin, cos on [-2 pi, 2 pi]; sqrt (relative) on
-/// [0, 1e5]; atan2 all round the circle at several radii.
-fn math_differences() -> [f32; 4] {
-    let mut e = [0.0f32; 4];
-    const N: i32 = 200;
-    for k in -N..=N {
-        let x = k as f32 * (2.0 * core::f32::consts::PI / N as f32);
-        let (s, c) = RomMath::sin_cos(x);
-        let (ls, lc) = Libm::sin_cos(x);
-        e[0] = e[0].max((s - ls).abs());
-        e[1] = e[1].max((c - lc).abs());
-        let y = (k + N) as f32 * 25.0;
-        let (r, lr) = (RomMath::sqrt(y), Libm::sqrt(y));
-        if lr > 0.0 {
-            e[2] = e[2].max((r - lr).abs() / lr);
+/// The largest errors of `M`'s `f32` routines against `libm`'s `f64` over a grid: sin, cos on
+/// [-pi, pi] (the pose's angles); sqrt (relative) on [0, 1e5]; atan2 (rad) all round the
+/// circle at several radii.
+fn float_errors<M: Math>() -> [f64; 4] {
+    let mut e = [0.0f64; 4];
+    for k in -GRID..=GRID {
+        let x = k as f32 * (core::f32::consts::PI / GRID as f32);
+        let (s, c) = M::sin_cos(x);
+        let (ls, lc) = libm::sincos(f64::from(x));
+        e[0] = e[0].max((f64::from(s) - ls).abs());
+        e[1] = e[1].max((f64::from(c) - lc).abs());
+        let y = (k + GRID) as f32 * 25.0;
+        let ly = libm::sqrt(f64::from(y));
+        if ly > 0.0 {
+            e[2] = e[2].max((f64::from(M::sqrt(y)) - ly).abs() / ly);
         }
         for radius in [1e-3f32, 1.0, 3e3] {
-            let (sy, sx) = Libm::sin_cos(x * 0.5);
-            let (yy, xx) = (radius * sy, radius * sx);
-            e[3] = e[3].max((RomMath::atan2(yy, xx) - Libm::atan2(yy, xx)).abs());
+            let (yy, xx) = (radius * libm::sinf(x), radius * libm::cosf(x));
+            let exact = libm::atan2(f64::from(yy), f64::from(xx));
+            e[3] = e[3].max(angle_difference(f64::from(M::atan2(yy, xx)), exact));
         }
     }
     e
+}
+
+/// The same for `M`'s fixed-point routines (the ones the IK's hot loop calls): sin, cos of the
+/// same angles; sqrt (absolute, in units) of integers up to 2^59 spread pseudo-randomly (the
+/// IK's discriminants); atan2 (rad) of vectors of radius 2^29.
+fn fixed_errors<M: Math>() -> [f64; 4] {
+    let mut e = [0.0f64; 4];
+    for k in -GRID..=GRID {
+        let x = k as f32 * (core::f32::consts::PI / GRID as f32);
+        let (s, c) = M::sin_cos_fixed(x);
+        let (ls, lc) = libm::sincos(f64::from(x));
+        let unit = f64::from(1u32 << 30);
+        e[0] = e[0].max((f64::from(s) / unit - ls).abs());
+        e[1] = e[1].max((f64::from(c) / unit - lc).abs());
+        let d = ((k + GRID) as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15) >> 5;
+        e[2] = e[2].max((f64::from(M::sqrt_fixed(d)) - libm::sqrt(d as f64)).abs());
+        let radius = f64::from(1u32 << 29);
+        let (yy, xx) = (
+            radius * libm::sin(f64::from(x)),
+            radius * libm::cos(f64::from(x)),
+        );
+        let exact = libm::atan2(f64::from(yy as i32), f64::from(xx as i32));
+        let angle = f64::from(M::atan2_fixed(yy as i32, xx as i32)) / radius;
+        e[3] = e[3].max(angle_difference(angle, exact));
+    }
+    e
+}
+
+/// `|a - b|` as angles (rad): `pi` and `-pi` are the same direction.
+fn angle_difference(a: f64, b: f64) -> f64 {
+    let d = (a - b).abs() % (2.0 * core::f64::consts::PI);
+    d.min(2.0 * core::f64::consts::PI - d)
+}
+
+/// Half the number of grid points of [`float_errors`] and [`fixed_errors`].
+const GRID: i32 = 200;
+
+/// `name=a,b,c,d` (sin, cos, sqrt, atan2 errors).
+fn write_errors(out: &mut Out, name: &str, e: [f64; 4]) {
+    let _ = write!(out, " {name}={:e},{:e},{:e},{:e}", e[0], e[1], e[2], e[3]);
 }

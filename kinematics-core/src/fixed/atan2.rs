@@ -1,0 +1,254 @@
+//! Four-quadrant arc tangent in fixed point: the half-angle root of eq. 9 of "The Mathematics
+//! of the Stewart Platform", `alpha = 2 atan2(y, x)` (see [`crate::ik`]), in the IK's
+//! fixed-point path.
+//!
+//! Units: `y` and `x` are integers of any common scale (the IK's `L - N`, `M + sqrt(D)`, ...
+//! in one power-of-two step of mm^2); the angle is in rad, in steps of 2^-29, within
+//! `(-pi, pi]`.
+//!
+//! Method: octant reduction, then table look-up with an exact rotation, then a short series.
+//! 1. Symmetry: with `a = max(|x|, |y|)` and `b = min(|x|, |y|)`, `atan2(y, x)` is
+//!    `phi = atan(b/a)` in `[0, pi/4]`, or `pi/2 - phi` when `|y| > |x|`, then `pi - ...` when
+//!    `x < 0`, then negated when `y < 0`.
+//! 2. Table: `j`, the whole number nearest to `64 b/a` (from a 9-bit table of reciprocals;
+//!    `|64 b/a - j| < 0.63`), and `phi = atan(j/64) + atan(t)` with `t = tan(phi - atan(j/64))`.
+//!    This is the reduction of P. T. P. Tang's table-driven arc tangent
+//!    (`atan u = atan c + atan((u - c) / (1 + u c))`; J.-M. Muller, "Elementary Functions:
+//!    Algorithms and Implementation", chapter "Table-based methods"), done exactly in integers:
+//!    the vector `(a, b)` turned back by `atan(j/64)` is `(a + i b)(64 - i j)` (a Gaussian
+//!    integer product: only shifts, two small multiplications and adds), so
+//!    `t = (64 b - j a) / (64 a + j b)` exactly, `|t| < 0.0099`.
+//! 3. The quotient from a reciprocal by Newton-Raphson, `r <- r (2 - A r)` twice from the same
+//!    9-bit table (J.-M. Muller, chapter "Newton-Raphson and Goldschmidt iterations"), to a
+//!    relative error below 2^-26; then `atan t = t - t^3/3` (the next term, `t^5/5`, is below
+//!    2e-11 rad).
+//!
+//! Error bound: 2^-29 rad (1.9e-9, one step of the result) against the exact `atan2` of the
+//! integers given, tested on dense sweeps of the circle at many radii and by proptest against
+//! `f64`. Its parts: the table of `atan(j/64)` is rounded to 2^-33 rad; `t` to 2^-37 after
+//! `64 b - j a` is rounded to 2^-32 of `64 a + j b` (together below 5e-10 rad, with the
+//! reciprocal's 2^-26 of `|t|` and the series' cut); the result is rounded once, to 2^-29 rad
+//! (9.3e-10). Integer instructions only, the same bits on every machine.
+
+use core::f64::consts::PI;
+
+use super::{normalise, table, umul64, wide_mul};
+
+/// `2^16 / (1 + (i + 1/2) / 256)` for `i` = 0..=255, rounded: for a normalised `a` in
+/// `[2^31, 2^32)` whose bits 30..23 are `i`, an estimate of `2^47 / a` within 2^-9 (relative).
+static RECIPROCALS: [u16; 256] = reciprocals();
+
+const fn reciprocals() -> [u16; 256] {
+    let mut table = [0; 256];
+    let mut i = 0;
+    while i < 256 {
+        let a = 1.0 + (i as f64 + 0.5) / 256.0;
+        table[i] = table::round(65536.0 / a) as u16;
+        i += 1;
+    }
+    table
+}
+
+/// `atan(j / 64)` for `j` = 0..=64, in steps of 2^-32 rad, rounded.
+static ARC_TANGENTS: [u32; 65] = arc_tangents();
+
+const fn arc_tangents() -> [u32; 65] {
+    let mut table = [0; 65];
+    let mut j = 0;
+    while j <= 64 {
+        table[j] = table::round(table::atan(j as f64 / 64.0) * (1u64 << 32) as f64) as u32;
+        j += 1;
+    }
+    table
+}
+
+/// `pi/2` and `pi` in steps of 2^-32 rad, rounded.
+const HALF_PI_Q32: i64 = table::round(PI / 2.0 * (1u64 << 32) as f64);
+const PI_Q32: i64 = table::round(PI * (1u64 << 32) as f64);
+
+/// `atan2(y, x)`: the angle of the vector `(x, y)` in rad, in steps of 2^-29, within
+/// `(-pi, pi]` (`pi` for `y = 0`, `x < 0`), 0 for `(0, 0)`. Any `i32`s (see the module docs for
+/// the method and the error bound).
+pub fn atan2(y: i32, x: i32) -> i32 {
+    let (ax, ay) = (x.unsigned_abs(), y.unsigned_abs());
+    let swap = ay > ax;
+    let (a, b) = if swap { (ay, ax) } else { (ax, ay) };
+    if a == 0 {
+        return 0;
+    }
+    // The angle of (|x|, |y|) in steps of 2^-32 rad, then the quadrant.
+    let phi = i64::from(atan_of_ratio(a, b));
+    let mut theta = if swap { HALF_PI_Q32 - phi } else { phi };
+    if x < 0 {
+        theta = PI_Q32 - theta;
+    }
+    // Rounded as a magnitude, so atan2(-y, x) = -atan2(y, x) exactly.
+    let rounded = ((theta + 4) >> 3) as i32;
+    if y < 0 {
+        -rounded
+    } else {
+        rounded
+    }
+}
+
+/// `atan(b / a)` in steps of 2^-32 rad, for `0 <= b <= a`, `a > 0`.
+#[inline(always)]
+fn atan_of_ratio(a: u32, b: u32) -> u32 {
+    let (a, shift) = normalise(a);
+    let b = b << shift; // b <= a: no bit lost
+                        // j = round(64 b / a), with a's reciprocal from the table: q ~ (b/a) 2^31 within 2^-9.
+    let q = (b >> 16) * u32::from(RECIPROCALS[((a >> 23) & 0xff) as usize]);
+    let j = ((q + (1 << 24)) >> 25).min(64);
+    // (a + i b)(64 - i j): the vector turned back by atan(j/64), exactly (A < 2^39).
+    let big_a = (u64::from(a) << 6) + mul_small(b, j);
+    let big_b = (u64::from(b) << 6) as i64 - mul_small(a, j) as i64;
+    // A in [2^37, 2^39) scaled into [2^31, 2^32); B with it, rounded (|B| < 0.0099 A). (Two
+    // constant shifts: a variable 64-bit shift is a library call on the M0+.)
+    let (a32, b32) = if big_a >> 38 != 0 {
+        ((big_a >> 7) as u32, ((big_b + (1 << 6)) >> 7) as i32)
+    } else {
+        ((big_a >> 6) as u32, ((big_b + (1 << 5)) >> 6) as i32)
+    };
+    // t = B / A in steps of 2^-36 (|t| < 0.0099: below 2^30 steps).
+    let t = ((wide_mul(b32, reciprocal(a32) as i32) + (1 << 24)) >> 25) as i32;
+    // t^3/3 from t's top bits (steps of 2^-22, then 2^-28, 2^-50, 2^-36; 21845 / 2^16 is 1/3
+    // within 1.6e-5 of a term below 3.3e-7).
+    let t22 = t >> 14;
+    let t_squared = (t22 * t22) >> 16;
+    let t_cubed_over_3 = (((t_squared * t22) >> 14) * 21845) >> 16;
+    let atan_t = i64::from(t - t_cubed_over_3);
+    (i64::from(ARC_TANGENTS[j as usize]) + ((atan_t + 8) >> 4)) as u32
+}
+
+/// `a * j` for `j <= 64`, exactly, from two 16 x 7-bit products (no 64-bit multiply).
+#[inline(always)]
+fn mul_small(a: u32, j: u32) -> u64 {
+    (u64::from((a >> 16) * j) << 16) + u64::from((a & 0xffff) * j)
+}
+
+/// `2^61 / a` for `a` in `[2^31, 2^32)`, within 2^-26 (relative): the table's 9-bit estimate,
+/// one Newton-Raphson step `r <- r (2 - a r)` on `a`'s top 16 bits (to about 2^-13), and one on
+/// all of them with the exact residual `2^61 - a r`.
+#[inline(always)]
+fn reciprocal(a: u32) -> u32 {
+    // r0 ~ 2^47 / a; a's top 16 bits times r0 ~ 2^31 (1 + e), so 2^32 minus it is 2^31 (1 - e).
+    let r0 = u32::from(RECIPROCALS[((a >> 23) & 0xff) as usize]);
+    let r1 = r0 * (0u32.wrapping_sub((a >> 16) * r0) >> 17); // ~ 2^61 / a, below 2^30.01
+                                                             // The residual 2^61 - a r1, exactly (|residual| < 2^48), then r2 = r1 + r1 residual / 2^61.
+    let residual = (1i64 << 61) - umul64(a, r1) as i64;
+    let correction = wide_mul(r1 as i32, (residual >> 18) as i32) >> 43;
+    (i64::from(r1) + correction) as u32
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// The error bound of the module docs, in steps of 2^-29 rad.
+    const BOUND: f64 = 1.0;
+
+    /// The error of `atan2(y, x)` against `f64`, in steps of 2^-29 rad.
+    fn error_steps(y: i32, x: i32) -> f64 {
+        let exact = libm::atan2(f64::from(y), f64::from(x)) * (1u64 << 29) as f64;
+        (f64::from(atan2(y, x)) - exact).abs()
+    }
+
+    #[test]
+    fn tables_are_rounded() {
+        for (j, &entry) in ARC_TANGENTS.iter().enumerate() {
+            let exact = libm::atan(j as f64 / 64.0) * (1u64 << 32) as f64;
+            assert!((f64::from(entry) - exact).abs() <= 0.5, "j = {j}");
+        }
+        for (i, &entry) in RECIPROCALS.iter().enumerate() {
+            let exact = 65536.0 / (1.0 + (i as f64 + 0.5) / 256.0);
+            assert!((f64::from(entry) - exact).abs() <= 0.5, "i = {i}");
+        }
+    }
+
+    #[test]
+    fn reciprocal_within_its_bound() {
+        // Every 2^12-th a in [2^31, 2^32), and the ends.
+        let mut worst = 0.0f64;
+        let mut a = 1u64 << 31;
+        while a < 1 << 32 {
+            let exact = (1u64 << 61) as f64 / a as f64;
+            worst = worst.max((f64::from(reciprocal(a as u32)) - exact).abs() / exact);
+            a += 1 << 12;
+        }
+        let last = u32::MAX;
+        let exact = (1u64 << 61) as f64 / f64::from(last);
+        worst = worst.max((f64::from(reciprocal(last)) - exact).abs() / exact);
+        assert!(worst < (-26.0f64).exp2(), "{worst:e}");
+    }
+
+    #[test]
+    fn exact_at_the_axes_and_diagonals() {
+        let step = (1u64 << 29) as f64;
+        let pi = libm::round(PI * step) as i32;
+        for r in [1, 7, 1000, 1 << 20, i32::MAX] {
+            assert_eq!(atan2(0, r), 0);
+            assert_eq!(atan2(0, -r), pi);
+            assert_eq!(atan2(r, 0), libm::round(PI / 2.0 * step) as i32);
+            assert_eq!(atan2(-r, 0), -libm::round(PI / 2.0 * step) as i32);
+            assert!(error_steps(r, r) <= BOUND && error_steps(-r, -r) <= BOUND);
+        }
+        assert_eq!(atan2(0, 0), 0);
+        assert!(error_steps(i32::MIN, i32::MIN) <= BOUND);
+        assert!(error_steps(i32::MIN, 1) <= BOUND);
+    }
+
+    #[test]
+    fn within_the_bound_around_the_circle() {
+        // 2^18 directions evenly round the circle at radii from 2^4 to 2^31 (the IK's are about
+        // 2^29), and exhaustively every (x, y) with |x|, |y| <= 100 (small integers: the
+        // coarsest inputs).
+        let mut worst = (0.0f64, 0, 0);
+        let mut check = |y: i32, x: i32| {
+            let e = error_steps(y, x);
+            if e > worst.0 {
+                worst = (e, y, x);
+            }
+        };
+        let n = 1 << 18;
+        for radius_log2 in [4.0, 12.0, 20.0, 27.3, 28.0, 29.0, 29.5, 30.0, 30.99] {
+            let radius = f64::exp2(radius_log2);
+            for i in 0..n {
+                let angle = f64::from(i) / f64::from(n) * 2.0 * PI;
+                check(
+                    (radius * libm::sin(angle)) as i32,
+                    (radius * libm::cos(angle)) as i32,
+                );
+            }
+        }
+        for y in -100..=100 {
+            for x in -100..=100 {
+                check(y, x);
+            }
+        }
+        assert!(
+            worst.0 <= BOUND,
+            "{} steps at (y, x) = {:?}",
+            worst.0,
+            (worst.1, worst.2)
+        );
+        eprintln!("atan2: largest error {:.3} steps of 2^-29 rad", worst.0);
+    }
+
+    proptest! {
+        #[test]
+        fn within_the_bound_anywhere(y in any::<i32>(), x in any::<i32>()) {
+            prop_assert!(error_steps(y, x) <= BOUND, "(y, x) = ({}, {})", y, x);
+        }
+
+        #[test]
+        fn within_the_bound_for_nearly_equal_and_tiny_ratios(
+            a in 1i32..=i32::MAX, d in -1000i32..=1000, small in 0i32..=1000
+        ) {
+            let b = a.saturating_add(d);
+            prop_assert!(error_steps(b, a) <= BOUND, "({}, {})", b, a);
+            prop_assert!(error_steps(small, a) <= BOUND, "({}, {})", small, a);
+            prop_assert!(error_steps(a, -small) <= BOUND, "({}, {})", a, -small);
+        }
+    }
+}

@@ -1,0 +1,406 @@
+//! Fixed-point arithmetic for the IK's hot loop on a chip without an FPU (the RP2040's
+//! Cortex-M0+), in integer instructions only.
+//!
+//! Formats, each an integer counting steps of a power of two:
+//! - lengths, mm: `i32` in steps of 2^-[`MM_FRAC`] mm (2^-20 mm, about 1e-6 mm);
+//! - rotation matrix entries (no unit) and sines and cosines: `i32` in steps of
+//!   2^-[`ROT_FRAC`];
+//! - squared lengths, mm^2: `i64` in steps of 2^-[`SQ_FRAC`] mm^2 (2^-36 mm^2);
+//! - angles, rad: `i32` in steps of 2^-[`ANGLE_FRAC`] rad (the half-angles of eq. 9), which
+//!   are the arm angles in steps of 2^-[`ARM_FRAC`] rad.
+//!
+//! The `MAX_FIXED_*` bounds say which values the formats take without overflow anywhere in the
+//! IK's sums; the IK checks them and falls back to `f32` arithmetic beyond them. Integer
+//! arithmetic is the same on every machine, so the host runs exactly what the chip runs.
+//!
+//! The functions the IK needs, each in its own module with its method, its source and its
+//! error bound: [`sin_cos`] (the pose's rotation, eq. 1), [`sqrt`] and [`atan2`] (the arm
+//! angle, eq. 9). They are the default of [`crate::Math`]'s fixed-point functions.
+
+pub mod atan2;
+pub mod sin_cos;
+pub mod sqrt;
+mod table;
+
+pub use atan2::atan2;
+pub use sin_cos::sin_cos;
+pub use sqrt::sqrt;
+
+/// Fraction bits of the rotation entries `R_kj` (eq. 1 of "The Mathematics of the Stewart
+/// Platform") in fixed point.
+pub(crate) const ROT_FRAC: u32 = 30;
+/// Fraction bits of lengths (mm): steps of 2^-20 mm ~ 1e-6 mm, finer than an `f32` of the leg
+/// lengths (~100 mm, ulp 7.6e-6 mm) resolves.
+pub(crate) const MM_FRAC: u32 = 20;
+/// Bound (exclusive) on `|p_i|`, `|offset_i|` (per coordinate) and on `|x|, |y|, |z|` for the
+/// fixed-point part of the IK, mm. With `|R_kj| < 1 + 2^-4` ([`MAX_ROTATION_ENTRY`]),
+/// `|l_k| < 2 * 1.0625 * 384 + 384 + 384 < 1600 mm`, inside the 2048 mm an `i32` with
+/// [`MM_FRAC`] fraction bits holds. Larger geometries and poses take the float path (such a
+/// pose is far outside any workspace anyway).
+pub(crate) const MAX_FIXED_MM: f32 = 384.0;
+/// Fraction bits of the squared lengths (mm^2) `|l|^2`, `L`, `M`, `N` of eq. 9: the exact
+/// products of two [`MM_FRAC`] numbers (2^-40 mm^2) cut to 2^-36 mm^2 (3e-11 mm^2, while an
+/// `f32` of ~1e4 mm^2 has steps of 1e-3 mm^2), which leaves an `i64` room for every sum:
+/// `|l|^2 < 3 * 1600^2 mm^2` is below 2^59 of these steps.
+pub(crate) const SQ_FRAC: u32 = 36;
+/// Bound (exclusive) on `2a` for the fixed-point part, mm: `|N|, |M| < 2a |l| < 2^21 mm^2`.
+pub(crate) const MAX_FIXED_TWO_ARM_MM: f32 = 2.0 * MAX_FIXED_MM;
+/// Bound (exclusive) on `|s^2 - a^2|` for the fixed-point part, mm^2 (a rod up to ~6 m):
+/// `|L +- N| < 2^23 + 4e7 + 2^21 < 2^26 mm^2`, which is 2^62 steps of [`SQ_FRAC`].
+pub(crate) const MAX_FIXED_ROD_TERM_MM2: f32 = 4.0e7;
+/// Fraction bits of an angle from [`atan2`] (rad): `|angle| <= pi` fits an `i32`.
+pub(crate) const ANGLE_FRAC: u32 = 29;
+/// Fraction bits of an arm angle `alpha = 2 atan2(...)` (eq. 9; rad): the same integer as its
+/// half-angle in steps of 2^-[`ANGLE_FRAC`].
+pub(crate) const ARM_FRAC: u32 = ANGLE_FRAC - 1;
+/// Bound (exclusive) on `|R_kj|` for the fixed-point part, in steps of 2^-[`ROT_FRAC`]: 1 plus
+/// far more than any rounding (even a coarse library's sines, see [`crate::FloatRoutines`]).
+pub(crate) const MAX_ROTATION_ENTRY: i32 = (1 << ROT_FRAC) + (1 << (ROT_FRAC - 4));
+
+/// `x * 2^frac` rounded to the nearest integer (halves away from zero), in integer
+/// instructions. `|x| * 2^frac` must be below 2^31 (the callers bound `x` first).
+#[inline]
+pub(crate) fn to_fixed(x: f32, frac: u32) -> i32 {
+    let bits = x.to_bits();
+    let exponent = ((bits >> 23) & 0xff) as i32;
+    if exponent == 0 {
+        return 0; // zero or subnormal: far below 2^-frac
+    }
+    let mantissa = ((bits & 0x7f_ffff) | 0x80_0000) as i32;
+    // x = mantissa * 2^(exponent - 150).
+    let shift = exponent - 150 + frac as i32;
+    let magnitude = if shift >= 0 {
+        mantissa << shift
+    } else if shift > -26 {
+        ((mantissa >> (-shift - 1)) + 1) >> 1
+    } else {
+        0
+    };
+    if bits >> 31 != 0 {
+        -magnitude
+    } else {
+        magnitude
+    }
+}
+
+/// `x * 2^frac` rounded to the nearest integer (halves away from zero), in integer
+/// instructions, as [`to_fixed`] but wider: `|x| * 2^frac` must be below 2^62.
+pub(crate) fn to_fixed_wide(x: f32, frac: u32) -> i64 {
+    let bits = x.to_bits();
+    let exponent = ((bits >> 23) & 0xff) as i32;
+    if exponent == 0 {
+        return 0; // zero or subnormal
+    }
+    let mantissa = (bits & 0x7f_ffff) | 0x80_0000;
+    // x = mantissa * 2^(exponent - 150); the shifts are of 32-bit words (a variable 64-bit
+    // shift is a library call on the M0+).
+    let shift = exponent - 150 + frac as i32;
+    let magnitude = if shift >= 32 {
+        i64::from(mantissa << (shift - 32)) << 32
+    } else if shift > 0 {
+        ((i64::from(mantissa >> (32 - shift))) << 32) | i64::from(mantissa << shift)
+    } else if shift == 0 {
+        i64::from(mantissa)
+    } else if shift > -26 {
+        i64::from(((mantissa >> -shift) + ((mantissa >> (-shift - 1)) & 1)) as i32)
+    } else {
+        0
+    };
+    if bits >> 31 != 0 {
+        -magnitude
+    } else {
+        magnitude
+    }
+}
+
+/// A squared length `x_mm2` (mm^2, given in `f64`) in steps of 2^-[`SQ_FRAC`] mm^2, rounded
+/// to nearest (halves away from zero). `|x_mm2|` must be below [`MAX_FIXED_ROD_TERM_MM2`].
+pub(crate) fn to_fixed_sq(x_mm2: f64) -> i64 {
+    libm::round(x_mm2 * (1u64 << SQ_FRAC) as f64) as i64
+}
+
+/// `a * b` exactly, for any `i32`s, from four 16 x 16 -> 32-bit products: the M0+ multiplies
+/// 32 x 32 -> 32 bits in one cycle, while the library's 64-bit multiply takes ~55. With
+/// `a = a_hi 2^16 + a_lo` (`a_hi` signed, `a_lo` in `[0, 2^16)`), every partial product fits
+/// 32 bits: `|a_hi b_hi| <= 2^30`, `|a_hi b_lo| < 2^31`, `a_lo b_lo < 2^32` (unsigned).
+#[inline]
+pub(crate) fn wide_mul(a: i32, b: i32) -> i64 {
+    let (a_hi, a_lo) = (a >> 16, a & 0xffff);
+    let (b_hi, b_lo) = (b >> 16, b & 0xffff);
+    let low = (a_lo as u32) * (b_lo as u32);
+    (i64::from(a_hi * b_hi) << 32)
+        + ((i64::from(a_hi * b_lo) + i64::from(a_lo * b_hi)) << 16)
+        + i64::from(low)
+}
+
+/// `a * b` exactly for any `u32`s, from four 16 x 16 -> 32-bit products (see [`wide_mul`]).
+#[inline]
+pub(crate) fn umul64(a: u32, b: u32) -> u64 {
+    let (a_hi, a_lo) = (a >> 16, a & 0xffff);
+    let (b_hi, b_lo) = (b >> 16, b & 0xffff);
+    // The two middle products may sum past 2^32: each is added on its own.
+    (u64::from(a_hi * b_hi) << 32)
+        + (u64::from(a_hi * b_lo) << 16)
+        + (u64::from(a_lo * b_hi) << 16)
+        + u64::from(a_lo * b_lo)
+}
+
+/// `R_k0 p_0 + R_k1 p_1` for a row `(R_k0, R_k1)` in steps of 2^-[`ROT_FRAC`] (below
+/// [`MAX_ROTATION_ENTRY`]) and a point `(p_0, p_1)` in steps of 2^-[`MM_FRAC`] mm (below
+/// [`MAX_FIXED_MM`]), rounded to the nearest 2^-[`MM_FRAC`] mm (halves up), in 32-bit
+/// products only: each factor split at bit 15, the whole part `R_hi p_hi` exact, the cross
+/// products exact in steps of 2^-35 mm with the low one cut to that, the two columns' fractions
+/// halved before they are summed (so the sum fits 32 bits): off from the exact sum's rounding
+/// only within 2^-13 of a step of a tie (below 2^-33 mm in all).
+#[inline(always)]
+pub(crate) fn rotate_mm(row: [i32; 2], p_mm: [i32; 2]) -> i32 {
+    // |R_hi| <= 2^15 + 2^11, |p_hi| < 2^13.6, the lows below 2^15: every product and the
+    // fraction (below 2^30.6) fit 32 bits.
+    let part = |r: i32, p: i32| {
+        let (r_hi, r_lo) = (r >> 15, r & 0x7fff);
+        let (p_hi, p_lo) = (p >> 15, p & 0x7fff);
+        (
+            r_hi * p_hi,
+            r_hi * p_lo + r_lo * p_hi + ((r_lo * p_lo) >> 15),
+        )
+    };
+    let (whole_0, fraction_0) = part(row[0], p_mm[0]);
+    let (whole_1, fraction_1) = part(row[1], p_mm[1]);
+    whole_0 + whole_1 + (((fraction_0 >> 1) + (fraction_1 >> 1) + (1 << 13)) >> 14)
+}
+
+/// `a * a` exactly, from three 16 x 16 -> 32-bit products (see [`wide_mul`]).
+#[inline]
+pub(crate) fn square(a: i32) -> i64 {
+    let (a_hi, a_lo) = (a >> 16, a & 0xffff);
+    let low = (a_lo as u32) * (a_lo as u32);
+    (i64::from(a_hi * a_hi) << 32) + (i64::from(a_hi * a_lo) << 17) + i64::from(low)
+}
+
+/// The square of a length in steps of 2^-[`MM_FRAC`] mm, as [`mul_mm`].
+#[inline(always)]
+pub(crate) fn square_mm(a: i32) -> i64 {
+    square(a) >> (2 * MM_FRAC - SQ_FRAC)
+}
+
+/// The product of two lengths in steps of 2^-[`MM_FRAC`] mm, exact, cut (rounded towards
+/// minus infinity) to steps of 2^-[`SQ_FRAC`] mm^2.
+#[inline(always)]
+pub(crate) fn mul_mm(a: i32, b: i32) -> i64 {
+    wide_mul(a, b) >> (2 * MM_FRAC - SQ_FRAC)
+}
+
+/// The leading zeros of every byte value (8 for 0).
+static BYTE_LEADING_ZEROS: [u8; 256] = byte_leading_zeros();
+
+const fn byte_leading_zeros() -> [u8; 256] {
+    let mut table = [8; 256];
+    let mut b = 1;
+    while b < 256 {
+        let mut zeros = 0;
+        while b << zeros < 128 {
+            zeros += 1;
+        }
+        table[b] = zeros;
+        b += 1;
+    }
+    table
+}
+
+/// `m.leading_zeros()` (32 for 0) from the leading byte and a table: the M0+ has no
+/// count-leading-zeros instruction, and the library's binary search takes several times as long.
+#[inline(always)]
+pub(crate) fn leading_zeros(m: u32) -> u32 {
+    let (base, byte) = if m >= 1 << 16 {
+        if m >= 1 << 24 {
+            (0, m >> 24)
+        } else {
+            (8, m >> 16)
+        }
+    } else if m >= 1 << 8 {
+        (16, m >> 8)
+    } else {
+        (24, m)
+    };
+    base + u32::from(BYTE_LEADING_ZEROS[byte as usize])
+}
+
+/// `m` shifted so its leading one is bit 31, and the shift. `m != 0`.
+#[inline(always)]
+pub(crate) fn normalise(m: u32) -> (u32, u32) {
+    let shift = leading_zeros(m);
+    (m << shift, shift)
+}
+
+/// The `f32` nearest (ties to even) to `sign * m * 2^(exponent - 158)`, where `m` has its
+/// leading one in bit 31, `sticky` says whether non-zero bits were cut off below `m`, and the
+/// result is a normal number. In integer instructions: a carry out of the mantissa moves into
+/// the exponent field, which is then right.
+#[inline(always)]
+fn pack(sign: u32, m: u32, sticky: bool, exponent: u32) -> f32 {
+    let mut mantissa = m >> 8;
+    let rest = m & 0xff;
+    if rest > 0x80 || (rest == 0x80 && (sticky || mantissa & 1 == 1)) {
+        mantissa += 1;
+    }
+    f32::from_bits(sign | ((exponent << 23) + mantissa - (1 << 23)))
+}
+
+/// `v * 2^-frac` rounded to the nearest `f32` (ties to even), in integer instructions, as
+/// [`from_fixed`] for an `i32` (shorter on the M0+). `frac <= 100`.
+#[inline]
+pub(crate) fn from_fixed32(v: i32, frac: u32) -> f32 {
+    if v == 0 {
+        return 0.0;
+    }
+    let sign = v as u32 & 0x8000_0000;
+    let (m, shift) = normalise(v.unsigned_abs());
+    pack(sign, m, false, 127 + 31 - frac - shift)
+}
+
+/// `v * 2^-frac` rounded to the nearest `f32` (ties to even), in integer instructions.
+/// `frac <= 100` (the result is then a normal number or zero).
+#[inline]
+pub(crate) fn from_fixed(v: i64, frac: u32) -> f32 {
+    let sign = (v >> 32) as u32 & 0x8000_0000;
+    let magnitude = v.unsigned_abs();
+    let (high, low) = ((magnitude >> 32) as u32, magnitude as u32);
+    if high == 0 {
+        if low == 0 {
+            return 0.0;
+        }
+        let (m, shift) = normalise(low);
+        return pack(sign, m, false, 127 + 31 - frac - shift);
+    }
+    let (_, shift) = normalise(high);
+    let (m, sticky) = if shift == 0 {
+        (high, low != 0)
+    } else {
+        ((high << shift) | (low >> (32 - shift)), low << shift != 0)
+    };
+    pack(sign, m, sticky, 127 + 63 - frac - shift)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::test_support::xorshift;
+
+    /// `from_fixed` of `w` and `from_fixed32` of its low half are Rust's own `as f32`
+    /// conversions (one rounding, to nearest even) scaled by an exact power of two.
+    fn assert_converts_as_rust_rounds(w: i64) {
+        let expected = w as f32 * (-(SQ_FRAC as f32)).exp2();
+        assert_eq!(from_fixed(w, SQ_FRAC).to_bits(), expected.to_bits(), "{w}");
+        let v = w as i32;
+        let expected = v as f32 * (-(ARM_FRAC as f32)).exp2();
+        assert_eq!(
+            from_fixed32(v, ARM_FRAC).to_bits(),
+            expected.to_bits(),
+            "{v}"
+        );
+    }
+
+    #[test]
+    fn fixed_point_conversions_and_products_are_exact() {
+        let mut seed = 0x1234_5678_u32;
+        let mut next = || xorshift(&mut seed);
+        for _ in 0..100_000 {
+            let (a, b) = (next() as i32 >> (next() % 8), next() as i32 >> (next() % 8));
+            if a == i32::MIN || b == i32::MIN {
+                continue;
+            }
+            assert_eq!(wide_mul(a, b), i64::from(a) * i64::from(b), "{a} * {b}");
+            let scale = f64::from(1u32 << MM_FRAC);
+            // `i64 as f32` rounds once, to nearest even; the power of two scales exactly.
+            let w = ((u64::from(next()) << 32 | u64::from(next())) as i64) >> (next() % 64);
+            assert_converts_as_rust_rounds(w);
+            let x = f32::from_bits(next()) % MAX_FIXED_MM;
+            if x.is_finite() {
+                let expected = (f64::from(x) * scale).round() as i32;
+                assert_eq!(to_fixed(x, MM_FRAC), expected, "{x}");
+                let r = x / MAX_FIXED_MM;
+                let expected = (f64::from(r) * f64::from(1u32 << ROT_FRAC)).round() as i32;
+                assert_eq!(to_fixed(r, ROT_FRAC), expected, "{r}");
+            }
+        }
+    }
+
+    #[test]
+    fn products_leading_zeros_and_wide_conversions_are_exact() {
+        let mut seed = 0x8765_4321_u32;
+        let mut next = || xorshift(&mut seed);
+        let extremes = [0, 1, -1, i32::MAX, i32::MIN, 0xffff, -0x10000, 0x7fff_0000];
+        for &a in &extremes {
+            for &b in &extremes {
+                assert_eq!(wide_mul(a, b), i64::from(a) * i64::from(b), "{a} * {b}");
+            }
+            assert_eq!(square(a), i64::from(a) * i64::from(a), "{a}^2");
+        }
+        for _ in 0..100_000 {
+            let (a, b) = (next(), next() >> (next() % 32));
+            assert_eq!(umul64(a, b), u64::from(a) * u64::from(b), "{a} * {b}");
+            assert_eq!(square(a as i32), i64::from(a as i32).pow(2), "{a}^2");
+            assert_eq!(leading_zeros(b), b.leading_zeros(), "{b}");
+            let x = f32::from_bits(next()) % 4.0;
+            if x.is_finite() {
+                for frac in [36, 46, 58] {
+                    let expected = libm::round(f64::from(x) * (frac as f64).exp2()) as i64;
+                    assert_eq!(to_fixed_wide(x, frac), expected, "{x} {frac}");
+                }
+            }
+        }
+        assert_eq!(leading_zeros(0), 32);
+    }
+
+    #[test]
+    fn rotation_products_round_to_nearest() {
+        // Against the exact sum of exact products, over random rows and points within the
+        // bounds and at their extremes: within half a step and 2^-13 of one.
+        let mut seed = 0x2468_ace1_u32;
+        let mut next = || xorshift(&mut seed);
+        let r_max = MAX_ROTATION_ENTRY - 1;
+        let p_max = to_fixed(MAX_FIXED_MM, MM_FRAC) - 1;
+        let mut worst = 0.0f64;
+        for i in 0..200_000 {
+            let (row, p) = if i < 16 {
+                let sign = |b: u32, v: i32| if i >> b & 1 == 0 { v } else { -v };
+                (
+                    [sign(0, r_max), sign(1, r_max)],
+                    [sign(2, p_max), sign(3, p_max)],
+                )
+            } else {
+                let spread = |n: u32, max: i32| {
+                    (i64::from(n) % (2 * i64::from(max)) - i64::from(max)) as i32
+                };
+                let (r, q) = (|n| spread(n, r_max), |n| spread(n, p_max));
+                ([r(next()), r(next())], [q(next()), q(next())])
+            };
+            let exact = (i128::from(row[0]) * i128::from(p[0])
+                + i128::from(row[1]) * i128::from(p[1])) as f64
+                / f64::from(1u32 << ROT_FRAC);
+            worst = worst.max((f64::from(rotate_mm(row, p)) - exact).abs());
+        }
+        assert!(worst <= 0.5 + 1.0 / 8192.0, "{worst} steps");
+    }
+
+    #[test]
+    fn wide_conversion_rounds_ties_to_even() {
+        // 2^40 + 2^16 (a tie, even stays), + 1 (above the tie), 2^40 + 3 * 2^16 (a tie, odd
+        // rounds up), and the extremes.
+        for w in [
+            (1i64 << 40) + (1 << 16),
+            (1i64 << 40) + (1 << 16) + 1,
+            (1i64 << 40) + 3 * (1 << 16),
+            -((1i64 << 40) + 3 * (1 << 16)),
+            i64::MAX,
+            -i64::MAX,
+            1,
+            -1,
+            0,
+            (1 << 32) - 1,
+            1 << 32,
+        ] {
+            assert_converts_as_rust_rounds(w);
+        }
+    }
+}
