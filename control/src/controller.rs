@@ -96,7 +96,7 @@ use kinematics_core::{Geometry, KinematicsError, Libm, Math, Pose, LEGS};
 
 use crate::command::{self, Command};
 use crate::error::{Error, PoseError};
-use crate::motion::{lerp, Checkpoints, Motion, Segment, SpeedLimits};
+use crate::motion::{Checkpoints, Motion, Segment, SpeedLimits};
 use crate::payload::TorqueError;
 use crate::protocol::{Feed, Frame, Lost};
 use crate::report::{
@@ -283,6 +283,8 @@ enum Job {
 struct Bisection {
     from: Pose,
     to: Pose,
+    /// `to - from` per axis ([`Pose::to_array`] order).
+    span: [f32; 6],
     /// `to` is within reach with this solution, but its holding torques are still to be
     /// checked against the ratings (the first slice); if they are within them, `to` is the
     /// goal, else the bisection goes on.
@@ -294,6 +296,30 @@ struct Bisection {
     best: Option<(Pose, Solution)>,
     /// Halvings done.
     steps: u32,
+}
+
+impl Bisection {
+    /// A bisection on the straight line from `from` to `to`.
+    fn new(from: Pose, to: Pose, unchecked: Option<Solution>) -> Bisection {
+        let (a, b) = (from.to_array(), to.to_array());
+        Bisection {
+            from,
+            span: core::array::from_fn(|i| b[i] - a[i]),
+            to,
+            unchecked,
+            reachable: 0.0,
+            unreachable: 1.0,
+            best: None,
+            steps: 0,
+        }
+    }
+
+    /// The pose a fraction `t` of the way (what [`crate::motion::lerp`] gives, the differences computed
+    /// once per clamp rather than once per halving).
+    fn at(&self, t: f32) -> Pose {
+        let a = self.from.to_array();
+        Pose::from_array(core::array::from_fn(|i| a[i] + self.span[i] * t))
+    }
 }
 
 /// How far a [`Job::Save`] has got.
@@ -323,6 +349,17 @@ enum Rebuild {
 
 /// Holding torques (kgf cm), or why there are none.
 type Torques = Result<[f32; LEGS], KinematicsError>;
+
+/// What [`Controller::advance_in_place`] did.
+#[allow(clippy::large_enum_variant)] // see Job
+enum InPlace {
+    /// A slice of the job is done; more remain.
+    Pending,
+    /// The job has ended.
+    Done(Done),
+    /// Not a job it advances.
+    Other,
+}
 
 /// A job's outcome, for the reply.
 #[allow(clippy::large_enum_variant)] // see Job
@@ -751,9 +788,82 @@ impl<M: Math> Controller<M> {
         if commanded && !session.awaits_reply() {
             return;
         }
-        let Some(job) = self.job.take() else {
-            return;
+        let done = match self.advance_in_place() {
+            InPlace::Pending => return,
+            InPlace::Done(done) => done,
+            InPlace::Other => match self.take_and_advance(out) {
+                Some(done) => done,
+                None => return,
+            },
         };
+        self.holding = false;
+        match done {
+            Done::List(listing) => self.job = Some(Job::Listing { listing, next: 0 }),
+            Done::Quiet => {}
+            Done::Ok => self.reply(session, Ok(()), out),
+            Done::Refused(e) => self.reply(session, Err(e), out),
+        }
+    }
+
+    /// A slice of the jobs that take many (a path check's poses, a clamp's halvings), done
+    /// where the job is held: the job is moved out only when it ends. Moving a whole [`Job`]
+    /// (its largest variants hold a candidate IK and settings, over 1.6 KB) out and back
+    /// costs the RP2040 thousands of cycles, a good part of a slice's IK.
+    fn advance_in_place(&mut self) -> InPlace {
+        match &self.job {
+            Some(Job::Path {
+                segment,
+                checkpoints,
+                torque: Some(_),
+                ..
+            }) => {
+                let (segment, mut next) = (*segment, *checkpoints);
+                let result = self.check_slice(&segment, &mut next);
+                let Some(result) = result else {
+                    if let Some(Job::Path { checkpoints, .. }) = &mut self.job {
+                        *checkpoints = next;
+                    }
+                    return InPlace::Pending;
+                };
+                match self.job.take() {
+                    Some(Job::Path {
+                        purpose,
+                        solution,
+                        torque: Some(torque),
+                        ..
+                    }) => {
+                        InPlace::Done(self.finish_path(purpose, solution, segment, torque, result))
+                    }
+                    other => {
+                        self.job = other;
+                        InPlace::Pending
+                    }
+                }
+            }
+            Some(Job::Clamp(bisection)) => {
+                let mut bisection = *bisection;
+                match self.clamp_slice(&mut bisection) {
+                    None => {
+                        if let Some(Job::Clamp(held)) = &mut self.job {
+                            *held = bisection;
+                        }
+                        InPlace::Pending
+                    }
+                    Some((pose, solution)) => {
+                        self.job = None;
+                        self.reach_stream_goal(pose, solution);
+                        InPlace::Done(Done::Quiet)
+                    }
+                }
+            }
+            _ => InPlace::Other,
+        }
+    }
+
+    /// A slice of any other job, moved out of its place and back if it goes on: `None` while
+    /// it does, else how it ended.
+    fn take_and_advance(&mut self, out: &mut impl Write) -> Option<Done> {
+        let job = self.job.take()?;
         let done = match job {
             Job::Path {
                 purpose,
@@ -772,37 +882,18 @@ impl<M: Math> Controller<M> {
                             checkpoints,
                             torque: Some(torque),
                         });
-                        return;
+                        return None;
                     }
                     Err(e) => self.finish_path(purpose, solution, segment, None, Err(e)),
                 }
             }
-            Job::Path {
-                purpose,
-                solution,
-                segment,
-                mut checkpoints,
-                torque: Some(torque),
-            } => match self.check_slice(&segment, &mut checkpoints) {
-                None => {
-                    self.job = Some(Job::Path {
-                        purpose,
-                        solution,
-                        segment,
-                        checkpoints,
-                        torque: Some(torque),
-                    });
-                    return;
-                }
-                Some(result) => self.finish_path(purpose, solution, segment, torque, result),
-            },
             Job::Listing { listing, next } => {
                 if listing.write_line(next, &self.settings, &self.solver, out) {
                     self.job = Some(Job::Listing {
                         listing,
                         next: next + 1,
                     });
-                    return;
+                    return None;
                 }
                 Done::Ok
             }
@@ -813,7 +904,7 @@ impl<M: Math> Controller<M> {
             Job::Limits { start, mut search } => match self.limits_slice(&mut search) {
                 None => {
                     self.job = Some(Job::Limits { start, search });
-                    return;
+                    return None;
                 }
                 Some(reaches) => Done::List(Listing::Limits { start, reaches }),
             },
@@ -824,12 +915,12 @@ impl<M: Math> Controller<M> {
                 solution,
                 stage,
             } => match self.locate_step(why, candidate, solver, solution, stage) {
-                None => return,
+                None => return None,
                 Some(Ok(())) => Done::Ok,
                 Some(Err(e)) => Done::Refused(e),
             },
             Job::Rebuild { candidate, stage } => match self.rebuild_step(candidate, stage) {
-                None => return,
+                None => return None,
                 Some(Ok(())) => Done::Ok,
                 Some(Err(e)) => Done::Refused(e),
             },
@@ -841,26 +932,18 @@ impl<M: Math> Controller<M> {
             Job::Save(step) => {
                 // The board has not written yet.
                 self.job = Some(Job::Save(step));
-                return;
+                return None;
             }
-            Job::Clamp(mut bisection) => match self.clamp_slice(&mut bisection) {
-                None => {
-                    self.job = Some(Job::Clamp(bisection));
-                    return;
-                }
-                Some((pose, solution)) => {
-                    self.reach_stream_goal(pose, solution);
-                    Done::Quiet
-                }
-            },
+            // Advanced in place (see advance_in_place).
+            in_place @ (Job::Path {
+                torque: Some(_), ..
+            }
+            | Job::Clamp(_)) => {
+                self.job = Some(in_place);
+                return None;
+            }
         };
-        self.holding = false;
-        match done {
-            Done::List(listing) => self.job = Some(Job::Listing { listing, next: 0 }),
-            Done::Quiet => {}
-            Done::Ok => self.reply(session, Ok(()), out),
-            Done::Refused(e) => self.reply(session, Err(e), out),
-        }
+        Some(done)
     }
 
     /// Bytes were lost on their way in (a receive queue was full, or the UART saw an overrun,
@@ -1241,15 +1324,7 @@ impl<M: Math> Controller<M> {
     /// that feeds while busy: then the goal stays where it was.)
     fn start_clamp(&mut self, from: Pose, to: Pose, unchecked: Option<Solution>) {
         if self.job.is_none() {
-            self.job = Some(Job::Clamp(Bisection {
-                from,
-                to,
-                unchecked,
-                reachable: 0.0,
-                unreachable: 1.0,
-                best: None,
-                steps: 0,
-            }));
+            self.job = Some(Job::Clamp(Bisection::new(from, to, unchecked)));
         }
     }
 
@@ -1277,7 +1352,7 @@ impl<M: Math> Controller<M> {
             }
             b.steps += 1;
             let t = 0.5 * (b.reachable + b.unreachable);
-            let pose = lerp(&b.from, &b.to, t);
+            let pose = b.at(t);
             match self.pose_check(&pose, torque) {
                 Ok(solution) => {
                     b.reachable = t;

@@ -116,7 +116,8 @@ impl Tracker {
 fn braking_speed<M: Math>(frames_of_distance: f32, h: f32) -> f32 {
     let d = frames_of_distance;
     // (Truncation is floor here: the value is not negative; `as` saturates.)
-    let mut n = (((M::sqrt(1.0 + 8.0 * d / h) - 1.0) * 0.5).max(0.0) as u32) as f32;
+    let root = (M::sqrt(1.0 + 8.0 * d / h) - 1.0) * 0.5;
+    let mut n = (if root > 0.0 { root } else { 0.0 } as u32) as f32;
     // Rounding of the square root: make sure n is the largest whole number that fits.
     if h * n * (n + 1.0) * 0.5 > d {
         n -= 1.0;
@@ -124,6 +125,28 @@ fn braking_speed<M: Math>(frames_of_distance: f32, h: f32) -> f32 {
         n += 1.0;
     }
     d / (n + 1.0) + h * n * 0.5
+}
+
+/// `x` is finite, by its bit pattern: the exponent is not all ones. (The tests below, on the
+/// bits, cost a few integer instructions where a float comparison is a library call on the
+/// RP2040.)
+fn finite(x: f32) -> bool {
+    x.to_bits() & 0x7f80_0000 != 0x7f80_0000
+}
+
+/// `x` is a positive (above zero) finite number, by its bit pattern.
+fn positive_finite(x: f32) -> bool {
+    (1..0x7f80_0000).contains(&x.to_bits())
+}
+
+/// `a.min(b)` for a finite `a` (one comparison where `f32::min` is a library call with NaN
+/// handling on the RP2040; a NaN `b` leaves `a`, as `min` does).
+fn smaller(a: f32, b: f32) -> f32 {
+    if b < a {
+        b
+    } else {
+        a
+    }
 }
 
 /// One axis, one frame: `(position, velocity)` after it.
@@ -134,29 +157,37 @@ fn axis_step<M: Math>(
     (v_max, a_max): (f32, f32),
     dt: f32,
 ) -> (f32, f32) {
+    // At rest on its target, an axis stays there (what the steps below give too, without a
+    // float operation: on the RP2040 each is a library call, and a stream often leaves some
+    // axes still).
+    if target.to_bits() == position.to_bits() && velocity.to_bits() << 1 == 0 {
+        return (position, 0.0);
+    }
     let error = target - position;
-    if !(error.is_finite() && velocity.is_finite()) {
+    if !(finite(error) && finite(velocity)) {
         // Not reachable from finite inputs; hold rather than pass a NaN on.
         return (position, 0.0);
     }
     // A limit that is not a positive finite number is off.
-    let on = |limit: f32| limit > 0.0 && limit.is_finite();
-    let (speed_limited, accel_limited) = (on(v_max), on(a_max));
+    let (speed_limited, accel_limited) = (positive_finite(v_max), positive_finite(a_max));
     if !speed_limited && !accel_limited {
         return (target, 0.0);
     }
     let distance = error.abs();
-    let direction = if error < 0.0 { -1.0 } else { 1.0 };
+    // The direction to the target, -1 or 1, as a flag: `error < 0.0` by the bits (finite
+    // here: the sign bit, and not -0); multiplying by the direction is then a negation.
+    let backwards = error.to_bits() > 0x8000_0000;
     // The speed aimed at: what reaches the target this frame, what can still stop on it
     // ([`braking_speed`]), and the speed limit.
-    let mut wanted = distance / dt;
+    let reach_speed = distance / dt;
+    let mut wanted = reach_speed;
     if accel_limited {
-        wanted = wanted.min(braking_speed::<M>(distance / dt, a_max * dt));
+        wanted = smaller(wanted, braking_speed::<M>(reach_speed, a_max * dt));
     }
     if speed_limited {
-        wanted = wanted.min(v_max);
+        wanted = smaller(wanted, v_max);
     }
-    let wanted = direction * wanted;
+    let wanted = if backwards { -wanted } else { wanted };
     let new_velocity = if accel_limited {
         let change = a_max * dt;
         velocity + (wanted - velocity).clamp(-change, change)
@@ -168,7 +199,13 @@ fn axis_step<M: Math>(
     // the step it took (not zero: the next steps slow from it within the limit, staying on
     // the target, so a target that then moves away is not chased from a standstill that never
     // happened).
-    if (target - new_position) * direction <= 0.0 {
+    let ahead = target - new_position;
+    let reached = if backwards {
+        ahead >= 0.0
+    } else {
+        ahead <= 0.0
+    };
+    if reached {
         return (target, error / dt);
     }
     (new_position, new_velocity)
@@ -180,6 +217,39 @@ mod tests {
     use kinematics_core::Libm;
 
     const DT: f32 = 1.0 / 333.0;
+
+    #[test]
+    fn the_bit_tests_are_the_float_comparisons() {
+        let specials = [
+            0.0f32,
+            -0.0,
+            f32::MIN_POSITIVE,
+            1e-45,
+            -1e-45,
+            1.0,
+            -1.0,
+            f32::MAX,
+            f32::MIN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+            -f32::NAN,
+        ];
+        let mut seed = 0x2545_f491_u32;
+        let random = (0..100_000).map(|_| {
+            seed ^= seed << 13;
+            seed ^= seed >> 17;
+            seed ^= seed << 5;
+            f32::from_bits(seed)
+        });
+        for x in specials.into_iter().chain(random) {
+            assert_eq!(finite(x), x.is_finite(), "{x:?}");
+            assert_eq!(positive_finite(x), x > 0.0 && x.is_finite(), "{x:?}");
+            if x.is_finite() {
+                assert_eq!(x.to_bits() > 0x8000_0000, x < 0.0, "{x:?}");
+            }
+        }
+    }
 
     fn limits(mm_per_s: f32, mm_per_s2: f32) -> TrackLimits {
         TrackLimits {

@@ -91,7 +91,12 @@ export function highestFrameRate(rates, options) {
  * tracker runs every servo frame. Returns the share of the CPU's cycles executed (the core
  * does not count cycles while asleep in WFI) over `seconds` of streaming, and the counters.
  */
-export function measureStreamCpu({ framesPerSecond = 100, seconds = 1, baud = 921600 } = {}) {
+export function measureStreamCpu({
+  framesPerSecond = 100,
+  seconds = 1,
+  baud = 921600,
+  allAxes = false,
+} = {}) {
   const { board } = streamingBoard({ baud });
   for (const line of [
     'set frame_hz 333',
@@ -107,7 +112,17 @@ export function measureStreamCpu({ framesPerSecond = 100, seconds = 1, baud = 92
   const count = Math.round(framesPerSecond * seconds);
   const periodNanos = 1e9 / framesPerSecond;
   // Prime: the first target, then settle to the steady state before measuring.
-  const far = (k) => [32768 + (k % 7) * 200, 32768, k % 2 === 0 ? 65535 : 0, 32768, 32768, 32768];
+  // x and z move (z far out of reach, so every target is clamped); with `allAxes` the other
+  // four move too, so no axis of the tracker ever rests.
+  const moving = (k, n, step) => (allAxes ? 32768 + (k % n) * step : 32768);
+  const far = (k) => [
+    32768 + (k % 7) * 200,
+    moving(k, 5, 200),
+    k % 2 === 0 ? 65535 : 0,
+    moving(k, 3, 300),
+    moving(k, 4, 300),
+    moving(k, 6, 300),
+  ];
   board.sendBytes(binaryFrame(far(0)));
   board.runMs(50);
   const startNanos = board.nanos;
