@@ -79,10 +79,17 @@ const MICROMATH_ALONE = {
  */
 const BEFORE_STORAGE = { commit: 'b7187c2', flash: 158_696, ram: 5_288 };
 /**
- * The firmware just before USB serial (commit 20de6a3: b7187c2 with the settings storage
- * merged in, UART0 only), measured once the same way: flash and static RAM, bytes.
+ * The firmware with the settings storage merged in (commit 20de6a3: b7187c2 and the storage,
+ * UART0 only), measured once the same way: flash and static RAM, bytes.
  */
-const WITHOUT_USB = { commit: '20de6a3', flash: 177_772, ram: 5_652 };
+const WITH_STORAGE = { commit: '20de6a3', flash: 177_772, ram: 5_652 };
+/**
+ * USB serial's merge (commit c4c7568) and its first parent, the firmware just before it
+ * (7496619, UART0 only), measured once the same way: what USB added, against what it was
+ * merged into (the firmware has grown since, for other reasons).
+ */
+const WITHOUT_USB = { commit: '7496619', flash: 181_064, ram: 5_652 };
+const WITH_USB = { commit: 'c4c7568', flash: 208_304, ram: 12_128 };
 /** The USB code and data in the ELF's symbol table (rust names; the handler by its own). */
 const USB_SYMBOL =
   /usb_serial|usb_device|usbd_serial|rp2040_hal\.\.usb\.\.|rp2040_hal3usb|USBCTRL_IRQ/;
@@ -239,9 +246,9 @@ const symbols = symbolValues(DEFAULT_ELF, ['_stack_end', '_stack_start']);
 const usbSymbols = sizedSymbols(DEFAULT_ELF).filter((symbol) => USB_SYMBOL.test(symbol.name));
 const usbRam = usbSymbols.filter((s) => s.value >= RAM_START).reduce((n, s) => n + s.size, 0);
 const usbCode = usbSymbols.filter((s) => s.value < RAM_START).reduce((n, s) => n + s.size, 0);
-// What USB added against the firmware just before it (anything added since counts too).
-const usbFlash = fw.flash - WITHOUT_USB.flash;
-const usbRamTotal = fw.ram - WITHOUT_USB.ram;
+// What USB added, at its merge.
+const usbFlash = WITH_USB.flash - WITHOUT_USB.flash;
+const usbRamTotal = WITH_USB.ram - WITHOUT_USB.ram;
 const stackBytes = stackHighWaterBytes(worst.board, {
   stackEnd: symbols._stack_end,
   stackStart: symbols._stack_start,
@@ -530,11 +537,11 @@ Highest rate with every line answered \`ok\`: **${usbBest ? fmt(usbBest.linesPer
 (the bus could carry about ${fmt((BULK_PACKETS_PER_FRAME * 64 * 1000) / bytesPerLine)}/s of these lines). A host that waits for each \`ok\`
 before sending the next line gets ${fmt(usbLockStep.linesPerSecond)} lines/s (${usbLockStep.ok}/${usbLockStep.lines} ok).
 
-What USB costs: the firmware just before it (commit ${WITHOUT_USB.commit}, UART0 only) took
-${fmt(WITHOUT_USB.flash)} bytes of flash and ${fmt(WITHOUT_USB.ram)} of static RAM (measured once); this one takes ${fmt(fw.flash)} and
-${fmt(fw.ram)}: **${fmt(usbFlash)} bytes of flash and ${fmt(usbRamTotal)} of static RAM** for USB serial (usb-device,
+What USB costs: the firmware just before its merge (commit ${WITHOUT_USB.commit}, UART0 only) took
+${fmt(WITHOUT_USB.flash)} bytes of flash and ${fmt(WITHOUT_USB.ram)} of static RAM, the merge (${WITH_USB.commit}) ${fmt(WITH_USB.flash)} and
+${fmt(WITH_USB.ram)} (both measured once): **${fmt(usbFlash)} bytes of flash and ${fmt(usbRamTotal)} of static RAM** for USB serial (usb-device,
 usbd-serial, rp2040-hal's USB driver, \`firmware/src/usb_serial.rs\`, the second link in the
-main loop). Of that, the symbols named for USB hold ${fmt(usbCode)} bytes of code (the rest is inlined
+main loop). In this firmware, the symbols named for USB hold ${fmt(usbCode)} bytes of code (the rest is inlined
 into callers, descriptors and tables) and ${fmt(usbRam)} bytes of RAM: the receive queue (1 KB), the
 transmit queue (4 KB), usbd-serial's two 128-byte buffers and the USB device's state.
 
@@ -630,9 +637,9 @@ the worst-case command above (the deepest non-zero RAM word below the stack top;
 zeroed): **${fmt(stackBytes)} bytes**; on a board that booted and saved: ${fmt(saveStackBytes)} bytes.
 
 The settings storage (\`save\`, \`control::store\` and \`control::record\`, the flash routines,
-the power-up load and their words): commit ${WITHOUT_USB.commit}, which merged it in, against
+the power-up load and their words): commit ${WITH_STORAGE.commit}, which merged it in, against
 commit ${BEFORE_STORAGE.commit} just before (both measured once with the same sums): flash
-**+${fmt(WITHOUT_USB.flash - BEFORE_STORAGE.flash)} bytes**, static RAM **+${fmt(WITHOUT_USB.ram - BEFORE_STORAGE.ram)} bytes**. Its RAM by symbol:
+**+${fmt(WITH_STORAGE.flash - BEFORE_STORAGE.flash)} bytes**, static RAM **+${fmt(WITH_STORAGE.ram - BEFORE_STORAGE.ram)} bytes**. Its RAM by symbol:
 ${Object.entries(storageSymbols)
   .map(([name, size]) => `\`${name}\` ${fmt(size)} bytes`)
   .join(', ')} (the two routines also have their copy in flash, in \`.data\`'s load image).
