@@ -66,41 +66,8 @@ export function sectionSizes(elfPath) {
 
 const SHT_SYMTAB = 2;
 
-/** The value of each named symbol in the ELF's symbol table (those asked for that exist). */
-export function symbolValues(elfPath, names) {
-  const file = readFileSync(elfPath);
-  const view = new DataView(file.buffer, file.byteOffset, file.byteLength);
-  const sectionHeaderOffset = view.getUint32(0x20, true);
-  const sectionHeaderSize = view.getUint16(0x2e, true);
-  const sectionCount = view.getUint16(0x30, true);
-  const header = (i) => sectionHeaderOffset + i * sectionHeaderSize;
-  const wanted = new Set(names);
-  const values = {};
-  for (let i = 0; i < sectionCount; i++) {
-    if (view.getUint32(header(i) + 0x04, true) !== SHT_SYMTAB) {
-      continue;
-    }
-    const offset = view.getUint32(header(i) + 0x10, true);
-    const size = view.getUint32(header(i) + 0x14, true);
-    const entrySize = view.getUint32(header(i) + 0x24, true);
-    const strings = view.getUint32(header(view.getUint32(header(i) + 0x18, true)) + 0x10, true);
-    for (let entry = offset; entry < offset + size; entry += entrySize) {
-      let end = strings + view.getUint32(entry, true);
-      const start = end;
-      while (file[end] !== 0) {
-        end++;
-      }
-      const name = file.toString('latin1', start, end);
-      if (wanted.has(name)) {
-        values[name] = view.getUint32(entry + 4, true);
-      }
-    }
-  }
-  return values;
-}
-
-/** Every symbol in the ELF's symbol table with a size: `[{ name, value, size }]` (raw names). */
-export function sizedSymbols(elfPath) {
+/** Every symbol in the ELF's symbol table: `[{ name, value, size }]` (raw names). */
+function allSymbols(elfPath) {
   const file = readFileSync(elfPath);
   const view = new DataView(file.buffer, file.byteOffset, file.byteLength);
   const sectionHeaderOffset = view.getUint32(0x20, true);
@@ -117,10 +84,6 @@ export function sizedSymbols(elfPath) {
     const entrySize = view.getUint32(header(i) + 0x24, true);
     const strings = view.getUint32(header(view.getUint32(header(i) + 0x18, true)) + 0x10, true);
     for (let entry = offset; entry < offset + size; entry += entrySize) {
-      const symbolSize = view.getUint32(entry + 8, true);
-      if (symbolSize === 0) {
-        continue;
-      }
       let end = strings + view.getUint32(entry, true);
       const start = end;
       while (file[end] !== 0) {
@@ -129,11 +92,28 @@ export function sizedSymbols(elfPath) {
       symbols.push({
         name: file.toString('latin1', start, end),
         value: view.getUint32(entry + 4, true),
-        size: symbolSize,
+        size: view.getUint32(entry + 8, true),
       });
     }
   }
   return symbols;
+}
+
+/** The value of each named symbol in the ELF's symbol table (those asked for that exist). */
+export function symbolValues(elfPath, names) {
+  const wanted = new Set(names);
+  const values = {};
+  for (const { name, value } of allSymbols(elfPath)) {
+    if (wanted.has(name)) {
+      values[name] = value;
+    }
+  }
+  return values;
+}
+
+/** Every symbol in the ELF's symbol table with a size: `[{ name, value, size }]` (raw names). */
+export function sizedSymbols(elfPath) {
+  return allSymbols(elfPath).filter(({ size }) => size > 0);
 }
 
 /** Sizes of the symbols whose (mangled) names `keep` accepts, by demangled-looking name. */

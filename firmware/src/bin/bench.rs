@@ -399,46 +399,13 @@ mod micro {
     use kinematics_core::{FloatRoutines, Math};
     use micromath::F32Ext;
 
-    /// `micromath`'s sine, cosine, square root and arc tangent; the arithmetic the boot ROM's.
-    pub struct Micromath;
-
-    impl Math for Micromath {
-        fn sin_cos(x: f32) -> (f32, f32) {
-            F32Ext::sin_cos(x)
-        }
-        fn sqrt(x: f32) -> f32 {
-            F32Ext::sqrt(x)
-        }
-        fn atan2(y: f32, x: f32) -> f32 {
-            F32Ext::atan2(y, x)
-        }
-        fn add(a: f32, b: f32) -> f32 {
-            RomMath::add(a, b)
-        }
-        fn sub(a: f32, b: f32) -> f32 {
-            RomMath::sub(a, b)
-        }
-        fn mul(a: f32, b: f32) -> f32 {
-            RomMath::mul(a, b)
-        }
-    }
-
-    /// The firmware's maths with one of `micromath`'s routines in the IK's fixed-point path.
-    macro_rules! one_routine {
-        ($name:ident, $doc:literal, $($routine:tt)*) => {
+    /// A [`Math`] named `$name` with the boot ROM's arithmetic and the routines given.
+    macro_rules! rom_arithmetic {
+        ($name:ident, $doc:literal, $($routines:tt)*) => {
             #[doc = $doc]
             pub struct $name;
 
             impl Math for $name {
-                fn sin_cos(x: f32) -> (f32, f32) {
-                    RomMath::sin_cos(x)
-                }
-                fn sqrt(x: f32) -> f32 {
-                    RomMath::sqrt(x)
-                }
-                fn atan2(y: f32, x: f32) -> f32 {
-                    RomMath::atan2(y, x)
-                }
                 fn add(a: f32, b: f32) -> f32 {
                     RomMath::add(a, b)
                 }
@@ -448,8 +415,42 @@ mod micro {
                 fn mul(a: f32, b: f32) -> f32 {
                     RomMath::mul(a, b)
                 }
-                $($routine)*
+                $($routines)*
             }
+        };
+    }
+
+    rom_arithmetic! {
+        Micromath,
+        "`micromath`'s sine, cosine, square root and arc tangent; the arithmetic the boot ROM's.",
+        fn sin_cos(x: f32) -> (f32, f32) {
+            F32Ext::sin_cos(x)
+        }
+        fn sqrt(x: f32) -> f32 {
+            F32Ext::sqrt(x)
+        }
+        fn atan2(y: f32, x: f32) -> f32 {
+            F32Ext::atan2(y, x)
+        }
+    }
+
+    /// The firmware's maths with one of `micromath`'s routines in the IK's fixed-point path.
+    macro_rules! one_routine {
+        ($name:ident, $doc:literal, $($routine:tt)*) => {
+            rom_arithmetic!(
+                $name,
+                $doc,
+                fn sin_cos(x: f32) -> (f32, f32) {
+                    RomMath::sin_cos(x)
+                }
+                fn sqrt(x: f32) -> f32 {
+                    RomMath::sqrt(x)
+                }
+                fn atan2(y: f32, x: f32) -> f32 {
+                    RomMath::atan2(y, x)
+                }
+                $($routine)*
+            );
         };
     }
 
