@@ -156,6 +156,13 @@ impl Rng {
         half * (2.0 * self.unit() - 1.0)
     }
 
+    /// A vector uniformly in the box `[-half, half)` per coordinate, as the core's f32 vector
+    /// (x drawn first).
+    pub fn vec3(&mut self, half: [f64; 3]) -> Vec3 {
+        let [x, y, z] = half.map(|h| self.symmetric(h) as f32);
+        Vec3::new(x, y, z)
+    }
+
     /// A pose uniformly in the box `range` (mm, degrees), as the core's f32 pose.
     pub fn pose(&mut self, range: &[f64; 6]) -> Pose {
         let v: [f64; 6] = core::array::from_fn(|i| self.symmetric(range[i]));

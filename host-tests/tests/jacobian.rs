@@ -153,11 +153,7 @@ fn rates_follow_the_motion_and_invert() {
         let twist = Twist {
             linear_mm_s: Vec3::new(rng.symmetric(40.0) as f32, rng.symmetric(40.0) as f32, 0.0)
                 + Vec3::new(0.0, 0.0, rng.symmetric(30.0) as f32),
-            angular_rad_s: Vec3::new(
-                rng.symmetric(0.5) as f32,
-                rng.symmetric(0.5) as f32,
-                rng.symmetric(1.0) as f32,
-            ),
+            angular_rad_s: rng.vec3([0.5, 0.5, 1.0]),
         };
         let rates = joint_rates::<Libm, _>(&solver, &pose, &twist).unwrap();
         let dt = 1e-5;

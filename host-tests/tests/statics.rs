@@ -112,16 +112,8 @@ fn joint_forces_do_the_work_of_the_wrench() {
                 continue;
             }
             let w = Wrench {
-                force_n: Vec3::new(
-                    rng.symmetric(20.0) as f32,
-                    rng.symmetric(20.0) as f32,
-                    rng.symmetric(40.0) as f32,
-                ),
-                moment_n_mm: Vec3::new(
-                    rng.symmetric(800.0) as f32,
-                    rng.symmetric(800.0) as f32,
-                    rng.symmetric(800.0) as f32,
-                ),
+                force_n: rng.vec3([20.0, 20.0, 40.0]),
+                moment_n_mm: rng.vec3([800.0, 800.0, 800.0]),
             };
             let Some(f) = forces(&pose, &w) else { continue };
             // The work of each part separately, so that neither hides the other's error.
@@ -508,28 +500,12 @@ fn motions_follow_the_trajectory() {
     let mut rng = Rng::new(79);
     let motion = |rng: &mut Rng| {
         let twist = Twist {
-            linear_mm_s: Vec3::new(
-                rng.symmetric(50.0) as f32,
-                rng.symmetric(50.0) as f32,
-                rng.symmetric(50.0) as f32,
-            ),
-            angular_rad_s: Vec3::new(
-                rng.symmetric(1.0) as f32,
-                rng.symmetric(1.0) as f32,
-                rng.symmetric(1.0) as f32,
-            ),
+            linear_mm_s: rng.vec3([50.0, 50.0, 50.0]),
+            angular_rad_s: rng.vec3([1.0, 1.0, 1.0]),
         };
         let acceleration = Acceleration {
-            linear_mm_s2: Vec3::new(
-                rng.symmetric(500.0) as f32,
-                rng.symmetric(500.0) as f32,
-                rng.symmetric(500.0) as f32,
-            ),
-            angular_rad_s2: Vec3::new(
-                rng.symmetric(10.0) as f32,
-                rng.symmetric(10.0) as f32,
-                rng.symmetric(10.0) as f32,
-            ),
+            linear_mm_s2: rng.vec3([500.0, 500.0, 500.0]),
+            angular_rad_s2: rng.vec3([10.0, 10.0, 10.0]),
         };
         (twist, acceleration)
     };
@@ -664,26 +640,10 @@ fn actuation_carries_the_payload_with_its_inertia() {
         if reference.margins_mm(&exact).iter().any(|m| *m < 1.0) {
             continue;
         }
-        let v = Vec3::new(
-            rng.symmetric(50.0) as f32,
-            rng.symmetric(50.0) as f32,
-            rng.symmetric(50.0) as f32,
-        );
-        let w = Vec3::new(
-            rng.symmetric(1.0) as f32,
-            rng.symmetric(1.0) as f32,
-            rng.symmetric(2.0) as f32,
-        );
-        let a = Vec3::new(
-            rng.symmetric(2000.0) as f32,
-            rng.symmetric(2000.0) as f32,
-            rng.symmetric(2000.0) as f32,
-        );
-        let alpha = Vec3::new(
-            rng.symmetric(20.0) as f32,
-            rng.symmetric(20.0) as f32,
-            rng.symmetric(20.0) as f32,
-        );
+        let v = rng.vec3([50.0, 50.0, 50.0]);
+        let w = rng.vec3([1.0, 1.0, 2.0]);
+        let a = rng.vec3([2000.0, 2000.0, 2000.0]);
+        let alpha = rng.vec3([20.0, 20.0, 20.0]);
         let twist = Twist {
             linear_mm_s: v,
             angular_rad_s: w,
