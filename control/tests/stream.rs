@@ -25,6 +25,11 @@ fn count(fraction: f32) -> u16 {
     (32768.0 + fraction * 32768.0).round().clamp(0.0, 65535.0) as u16
 }
 
+/// A binary frame of six fractions (-1..1) of the axes' full scales.
+fn frame_of(fractions: [f32; 6]) -> Vec<u8> {
+    binary(fractions.map(count))
+}
+
 /// Pass-through: every speed and acceleration limit off.
 fn pass_through() -> Host {
     let mut s = Host::quiet();
@@ -96,14 +101,7 @@ fn a_binary_frame_is_applied_at_once_in_pass_through() {
 fn the_newest_frame_wins() {
     let mut s = pass_through();
     for z in [0.1, 0.2, 0.3] {
-        s.feed(&binary([
-            count(0.0),
-            count(0.0),
-            count(z),
-            count(0.0),
-            count(0.0),
-            count(0.0),
-        ]));
+        s.feed(&frame_of([0.0, 0.0, z, 0.0, 0.0, 0.0]));
     }
     s.apply_stream();
     assert!(close(s.ctl.pose().z_mm, 0.3 * 15.0, 1e-3));
@@ -147,14 +145,7 @@ fn text_frames_use_the_bit_depth_and_axis_order_of_the_profile() {
 #[test]
 fn damaged_frames_and_garbage_are_counted_and_never_applied() {
     let mut s = pass_through();
-    let good = binary([
-        count(0.0),
-        count(0.0),
-        count(0.2),
-        count(0.0),
-        count(0.0),
-        count(0.0),
-    ]);
+    let good = frame_of([0.0, 0.0, 0.2, 0.0, 0.0, 0.0]);
     let mut bytes = good.clone();
     bytes.remove(6); // a lost byte: this frame and no other is damaged
     bytes.extend_from_slice(&[0x00, 0xFF, 0x13, 0xA5, 0x00]); // garbage
@@ -174,14 +165,7 @@ fn an_unreachable_target_is_clamped_on_the_way_to_it_and_counted() {
     let mut s = pass_through();
     s.ok("set stream.z_mm 100");
     // z = +80 mm is far outside the default workspace.
-    s.feed(&binary([
-        count(0.0),
-        count(0.0),
-        count(0.8),
-        count(0.0),
-        count(0.0),
-        count(0.0),
-    ]));
+    s.feed(&frame_of([0.0, 0.0, 0.8, 0.0, 0.0, 0.0]));
     // The target's IK at once; CLAMP_STEPS bisection steps, CHECKS_PER_SLICE a pass.
     let passes = s.apply_stream();
     assert_eq!(
@@ -218,14 +202,7 @@ fn the_tracker_respects_speed_and_acceleration_and_does_not_overshoot() {
     s.ok("set speed_deg_s 60");
     s.ok("set accel_deg_s2 600");
     // A step to z = +6 mm and roll = +6 deg.
-    s.feed(&binary([
-        count(0.0),
-        count(0.0),
-        count(0.4),
-        count(0.4),
-        count(0.0),
-        count(0.0),
-    ]));
+    s.feed(&frame_of([0.0, 0.0, 0.4, 0.4, 0.0, 0.0]));
     s.apply_stream();
     assert_eq!(
         *s.ctl.pose(),
@@ -267,14 +244,7 @@ fn the_tracker_respects_speed_and_acceleration_and_does_not_overshoot() {
 #[test]
 fn a_command_ends_the_stream_and_a_frame_starts_it_again() {
     let mut s = pass_through();
-    s.feed(&binary([
-        count(0.1),
-        count(0.0),
-        count(0.0),
-        count(0.0),
-        count(0.0),
-        count(0.0),
-    ]));
+    s.feed(&frame_of([0.1, 0.0, 0.0, 0.0, 0.0, 0.0]));
     s.apply_stream();
     assert!(s.ctl.is_streaming());
     s.ok("pose 0 0 2 0 0 0");
@@ -283,14 +253,7 @@ fn a_command_ends_the_stream_and_a_frame_starts_it_again() {
         *s.ctl.pose(),
         Pose::from_degrees(0.0, 0.0, 2.0, 0.0, 0.0, 0.0)
     );
-    s.feed(&binary([
-        count(0.0),
-        count(0.0),
-        count(0.0),
-        count(0.0),
-        count(0.0),
-        count(0.0),
-    ]));
+    s.feed(&frame_of([0.0, 0.0, 0.0, 0.0, 0.0, 0.0]));
     s.apply_stream();
     assert!(s.ctl.is_streaming());
     assert_eq!(*s.ctl.pose(), Pose::HOME);
@@ -304,14 +267,7 @@ fn the_e_stop_freezes_refuses_moves_and_frames_until_closed_and_reset() {
     s.ok("set estop_pin 15");
     s.ok("set power_pin 16");
     assert!(!s.ctl.servo_power(), "off at start-up");
-    s.feed(&binary([
-        count(0.2),
-        count(0.0),
-        count(0.0),
-        count(0.0),
-        count(0.0),
-        count(0.0),
-    ]));
+    s.feed(&frame_of([0.2, 0.0, 0.0, 0.0, 0.0, 0.0]));
     s.apply_stream();
     assert!(s.ctl.servo_power());
     let frozen = *s.ctl.pose();
@@ -325,14 +281,7 @@ fn the_e_stop_freezes_refuses_moves_and_frames_until_closed_and_reset() {
         "{notice:?}"
     );
     // Frames are refused and counted; moves are refused with the reason.
-    s.feed(&binary([
-        count(-0.2),
-        count(0.0),
-        count(0.0),
-        count(0.0),
-        count(0.0),
-        count(0.0),
-    ]));
+    s.feed(&frame_of([-0.2, 0.0, 0.0, 0.0, 0.0, 0.0]));
     s.apply_stream();
     assert_eq!(*s.ctl.pose(), frozen);
     assert_eq!(s.ctl.stream_counts().refused, 1);
@@ -386,14 +335,7 @@ fn the_e_stop_can_ease_home_then_power_off() {
 fn a_stream_that_stops_eases_home_after_the_link_timeout() {
     let mut s = pass_through();
     s.ok("set link_timeout_s 0.2");
-    s.feed(&binary([
-        count(0.0),
-        count(0.0),
-        count(0.3),
-        count(0.0),
-        count(0.0),
-        count(0.0),
-    ]));
+    s.feed(&frame_of([0.0, 0.0, 0.3, 0.0, 0.0, 0.0]));
     s.apply_stream();
     s.frames(5);
     assert!(s.ctl.is_streaming(), "frames are a sign of life");
@@ -415,14 +357,7 @@ fn defaults_for_a_fresh_board_have_no_safety_pins() {
 fn a_clamp_is_the_controllers_own_work_a_slice_at_a_time() {
     let mut s = pass_through();
     s.ok("set stream.z_mm 100");
-    s.feed(&binary([
-        count(0.0),
-        count(0.0),
-        count(0.8),
-        count(0.0),
-        count(0.0),
-        count(0.0),
-    ]));
+    s.feed(&frame_of([0.0, 0.0, 0.8, 0.0, 0.0, 0.0]));
     s.ctl.apply_stream();
     // The target's own IK failed: the bisection (6 IK solutions) is left to `work`, a few per
     // slice, so the pass that fed the frame stays short; nothing moved yet.
@@ -487,14 +422,7 @@ fn a_frame_fed_with_a_command_in_the_same_pass_is_applied_after_the_command_s_wo
             s.ok("set payload_g 1000");
             s.ok("set servos.torque_kgcm 20");
         }
-        let mut bytes = binary([
-            count(0.0),
-            count(0.0),
-            count(z),
-            count(0.0),
-            count(0.0),
-            count(0.0),
-        ]);
+        let mut bytes = frame_of([0.0, 0.0, z, 0.0, 0.0, 0.0]);
         bytes.extend_from_slice(b"status\r\n");
         one_pass(&mut s, &bytes);
         let out = passes_until_idle(&mut s);
