@@ -3,7 +3,7 @@
 use kinematics_core::configuration::{CubicConfiguration, GeneralConfiguration};
 use kinematics_core::geometry::{CircularLayout, PairedLayout};
 use kinematics_core::legs::Struts;
-use kinematics_core::{Geometry, Pose, Vec3};
+use kinematics_core::{ik, Geometry, Pose, Vec3};
 
 /// The angles of the general circular configuration of the Stewart platform Simscape model
 /// documentation, degrees: servo shafts...
@@ -126,6 +126,14 @@ pub fn cases() -> Vec<Case> {
             angle_tol_deg: 2.0e-4,
         },
     ]
+}
+
+/// The IK of a test geometry rotating about `centre_mm` (platform frame); both must be valid.
+pub fn solver_about(geometry: Geometry, centre_mm: Vec3) -> ik::Solver {
+    ik::Solver::new(geometry)
+        .expect("a test geometry builds")
+        .with_rotation_centre_mm(centre_mm)
+        .expect("a valid rotation centre")
 }
 
 /// A small deterministic generator (xorshift64*), so every failure reproduces.

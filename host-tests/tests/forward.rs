@@ -6,7 +6,7 @@
 // Legs are numbered; index loops over them read like the equations.
 #![allow(clippy::needless_range_loop)]
 
-use host_tests::fixtures::{cases, strut_cases, Rng, CENTRES_MM};
+use host_tests::fixtures::{cases, solver_about, strut_cases, Rng, CENTRES_MM};
 use host_tests::platform::{newton_fk, rotation_between, translation_between, RefAnchors, RefArms};
 use host_tests::reference::RefPose;
 use kinematics_core::forward::{
@@ -80,10 +80,7 @@ fn servo_round_trip_from_a_frame_away() {
     };
     for case in cases() {
         for c in CENTRES_MM {
-            let solver = ik::Solver::new(case.geometry.clone())
-                .unwrap()
-                .with_rotation_centre_mm(Vec3::from(c))
-                .unwrap();
+            let solver = solver_about(case.geometry.clone(), Vec3::from(c));
             let reference = RefArms::from_solver(&solver);
             let mut rng = Rng::new(43);
             let mut tally = Tally::default();
@@ -141,10 +138,7 @@ fn strut_round_trip_from_a_frame_away() {
 #[test]
 fn core_newton_agrees_with_an_independent_f64_newton() {
     eprintln!();
-    let solver = ik::Solver::new(cases()[0].geometry.clone())
-        .unwrap()
-        .with_rotation_centre_mm(Vec3::new(12.0, -7.5, -35.0))
-        .unwrap();
+    let solver = solver_about(cases()[0].geometry.clone(), Vec3::new(12.0, -7.5, -35.0));
     let reference = RefArms::from_solver(&solver);
     let mut rng = Rng::new(53);
     let mut tally = Tally::default();

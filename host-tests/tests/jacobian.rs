@@ -6,7 +6,7 @@
 // Legs are numbered; index loops over them read like the equations.
 #![allow(clippy::needless_range_loop)]
 
-use host_tests::fixtures::{cases, strut_cases, Rng, CENTRES_MM};
+use host_tests::fixtures::{cases, solver_about, strut_cases, Rng, CENTRES_MM};
 use host_tests::platform::{fd_jacobian, moved, RefAnchors, RefArms, M6};
 use host_tests::reference::{mat_mul, transpose, RefPose};
 use kinematics_core::jacobian::Jacobian;
@@ -91,10 +91,7 @@ fn servo_jacobian_matches_finite_differences_of_the_arm_angles() {
     eprintln!();
     for case in cases() {
         for c in CENTRES_MM {
-            let solver = ik::Solver::new(case.geometry.clone())
-                .unwrap()
-                .with_rotation_centre_mm(Vec3::from(c))
-                .unwrap();
+            let solver = solver_about(case.geometry.clone(), Vec3::from(c));
             let reference = RefArms::from_solver(&solver);
             let mut rng = Rng::new(23);
             let (mut tested, mut worst) = (0, 0.0f64);
@@ -133,10 +130,7 @@ fn servo_jacobian_matches_finite_differences_of_the_arm_angles() {
 /// the twist.
 #[test]
 fn rates_follow_the_motion_and_invert() {
-    let solver = ik::Solver::new(cases()[0].geometry.clone())
-        .unwrap()
-        .with_rotation_centre_mm(Vec3::new(0.0, 0.0, 30.0))
-        .unwrap();
+    let solver = solver_about(cases()[0].geometry.clone(), Vec3::new(0.0, 0.0, 30.0));
     let reference = RefArms::from_solver(&solver);
     let mut rng = Rng::new(29);
     let mut worst = 0.0f64;

@@ -5,7 +5,7 @@
 // Legs are numbered; index loops over them read like the equations.
 #![allow(clippy::needless_range_loop)]
 
-use host_tests::fixtures::{cases, strut_cases, Rng, CENTRES_MM};
+use host_tests::fixtures::{cases, solver_about, strut_cases, Rng, CENTRES_MM};
 use host_tests::platform::{RefAnchors, RefArms};
 use host_tests::reference::{solve_leg, RefPose};
 use kinematics_core::configuration::ConfigurationError;
@@ -27,10 +27,7 @@ fn servo_ik_turns_the_platform_about_the_centre() {
     eprintln!();
     for case in cases() {
         for c in CENTRES_MM {
-            let solver = ik::Solver::new(case.geometry.clone())
-                .expect("a valid geometry")
-                .with_rotation_centre_mm(Vec3::from(c))
-                .expect("a valid centre");
+            let solver = solver_about(case.geometry.clone(), Vec3::from(c));
             let reference = RefArms::from_solver(&solver);
             let mut rng = Rng::new(11);
             let (mut ok, mut worst_mm, mut worst_deg) = (0, 0.0f64, 0.0f64);
@@ -132,10 +129,7 @@ fn default_centre_changes_nothing() {
 fn a_rotation_alone_leaves_the_centre_where_it_was() {
     // The point the platform turns about does not move when only the angles change: in the
     // core's placement, and in the reference's chain of frames.
-    let solver = ik::Solver::new(cases()[0].geometry.clone())
-        .unwrap()
-        .with_rotation_centre_mm(Vec3::new(12.0, -7.5, -35.0))
-        .unwrap();
+    let solver = solver_about(cases()[0].geometry.clone(), Vec3::new(12.0, -7.5, -35.0));
     let anchors = solver.anchors();
     let reference = RefAnchors::from_core(&anchors);
     let mut rng = Rng::new(5);

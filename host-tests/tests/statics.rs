@@ -9,7 +9,7 @@
 // Legs are numbered; index loops over them read like the equations.
 #![allow(clippy::needless_range_loop)]
 
-use host_tests::fixtures::{cases, strut_cases, Rng, CENTRES_MM};
+use host_tests::fixtures::{cases, solver_about, strut_cases, Rng, CENTRES_MM};
 use host_tests::platform::{apply, moved, solve6, RefAnchors, RefArms, M6};
 use host_tests::reference::{RefPose, V3};
 use kinematics_core::configuration::CubicConfiguration;
@@ -52,10 +52,7 @@ fn platforms() -> Vec<Platform> {
     }
     for case in cases().into_iter().take(3) {
         for c in CENTRES_MM {
-            let solver = ik::Solver::new(case.geometry.clone())
-                .unwrap()
-                .with_rotation_centre_mm(Vec3::from(c))
-                .unwrap();
+            let solver = solver_about(case.geometry.clone(), Vec3::from(c));
             let reference = RefArms::from_solver(&solver);
             let s2 = solver.clone();
             out.push(Platform {
@@ -149,10 +146,7 @@ fn holding_torques_do_the_work_of_lifting_the_payload() {
     let payload = Payload::point(1.2, Vec3::new(15.0, -10.0, 35.0));
     let mut worst = 0.0f64;
     for c in CENTRES_MM {
-        let solver = ik::Solver::new(cases()[0].geometry.clone())
-            .unwrap()
-            .with_rotation_centre_mm(Vec3::from(c))
-            .unwrap();
+        let solver = solver_about(cases()[0].geometry.clone(), Vec3::from(c));
         let reference = RefArms::from_solver(&solver);
         let com: V3 = core::array::from_fn(|k| f64::from(payload.centre_of_mass_mm[k]));
         let weight_n = f64::from(payload.mass_kg) * 9.806_65;
@@ -298,10 +292,7 @@ fn stiffness_is_the_hessian_of_the_spring_energy() {
         }
         eprintln!("{:<56} stiffness vs f64 Hessian: {worst:.1e}", case.name);
     }
-    let solver = ik::Solver::new(cases()[0].geometry.clone())
-        .unwrap()
-        .with_rotation_centre_mm(Vec3::new(0.0, 0.0, 50.0))
-        .unwrap();
+    let solver = solver_about(cases()[0].geometry.clone(), Vec3::new(0.0, 0.0, 50.0));
     let reference = RefArms::from_solver(&solver);
     let mut worst = 0.0f64;
     let mut tested = 0;
@@ -520,10 +511,7 @@ fn motions_follow_the_trajectory() {
     // Truncation errors of the differences are dt^2 times third derivatives (up to 1e3 per
     // s^3 here); rounding is 1e-15 / dt^2.
     let dt = 1e-4;
-    let solver = ik::Solver::new(cases()[0].geometry.clone())
-        .unwrap()
-        .with_rotation_centre_mm(Vec3::new(12.0, -7.5, -35.0))
-        .unwrap();
+    let solver = solver_about(cases()[0].geometry.clone(), Vec3::new(12.0, -7.5, -35.0));
     let reference = RefArms::from_solver(&solver);
     let mut tested = 0;
     while tested < 200 {
@@ -627,10 +615,7 @@ fn actuation_carries_the_payload_with_its_inertia() {
             9000.0, 100.0, 0.0, 100.0, 11000.0, -50.0, 0.0, -50.0, 15000.0,
         ),
     };
-    let solver = ik::Solver::new(cases()[0].geometry.clone())
-        .unwrap()
-        .with_rotation_centre_mm(Vec3::new(0.0, 0.0, 50.0))
-        .unwrap();
+    let solver = solver_about(cases()[0].geometry.clone(), Vec3::new(0.0, 0.0, 50.0));
     let reference = RefArms::from_solver(&solver);
     let mut rng = Rng::new(83);
     let mut tested = 0;

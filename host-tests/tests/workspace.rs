@@ -6,7 +6,7 @@
 // Legs are numbered; index loops over them read like the equations.
 #![allow(clippy::needless_range_loop)]
 
-use host_tests::fixtures::{cases, strut_cases, Rng};
+use host_tests::fixtures::{cases, solver_about, strut_cases, Rng};
 use host_tests::platform::{RefAnchors, RefArms};
 use host_tests::reference::{pulse_us, RefPose};
 use kinematics_core::legs::Actuators;
@@ -79,10 +79,7 @@ fn every_reported_edge_is_an_edge_for_the_reference() {
     let servos = ServoSet::default();
     for case in cases() {
         for centre in [[0.0, 0.0, 0.0], [0.0, 0.0, 50.0f32]] {
-            let solver = ik::Solver::new(case.geometry.clone())
-                .unwrap()
-                .with_rotation_centre_mm(Vec3::from(centre))
-                .unwrap();
+            let solver = solver_about(case.geometry.clone(), Vec3::from(centre));
             let reference = RefArms::from_solver(&solver);
             let mut rng = Rng::new(97);
             let mut starts = vec![Pose::HOME];
