@@ -32,7 +32,7 @@ mod errors;
 mod format;
 mod replies;
 
-pub use errors::{usage, Code};
+pub use errors::{usage, write_error_codes_doc, Code};
 pub use format::{degrees, Fixed, PoseText, Six, ValueText, Vector};
 pub use replies::{
     refusal, write_banner, write_echo, write_error, write_notice, write_ok, write_prompt, Fault,
