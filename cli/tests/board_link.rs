@@ -123,8 +123,8 @@ fn apply_stops_at_the_board_s_refusal_and_names_file_line_and_reply() {
     )
     .unwrap();
     let board = SimBoard::start();
-    // The platform held low (README: at `pose 0 0 -8 0 0 0`, `set servo1.max_us 1600` is a
-    // pose conflict): the file is valid, the board refuses.
+    // The platform held low (docs/error-codes.md: at `pose 0 0 -8 0 0 0`,
+    // `set servo1.max_us 1600` is a pose conflict): the file is valid, the board refuses.
     let send = hexapod(
         &dir,
         &[

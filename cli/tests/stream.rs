@@ -200,7 +200,7 @@ fn a_row_a_rated_servo_cannot_hold_is_named_in_the_board_s_words_before_anything
 #[test]
 fn a_row_the_board_refuses_is_reported_and_the_rest_still_goes() {
     let dir = scratch("refused-row");
-    // README, "Error codes": from the first pose the straight path to the second leaves the
+    // docs/error-codes.md: from the first pose the straight path to the second leaves the
     // workspace (error:path-blocked); each pose alone is reachable.
     std::fs::write(
         dir.join("t.csv"),
