@@ -9,10 +9,10 @@ import { dirname, join } from 'node:path';
 import { parseArgs } from 'node:util';
 import { fileURLToPath } from 'node:url';
 
-import { DEFAULT_ELF, EmulatedBoard } from './board.js';
-import { loadBootrom } from './bootrom.js';
-import { SharedInput } from './shared-input.js';
-import { DEFAULT_VIEW_PORT, startViewServer } from './view-server.js';
+import { DEFAULT_ELF, EmulatedBoard } from './chip/board.js';
+import { loadBootrom } from './chip/bootrom.js';
+import { SharedInput } from './view-server/shared-input.js';
+import { DEFAULT_VIEW_PORT, startViewServer } from './view-server/view-server.js';
 
 const USAGE = `usage: ./dev run [--uart] [--pty] [--local-echo] [--no-view] [--view-port N] [--elf PATH]
 

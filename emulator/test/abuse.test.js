@@ -12,8 +12,8 @@
 import assert from 'node:assert/strict';
 import { before, test } from 'node:test';
 
-import { FINAL_REPLY } from '../src/board.js';
-import { bootedBoard, firmwareBootrom, FRAME_MS, steadyPulses } from '../src/e2e-support.js';
+import { FINAL_REPLY } from '../src/chip/board.js';
+import { bootedBoard, firmwareBootrom, FRAME_MS, steadyPulses } from '../src/test-support/e2e-support.js';
 
 const MAX_LINE = 128; // documented line buffer
 const BYTE_MS = (10 / 115_200) * 1000; // 8N1 at the default baud rate

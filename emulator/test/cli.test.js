@@ -16,9 +16,9 @@ import { dirname, join } from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { after, before, test } from 'node:test';
 
-import { DEFAULT_ELF, EmulatedBoard } from '../src/board.js';
-import { COUNT_US, defaultSettings, firmwareBootrom, numbersIn, ok } from '../src/e2e-support.js';
-import { HostReference } from '../src/host-reference.js';
+import { DEFAULT_ELF, EmulatedBoard } from '../src/chip/board.js';
+import { COUNT_US, defaultSettings, firmwareBootrom, numbersIn, ok } from '../src/test-support/e2e-support.js';
+import { HostReference } from '../src/test-support/host-reference.js';
 
 const REPO = join(dirname(fileURLToPath(import.meta.url)), '..', '..');
 const RUNNER = join(REPO, 'emulator', 'src', 'run.js');

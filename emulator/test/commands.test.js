@@ -1,12 +1,12 @@
 // Every command through the real firmware binary, over UART0 and over the USB port: the exact
 // reply shape, the data lines, and the servo pins. Expected pulses come from the host build of
-// kinematics-core (src/host-reference.js), expected formats and defaults from README.md.
+// kinematics-core (src/test-support/host-reference.js), expected formats and defaults from README.md.
 
 import assert from 'node:assert/strict';
 import { readFileSync } from 'node:fs';
 import { before, test } from 'node:test';
 
-import { EmulatedBoard } from '../src/board.js';
+import { EmulatedBoard } from '../src/chip/board.js';
 import {
   assertClose,
   assertConstant,
@@ -26,8 +26,8 @@ import {
   runFrames,
   status,
   widthsNanos,
-} from '../src/e2e-support.js';
-import { HostReference } from '../src/host-reference.js';
+} from '../src/test-support/e2e-support.js';
+import { HostReference } from '../src/test-support/host-reference.js';
 
 // Reported numbers vs the host core: the firmware computes in f32 with the ROM's routines, the
 // reference with libm; they print with 3 (angles) and 2 (pulses) decimals.

@@ -4,8 +4,8 @@
 import assert from 'node:assert/strict';
 import { before, test } from 'node:test';
 
-import { EmulatedBoard, FINAL_REPLY } from '../src/board.js';
-import { bootedBoard, firmwareBootrom } from '../src/e2e-support.js';
+import { EmulatedBoard, FINAL_REPLY } from '../src/chip/board.js';
+import { bootedBoard, firmwareBootrom } from '../src/test-support/e2e-support.js';
 
 // The wiring and timing the firmware promises (docs: CONTEXT "Wiring"), restated here from
 // the spec rather than taken from the firmware: 125 MHz / divider 40 -> 320 ns per count.

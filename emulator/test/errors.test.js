@@ -26,8 +26,8 @@ import {
   runFrames,
   status,
   widthsNanos,
-} from '../src/e2e-support.js';
-import { HostReference } from '../src/host-reference.js';
+} from '../src/test-support/e2e-support.js';
+import { HostReference } from '../src/test-support/host-reference.js';
 
 const README = readFileSync(new URL('../../README.md', import.meta.url), 'utf8');
 const REPORT_RS = readFileSync(new URL('../../control/src/report/errors.rs', import.meta.url), 'utf8');

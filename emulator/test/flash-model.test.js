@@ -1,4 +1,4 @@
-// The flash model of src/rp2040js-gaps.js (gap 7) on its own: a bare RP2040 with the boot ROM
+// The flash model of src/gaps/flash.js (gap 7) on its own: a bare RP2040 with the boot ROM
 // and no firmware, its patched ROM flash routines called as firmware calls them (registers,
 // a return address in SRAM), and every rule it enforces broken once on purpose. Expected
 // contents follow NOR flash semantics (an erase sets bytes to 0xFF, a program can only clear
@@ -9,8 +9,8 @@ import { before, test } from 'node:test';
 
 import { RP2040 } from 'rp2040js';
 
-import { loadBootrom } from '../src/bootrom.js';
-import { attachFlashChip, FlashChip, patchEmulatorGaps } from '../src/rp2040js-gaps.js';
+import { loadBootrom } from '../src/chip/bootrom.js';
+import { attachFlashChip, FlashChip, patchEmulatorGaps } from '../src/gaps/index.js';
 
 const SRAM = 0x20000000;
 const FLASH = 0x10000000;

@@ -18,8 +18,8 @@ import {
   plannedFrames,
   poseText,
   widthsNanos,
-} from '../src/e2e-support.js';
-import { HostReference } from '../src/host-reference.js';
+} from '../src/test-support/e2e-support.js';
+import { HostReference } from '../src/test-support/host-reference.js';
 
 let bootrom;
 let reference;

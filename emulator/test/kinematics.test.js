@@ -1,6 +1,6 @@
 // `servo`, `limits` and the payload's holding torques through the real firmware binary: the
 // pins, the pose the pulses correspond to, the reach of each axis and the torques, compared
-// with the host build of kinematics-core (src/host-reference.js: its forward kinematics, IK,
+// with the host build of kinematics-core (src/test-support/host-reference.js: its forward kinematics, IK,
 // workspace search and statics), formats and rules from README.md. Refusals (torque-limit,
 // no-pose, servo-limit, ...) are in errors.test.js.
 
@@ -27,9 +27,9 @@ import {
   runFrames,
   status,
   widthsNanos,
-} from '../src/e2e-support.js';
-import { binaryFrame } from '../src/firmware-bench.js';
-import { HostReference } from '../src/host-reference.js';
+} from '../src/test-support/e2e-support.js';
+import { binaryFrame } from '../src/bench/firmware-bench.js';
+import { HostReference } from '../src/test-support/host-reference.js';
 
 // The firmware's numbers (boot ROM floats) vs the host core's (libm), as printed.
 const POSE_TOLERANCE = 0.005; // mm and degrees: the forward kinematics stops within 1e-3 mm

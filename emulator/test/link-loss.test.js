@@ -6,8 +6,8 @@
 import assert from 'node:assert/strict';
 import { before, test } from 'node:test';
 
-import { EmulatedBoard } from '../src/board.js';
-import { bootedBoard, firmwareBootrom, FRAME_MS, steadyPulses } from '../src/e2e-support.js';
+import { EmulatedBoard } from '../src/chip/board.js';
+import { bootedBoard, firmwareBootrom, FRAME_MS, steadyPulses } from '../src/test-support/e2e-support.js';
 
 const COUNT_US = 0.32; // one PWM count
 

@@ -10,14 +10,14 @@
 // the boot ROM with interrupts masked, 45 ms in the emulator's typical W25Q080 timing): the
 // last test checks that each long pass is exactly a save's, and that the pins hold meanwhile.
 // Pass lengths are CPU cycles between watchdog feeds (the loop feeds it at the top of every
-// pass; emulator/src/loop-meter.js), which the emulator counts the same on every run.
+// pass; emulator/src/chip/loop-meter.js), which the emulator counts the same on every run.
 
 import assert from 'node:assert/strict';
 import { before, test } from 'node:test';
 
-import { EmulatedBoard, FINAL_REPLY } from '../src/board.js';
-import { bootQuiet, firmwareBootrom, FRAME_MS, ok } from '../src/e2e-support.js';
-import { binaryFrame } from '../src/firmware-bench.js';
+import { EmulatedBoard, FINAL_REPLY } from '../src/chip/board.js';
+import { bootQuiet, firmwareBootrom, FRAME_MS, ok } from '../src/test-support/e2e-support.js';
+import { binaryFrame } from '../src/bench/firmware-bench.js';
 
 /** The documented bound on a main-loop pass: 1 ms at 125 MHz. */
 const PASS_BOUND_CYCLES = 125_000;

@@ -1,7 +1,7 @@
 // Smooth motion measured on the pins of the real firmware: straight lines in pose space at the
 // configured speeds, one IK per servo frame, no glitches, and paths that leave the workspace
 // refused before anything moves. Frame counts are computed here from the documented rule
-// (README.md "Motion"); per-frame pulses come from the host core (src/host-reference.js).
+// (README.md "Motion"); per-frame pulses come from the host core (src/test-support/host-reference.js).
 
 import assert from 'node:assert/strict';
 import { before, test } from 'node:test';
@@ -29,8 +29,8 @@ import {
   runFrames,
   status,
   widthsNanos,
-} from '../src/e2e-support.js';
-import { HostReference } from '../src/host-reference.js';
+} from '../src/test-support/e2e-support.js';
+import { HostReference } from '../src/test-support/host-reference.js';
 
 let bootrom;
 let reference;

@@ -1,5 +1,5 @@
 // Settings saved in flash, through the real firmware ELF and the flash model (gap 7 of
-// src/rp2040js-gaps.js: the boot ROM's erase and program as the W25Q080 does them, its rules
+// src/gaps/flash.js: the boot ROM's erase and program as the W25Q080 does them, its rules
 // enforced): `save`, power cycles (a fresh chip, the same flash), power cuts at every step of a
 // save, a damaged copy, a thousand saves, and what the firmware does meanwhile (the pins hold,
 // the watchdog stays quiet). What to expect comes from README.md ("Saving the settings") and
@@ -8,7 +8,7 @@
 import assert from 'node:assert/strict';
 import { before, test } from 'node:test';
 
-import { BANNER, EmulatedBoard } from '../src/board.js';
+import { BANNER, EmulatedBoard } from '../src/chip/board.js';
 import {
   assertConstant,
   assertPins,
@@ -22,7 +22,7 @@ import {
   runFrames,
   status,
   widthsNanos,
-} from '../src/e2e-support.js';
+} from '../src/test-support/e2e-support.js';
 
 let bootrom;
 before(() => {

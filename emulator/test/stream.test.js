@@ -24,9 +24,9 @@ import {
   refused,
   runFrames,
   status,
-} from '../src/e2e-support.js';
-import { binaryFrame } from '../src/firmware-bench.js';
-import { HostReference } from '../src/host-reference.js';
+} from '../src/test-support/e2e-support.js';
+import { binaryFrame } from '../src/bench/firmware-bench.js';
+import { HostReference } from '../src/test-support/host-reference.js';
 
 let bootrom;
 let reference;

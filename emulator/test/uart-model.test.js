@@ -1,4 +1,4 @@
-// The PL011 model of src/rp2040js-gaps.js (gap 2) on its own: a bare RP2040 with no firmware,
+// The PL011 model of src/gaps/uart.js (gap 2) on its own: a bare RP2040 with no firmware,
 // UART0 programmed and read through its registers as firmware would, bytes sent by the paced
 // host (gap 3), time advanced on the emulated clock. Expected figures come from the RP2040
 // datasheet (4.2, UART) and the PL011 TRM: 10 bit periods per 8N1 byte, FIFO levels of
@@ -9,7 +9,7 @@ import { test } from 'node:test';
 
 import { RP2040 } from 'rp2040js';
 
-import { PacedUartInput, patchEmulatorGaps } from '../src/rp2040js-gaps.js';
+import { PacedUartInput, patchEmulatorGaps } from '../src/gaps/index.js';
 
 const UARTDR = 0x00;
 const UARTRSR = 0x04;

@@ -1,5 +1,5 @@
 // The Pico's USB port as a serial port (README.md, "Serial links"), through the real firmware ELF
-// and a USB host on the emulated chip's USB controller (src/rp2040js-gaps.js, gaps 9-12): it
+// and a USB host on the emulated chip's USB controller (src/gaps/usb.js, gaps 9-12): it
 // enumerates as a CDC ACM device, speaks the protocol of UART0 beside UART0 (each link its own
 // line, echo and prompt; replies to the asking link, notices to every open link), never loses
 // input, greets each opening of the port, and neither a closed port, an unplugged cable nor a
@@ -10,7 +10,7 @@ import assert from 'node:assert/strict';
 import { readFileSync } from 'node:fs';
 import { before, test } from 'node:test';
 
-import { BANNER, EmulatedBoard, FINAL_REPLY } from '../src/board.js';
+import { BANNER, EmulatedBoard, FINAL_REPLY } from '../src/chip/board.js';
 import {
   assertPins,
   bootQuietUsb,
@@ -18,14 +18,14 @@ import {
   firmwareBootrom,
   FRAME_MS,
   ok,
-} from '../src/e2e-support.js';
-import { HostReference } from '../src/host-reference.js';
+} from '../src/test-support/e2e-support.js';
+import { HostReference } from '../src/test-support/host-reference.js';
 
 /** The documented bound on a main-loop pass: 1 ms at 125 MHz (main-loop.test.js). */
 const PASS_BOUND_CYCLES = 125_000;
 /** The firmware's USB receive queue holds fewer bytes than this (README.md, "Serial links"). */
 const RX_QUEUE_BYTES = 1024;
-/** A UART framing error on a received byte (PL011 UARTDR bit 8; rp2040js-gaps.js, gap 2). */
+/** A UART framing error on a received byte (PL011 UARTDR bit 8; src/gaps/uart.js, gap 2). */
 const UART_FRAMING_ERROR = 1 << 8;
 
 // USB 2.0 chapter 9 and the CDC 1.2 / PSTN 1.2 class codes.

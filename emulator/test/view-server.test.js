@@ -7,11 +7,11 @@ import assert from 'node:assert/strict';
 import { request } from 'node:http';
 import { before, test } from 'node:test';
 
-import { ListingReader, listingsChangedBy } from '../src/board-listings.js';
-import { EmulatedBoard } from '../src/board.js';
-import { bootedBoard, firmwareBootrom } from '../src/e2e-support.js';
-import { SharedInput } from '../src/shared-input.js';
-import { startViewServer } from '../src/view-server.js';
+import { ListingReader, listingsChangedBy } from '../src/view-server/board-listings.js';
+import { EmulatedBoard } from '../src/chip/board.js';
+import { bootedBoard, firmwareBootrom } from '../src/test-support/e2e-support.js';
+import { SharedInput } from '../src/view-server/shared-input.js';
+import { startViewServer } from '../src/view-server/view-server.js';
 
 let bootrom;
 before(() => {

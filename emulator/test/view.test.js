@@ -21,7 +21,7 @@ import {
   startRunner,
   typeLine,
   waitForPose,
-} from '../src/view-browser.js';
+} from '../src/test-support/view-browser.js';
 
 /** The plate's top colour (emulator/view/scene.js, PLATFORM_COLOUR). */
 const PLATE_RGB = [0xf2, 0x8c, 0x28];

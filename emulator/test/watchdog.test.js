@@ -15,8 +15,8 @@
 import assert from 'node:assert/strict';
 import { before, test } from 'node:test';
 
-import { BANNER, EmulatedBoard, WDSEL_FULL_RESET } from '../src/board.js';
-import { firmwareBootrom, FRAME_MS, steadyPulses } from '../src/e2e-support.js';
+import { BANNER, EmulatedBoard, WDSEL_FULL_RESET } from '../src/chip/board.js';
+import { firmwareBootrom, FRAME_MS, steadyPulses } from '../src/test-support/e2e-support.js';
 
 const WATCHDOG_MS = 500; // the firmware's documented watchdog period
 const HANG_ADDRESS = 0x20041000; // SRAM bank 5: outside the firmware's 256 KiB RAM region

@@ -1,4 +1,4 @@
-// The live view's page: connects to the runner's event stream (emulator/src/view-server.js),
+// The live view's page: connects to the runner's event stream (emulator/src/view-server/view-server.js),
 // runs every pin update through the project's kinematics (kinematics.js, WebAssembly) and shows
 // the result: the 3D picture (scene.js), the readout (pulses in us, arm angles in deg, the pose
 // in mm and deg) and the board's serial output (terminal.js). When the emulator stops it says

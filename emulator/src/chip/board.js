@@ -20,10 +20,10 @@ import {
   patchEmulatorGaps,
   UsbCdcHost,
   wakeIfInterruptPending,
-} from './rp2040js-gaps.js';
+} from '../gaps/index.js';
 import { ServoPulseMeter } from './servo-pulses.js';
 
-const REPO = join(dirname(fileURLToPath(import.meta.url)), '..', '..');
+const REPO = join(dirname(fileURLToPath(import.meta.url)), '..', '..', '..');
 /** The ELF `cargo fw` builds; FIRMWARE_ELF=path overrides. */
 export const DEFAULT_ELF =
   process.env.FIRMWARE_ELF ?? join(REPO, 'target', 'thumbv6m-none-eabi', 'release', 'firmware');
@@ -54,7 +54,7 @@ export class EmulatedBoard {
    *   (default) stops the run with an error; `'reset'` restarts the chip as the watchdog
    *   reset would (see `watchdogReset`).
    * @param {'typical'|'max'|object} [options.flashTiming] the flash chip's erase and program
-   *   times (rp2040js-gaps.js, gap 7, `W25Q080_TIMING`)
+   *   times (../gaps/flash.js, gap 7, `W25Q080_TIMING`)
    * @param {{address: number, bytes: Uint8Array}[]} [options.segments] what to program into
    *   the flash instead of the ELF's load segments (e.g. a UF2's blocks)
    * @param {boolean|{open?: boolean}} [options.usb] plug a USB host into the USB port at
@@ -592,7 +592,7 @@ export class SerialLink {
 }
 
 /**
- * The USB port's serial link (`board.usb`): a USB host (`UsbCdcHost`, rp2040js-gaps.js, gaps
+ * The USB port's serial link (`board.usb`): a USB host (`UsbCdcHost`, ../gaps/usb.js, gaps
  * 9-12) with the firmware's CDC ACM port. Besides the `SerialLink` calls: open and close the
  * port (DTR), stop and resume reading, unplug and plug in again.
  */

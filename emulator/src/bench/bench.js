@@ -1,6 +1,6 @@
 // `./dev bench`: the IK and firmware benchmarks in the emulator; writes BENCHMARKS.md.
 //
-//   node src/bench.js [--poses N] [--seed S] [--lines N] [--out PATH]
+//   node src/bench/bench.js [--poses N] [--seed S] [--lines N] [--out PATH]
 //
 // Expects `cargo fw` to have built the firmware and the benchmark firmware (./dev bench does).
 
@@ -9,8 +9,8 @@ import { dirname, join, relative } from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { parseArgs } from 'node:util';
 
-import { DEFAULT_ELF } from './board.js';
-import { sectionSizes, sizedSymbols, symbolSizes, symbolValues } from './elf.js';
+import { DEFAULT_ELF } from '../chip/board.js';
+import { sectionSizes, sizedSymbols, symbolSizes, symbolValues } from '../chip/elf.js';
 import {
   measureClampedStream,
   measureKinematicsCommands,
@@ -24,11 +24,11 @@ import {
   measureWorstCommand,
   stackHighWaterBytes,
 } from './firmware-bench.js';
-import { BULK_PACKETS_PER_FRAME } from './rp2040js-gaps.js';
+import { BULK_PACKETS_PER_FRAME } from '../gaps/index.js';
 import { benchPoses, profileIk, runIkBench, runKinematicsBench, runStreamBench } from './ik-bench.js';
 import { highestFrameRate, measureFrameLatency, measureStreamCpu } from './stream-bench.js';
 
-const REPO = join(dirname(fileURLToPath(import.meta.url)), '..', '..');
+const REPO = join(dirname(fileURLToPath(import.meta.url)), '..', '..', '..');
 const CLOCK_HZ = 125e6;
 const WATCHDOG_MS = 500;
 const STREAM_BAUD = 921600;
@@ -505,7 +505,7 @@ sending the next line gets ${fmt(lockStep.linesPerSecond)} lines/s (${lockStep.o
 
 ## USB serial
 
-The same firmware with a USB host on its USB port (\`emulator/src/rp2040js-gaps.js\`, gaps
+The same firmware with a USB host on its USB port (\`emulator/src/gaps/usb.js\`, gaps
 9-12): the host has enumerated the firmware and opened the port, echo off there, speed limits
 off. The host's packets share a full-speed bus of at most ${BULK_PACKETS_PER_FRAME} bulk packets of 64 bytes
 per 1 ms frame, each transaction holding the bus for 1/${BULK_PACKETS_PER_FRAME} ms whatever its length (a short
@@ -565,7 +565,7 @@ both links (the USB interrupt among them): ${fmt(passesBoth.longestHandlerCycles
 measured from one watchdog feed to the next (the loop feeds it at its top), in CPU cycles, which
 the emulator does not count while the core sleeps; interrupt handlers inside a pass count in it.
 A missed frame is a frame period in which the firmware wrote no new compare values
-(\`emulator/src/loop-meter.js\`); \`emulator/test/main-loop.test.js\` asserts the bound and no
+(\`emulator/src/chip/loop-meter.js\`); \`emulator/test/main-loop.test.js\` asserts the bound and no
 missed frame for these cases and others.
 
 ### \`servo\`, \`limits\` and torque-checked paths
@@ -597,7 +597,7 @@ A \`save\` erases one 4 KiB flash sector and programs one 256-byte page through 
 from RAM with interrupts masked (flash cannot be read meanwhile), alone in its main-loop pass:
 that pass is over the 1 ms bound by design, the watchdog is given 2 s around it, and the PWM
 hardware holds the pulses (a save is refused while the platform moves). The emulator times the
-flash as the W25Q80DV datasheet gives it (rp2040js-gaps.js, gap 7), the core busy in the ROM
+flash as the W25Q80DV datasheet gives it (gaps/flash.js, gap 7), the core busy in the ROM
 meanwhile: sector erase ${saves[0].times.sectorEraseMs} ms typical, ${saves[1].times.sectorEraseMs} ms maximum; page program ${saves[0].times.pageProgramMs} ms typical, ${saves[1].times.pageProgramMs} ms maximum
 (the other ROM calls and the SPI transfers are taken as instant). Echo off, 115,200 baud, 50 Hz.
 
@@ -648,13 +648,13 @@ ${Object.entries(storageSymbols)
 
 \`\`\`sh
 ./dev bench                  # builds, runs everything above, rewrites BENCHMARKS.md (a few minutes)
-node emulator/src/bench.js --poses 1000 --seed 7   # more poses, another seed
+node emulator/src/bench/bench.js --poses 1000 --seed 7   # more poses, another seed
 \`\`\`
 
 Files: \`firmware/src/bin/bench.rs\` (IK, kinematics and stream benchmark firmware; \`./dev bench\`
 builds it with \`--features micromath\`),
-\`host-tests/examples/bench_poses.rs\` (poses, f64 reference pulses, Jacobians and torques), \`emulator/src/ik-bench.js\`, \`emulator/src/firmware-bench.js\`,
-\`emulator/src/bench.js\` (this report). \`emulator/test/rom-math.test.js\` runs a small IK
+\`host-tests/examples/bench_poses.rs\` (poses, f64 reference pulses, Jacobians and torques), \`emulator/src/bench/ik-bench.js\`, \`emulator/src/bench/firmware-bench.js\`,
+\`emulator/src/bench/bench.js\` (this report). \`emulator/test/rom-math.test.js\` runs a small IK
 comparison in \`./dev test\` (no timing assertions).
 `;
 writeFileSync(args.out, report);

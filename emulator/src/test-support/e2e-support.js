@@ -6,8 +6,8 @@ import assert from 'node:assert/strict';
 import { existsSync } from 'node:fs';
 import { test } from 'node:test';
 
-import { BANNER, DEFAULT_ELF, EmulatedBoard } from './board.js';
-import { loadBootrom } from './bootrom.js';
+import { BANNER, DEFAULT_ELF, EmulatedBoard } from '../chip/board.js';
+import { loadBootrom } from '../chip/bootrom.js';
 
 /** The boot ROM words for a test file, after checking that the firmware ELF has been built. */
 export function firmwareBootrom() {

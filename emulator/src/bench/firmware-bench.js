@@ -1,7 +1,7 @@
 // Timing of the real firmware in the emulator (emulated time): command-to-output latency,
 // sustained pose lines per second, the worst-case command against the watchdog.
 
-import { BANNER, EmulatedBoard } from './board.js';
+import { BANNER, EmulatedBoard } from '../chip/board.js';
 
 const RAM_START = 0x20000000;
 
@@ -59,7 +59,7 @@ export function streamingBoard({ baud = 115200, elf, flashTiming } = {}) {
 /**
  * The same over USB: a USB host plugged in at power-on has opened the port; echo off there,
  * speed limits off. `lineEnds` are the instants the OUT packets carrying a line end reached
- * the firmware's endpoint buffer (the end of their bus slot, rp2040js-gaps.js gap 11).
+ * the firmware's endpoint buffer (the end of their bus slot, gaps/usb.js, gap 11).
  */
 export function usbStreamingBoard({ elf } = {}) {
   const board = new EmulatedBoard({ ...(elf ? { elf } : {}), usb: true });
@@ -476,7 +476,7 @@ export function measureLongestPass() {
 }
 
 /**
- * A `save` with the flash model's `timing` ('typical' or 'max', rp2040js-gaps.js gap 7): its
+ * A `save` with the flash model's `timing` ('typical' or 'max', gaps/flash.js, gap 7): its
  * one long main-loop pass (the sector erase and the page program in the boot ROM with
  * interrupts masked, and the firmware's own work in that pass), the time from its line end to
  * its `ok` at the host, and the frames the loop missed meanwhile (the PWM hardware held the

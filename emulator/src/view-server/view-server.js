@@ -17,10 +17,10 @@ import { createServer } from 'node:http';
 import { dirname, extname, join, resolve, sep } from 'node:path';
 import { fileURLToPath } from 'node:url';
 
-import { BANNER } from './board.js';
+import { BANNER } from '../chip/board.js';
 import { ListingReader, listingsChangedBy } from './board-listings.js';
 
-const EMULATOR = join(dirname(fileURLToPath(import.meta.url)), '..');
+const EMULATOR = join(dirname(fileURLToPath(import.meta.url)), '..', '..');
 const REPO = join(EMULATOR, '..');
 /** The view's kinematics as `cargo build -p view-kinematics --release --target
  * wasm32-unknown-unknown` leaves it (`./dev run` builds it). */
@@ -65,7 +65,7 @@ const CONTENT_TYPES = {
  * Starts the server; resolves to a ViewServer once it listens. `port` 0 takes any free port;
  * another port that is taken falls back to any free one when `fallback` is set.
  * @param {object} options
- * @param {import('./board.js').EmulatedBoard} options.board
+ * @param {import('../chip/board.js').EmulatedBoard} options.board
  * @param {object} [options.serial] the serial link the page and the terminal share (one with
  *   `onOutput(listener)`: `board.usb`, `board.uart`; default the board, UART0)
  * @param {import('./shared-input.js').SharedInput} options.input

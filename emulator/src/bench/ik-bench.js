@@ -5,10 +5,10 @@ import { execFileSync } from 'node:child_process';
 import { dirname, join } from 'node:path';
 import { fileURLToPath } from 'node:url';
 
-import { EmulatedBoard } from './board.js';
-import { symbolRanges } from './elf.js';
+import { EmulatedBoard } from '../chip/board.js';
+import { symbolRanges } from '../chip/elf.js';
 
-const REPO = join(dirname(fileURLToPath(import.meta.url)), '..', '..');
+const REPO = join(dirname(fileURLToPath(import.meta.url)), '..', '..', '..');
 /** The benchmark ELF `cargo fw` builds next to the firmware; BENCH_ELF=path overrides. */
 export const BENCH_ELF =
   process.env.BENCH_ELF ?? join(REPO, 'target', 'thumbv6m-none-eabi', 'release', 'bench');
