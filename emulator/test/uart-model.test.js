@@ -184,7 +184,13 @@ for (const baud of [115200, 921600]) {
 }
 
 test('RX levels 1/8, 1/4, 1/2, 3/4, 7/8 of 32 entries: 4, 8, 16, 24, 28', () => {
-  for (const [select, level] of [[0, 4], [1, 8], [2, 16], [3, 24], [4, 28]]) {
+  for (const [select, level] of [
+    [0, 4],
+    [1, 8],
+    [2, 16],
+    [3, 24],
+    [4, 28],
+  ]) {
     const chip = bareUart({ ifls: select << 3 });
     chip.host.send(Buffer.alloc(32, 0x55));
     chip.runTo((level - 1) * 86_800 + 1);

@@ -84,7 +84,10 @@ test('the firmware UF2: 256-byte pages, RP2040 family, numbered, every ELF byte 
       image.delete(address + j);
     });
   }
-  assert.ok([...image.values()].every((b) => b === 0), 'the rest is zero padding');
+  assert.ok(
+    [...image.values()].every((b) => b === 0),
+    'the rest is zero padding',
+  );
 });
 
 test('the chip boots from the UF2 and works as from the ELF', () => {

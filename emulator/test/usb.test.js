@@ -115,15 +115,27 @@ test('the USB port enumerates as a CDC ACM serial port named as the firmware', (
   // bulk OUT endpoint of 64 bytes: what /dev/ttyACM0 and COMx drivers bind to.
   const list = descriptors(board.usb.configurationDescriptor);
   const interfaces = list.filter((d) => d.type === DESCRIPTOR_INTERFACE).map((d) => d.bytes);
-  assert.ok(interfaces.some((i) => i[5] === CLASS_CDC && i[6] === SUBCLASS_ACM), 'ACM');
+  assert.ok(
+    interfaces.some((i) => i[5] === CLASS_CDC && i[6] === SUBCLASS_ACM),
+    'ACM',
+  );
   const data = list.findIndex(
     (d) => d.type === DESCRIPTOR_INTERFACE && d.bytes[5] === CLASS_CDC_DATA,
   );
   assert.ok(data >= 0, 'a CDC data interface');
   const endpoints = list.slice(data + 1, data + 3).map((d) => d.bytes);
-  assert.deepEqual(endpoints.map((e) => e[1]), [DESCRIPTOR_ENDPOINT, DESCRIPTOR_ENDPOINT]);
-  assert.deepEqual(endpoints.map((e) => e[3] & 3), [ENDPOINT_BULK, ENDPOINT_BULK]);
-  assert.deepEqual(endpoints.map((e) => e[4] | (e[5] << 8)), [64, 64]);
+  assert.deepEqual(
+    endpoints.map((e) => e[1]),
+    [DESCRIPTOR_ENDPOINT, DESCRIPTOR_ENDPOINT],
+  );
+  assert.deepEqual(
+    endpoints.map((e) => e[3] & 3),
+    [ENDPOINT_BULK, ENDPOINT_BULK],
+  );
+  assert.deepEqual(
+    endpoints.map((e) => e[4] | (e[5] << 8)),
+    [64, 64],
+  );
   assert.deepEqual(endpoints.map((e) => e[2] & 0x80).sort(), [0, 0x80], 'one IN, one OUT');
 });
 
@@ -199,7 +211,7 @@ test('UART0 and USB at once: each its own lines; replies to the asker, notices t
   assert.deepEqual(
     finals(board.usb, usbFrom),
     ['ok', 'ok', 'ok'],
-    'USB: geometry, set echo off, set link_timeout_s; nothing of UART0\'s',
+    "USB: geometry, set echo off, set link_timeout_s; nothing of UART0's",
   );
 });
 
@@ -316,7 +328,10 @@ test('unplugging and plugging in again: UART0 and the frames go on, the port com
   assert.match(board.usb.lines[before], BANNER, JSON.stringify(board.usb.lines.slice(before - 2)));
   const { reply, lines } = board.usb.request('status');
   assert.equal(reply, 'ok');
-  assert.ok(lines.some((l) => /^# state: moving /.test(l)), JSON.stringify(lines));
+  assert.ok(
+    lines.some((l) => /^# state: moving /.test(l)),
+    JSON.stringify(lines),
+  );
   assert.equal(board.request('stop').reply, 'ok');
   assertNoStall(board, 'unplugged and back');
 });
@@ -351,7 +366,7 @@ test('a host that stops reading holds up neither UART0, nor the frames, nor its 
   assert.equal(board.request('status').reply, 'ok');
 });
 
-test('baud is UART0\'s: set on USB it switches UART0, and USB goes on as before', () => {
+test("baud is UART0's: set on USB it switches UART0, and USB goes on as before", () => {
   const board = bothLinks();
   const { reply, lines } = board.usb.request('set baud 230400');
   assert.equal(reply, 'ok');
@@ -362,7 +377,7 @@ test('baud is UART0\'s: set on USB it switches UART0, and USB goes on as before'
   assert.equal(board.request('status').reply, 'ok', 'UART0 talks at the new rate');
   const config = board.usb.request('config').lines;
   assert.ok(config.includes('# baud: 230400'), JSON.stringify(config));
-  assert.ok(config.includes('# echo: on'), 'the USB link\'s own echo');
+  assert.ok(config.includes('# echo: on'), "the USB link's own echo");
   assert.equal(board.usb.request('set echo off').reply, 'ok');
   assert.ok(board.request('config').lines.includes('# echo: on'), 'UART0 keeps its echo');
   // A terminal opening the USB port at some rate (SET_LINE_CODING) changes nothing: UART0

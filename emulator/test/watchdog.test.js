@@ -27,7 +27,6 @@ before(() => {
   bootrom = firmwareBootrom();
 });
 
-
 /** Boots with resets enabled, measures the power-on pulses, then moves away from home. */
 function movedBoard() {
   const board = new EmulatedBoard({ bootrom, onWatchdog: 'reset' });
@@ -65,13 +64,20 @@ for (const [name, stall] of Object.entries(stalls)) {
     assert.deepEqual(board.pulseWidthsUs(), moved);
 
     // The last feed was at most one main-loop pass (well under a frame) before the stall.
-    assert.ok(board.runUntil(() => board.resets.length > 0, { timeoutMs: 3 * FRAME_MS }), 'no reset');
+    assert.ok(
+      board.runUntil(() => board.resets.length > 0, { timeoutMs: 3 * FRAME_MS }),
+      'no reset',
+    );
     const resetAfterMs = board.resets[0].nanos / 1e6 - stalledAt;
     assert.ok(
       resetAfterMs > WATCHDOG_MS - FRAME_MS && resetAfterMs <= WATCHDOG_MS,
       `reset ${resetAfterMs} ms after the stall`,
     );
-    assert.equal(board.resets[0].wdsel & WDSEL_FULL_RESET, WDSEL_FULL_RESET, 'WDSEL: not a full reset');
+    assert.equal(
+      board.resets[0].wdsel & WDSEL_FULL_RESET,
+      WDSEL_FULL_RESET,
+      'WDSEL: not a full reset',
+    );
 
     // The firmware starts again: banner, then home pulses on every servo.
     board.waitForLine(BANNER, { timeoutMs: 100 });

@@ -85,8 +85,10 @@ function connect() {
 
 function showStopped() {
   linkState('stopped', 'emulator stopped');
-  overlay(`The emulator stopped: ${state.stopped}. The picture shows the last pins seen. ` +
-    'Start ./dev run again; this page reconnects by itself.');
+  overlay(
+    `The emulator stopped: ${state.stopped}. The picture shows the last pins seen. ` +
+      'Start ./dev run again; this page reconnects by itself.',
+  );
 }
 
 function linkState(kind, text) {
@@ -186,11 +188,15 @@ function describe(frame) {
   const note = waiting ? ` (asking the board for ${waiting})` : '';
   switch (frame.status) {
     case 'solved':
-      return `solved in ${frame.iterations} Newton iteration${frame.iterations === 1 ? '' : 's'}` +
-        `; rods close within ${frame.rodErrorMm.toFixed(4)} mm${note}`;
+      return (
+        `solved in ${frame.iterations} Newton iteration${frame.iterations === 1 ? '' : 's'}` +
+        `; rods close within ${frame.rodErrorMm.toFixed(4)} mm${note}`
+      );
     case 'no solution':
-      return `no solution: no pose closes all six rods at these arm angles ` +
-        `(drawn red at the last pose found)${note}`;
+      return (
+        `no solution: no pose closes all six rods at these arm angles ` +
+        `(drawn red at the last pose found)${note}`
+      );
     case 'no geometry':
       return state.geometryError
         ? `the board's geometry was refused by the core: ${state.geometryError}`

@@ -31,7 +31,10 @@ function recordCompareWrites(board) {
  * (`board.uart`).
  */
 export function streamingBoard({ baud = 115200, elf, flashTiming } = {}) {
-  const board = new EmulatedBoard({ ...(elf ? { elf } : {}), ...(flashTiming ? { flashTiming } : {}) });
+  const board = new EmulatedBoard({
+    ...(elf ? { elf } : {}),
+    ...(flashTiming ? { flashTiming } : {}),
+  });
   const ccWrites = recordCompareWrites(board);
   const lineEnds = [];
   /** When each byte reached the UART (emulated ns), in order. */
@@ -358,15 +361,43 @@ export function measureKinematicsCommands() {
   // From z = -10 mm, 20.48 mm at 1 mm/s at 50 Hz: 1,024 frames, each checked (the budget).
   const longest = ['pose 0 0 -10 0 0 0', 'set speed_mm_s 1'];
   const cases = [
-    ['`servo 3 1520` from home (2.2 degrees of arm: one continuation step)', [], 'servo 3 1520', 333],
+    [
+      '`servo 3 1520` from home (2.2 degrees of arm: one continuation step)',
+      [],
+      'servo 3 1520',
+      333,
+    ],
     ['`servo 1 1900` from home (45 degrees: nine steps of 5 degrees)', [], 'servo 1 1900', 333],
-    ['`status` after `servo 1 1900`, with a payload (the pose is known since `servo`; the holding torques take a pass of their own)', ['servo 1 1900', ...PAYLOAD], 'status', 333],
+    [
+      '`status` after `servo 1 1900`, with a payload (the pose is known since `servo`; the holding torques take a pass of their own)',
+      ['servo 1 1900', ...PAYLOAD],
+      'status',
+      333,
+    ],
     ['`limits` from home, within the servo limits', [], 'limits', 333],
-    ['`limits` from home with a payload and ratings of 1 kgf cm (each pose with its holding torques)', rated(1), 'limits', 333],
-    ['`check 0 0 10.48 0 0 0` from z = -10 at 1 mm/s, 50 Hz: 1,024 checkpoints by the IK', longest, 'check 0 0 10.48 0 0 0', 50],
-    ['the same with a payload and ratings of 2 kgf cm: each checkpoint with its holding torques (the longest command)', [...longest, ...rated(2)], 'check 0 0 10.48 0 0 0', 50],
+    [
+      '`limits` from home with a payload and ratings of 1 kgf cm (each pose with its holding torques)',
+      rated(1),
+      'limits',
+      333,
+    ],
+    [
+      '`check 0 0 10.48 0 0 0` from z = -10 at 1 mm/s, 50 Hz: 1,024 checkpoints by the IK',
+      longest,
+      'check 0 0 10.48 0 0 0',
+      50,
+    ],
+    [
+      'the same with a payload and ratings of 2 kgf cm: each checkpoint with its holding torques (the longest command)',
+      [...longest, ...rated(2)],
+      'check 0 0 10.48 0 0 0',
+      50,
+    ],
   ];
-  return cases.map(([what, setup, line, frameHz]) => ({ what, ...measureCommand(setup, line, { frameHz }) }));
+  return cases.map(([what, setup, line, frameHz]) => ({
+    what,
+    ...measureCommand(setup, line, { frameHz }),
+  }));
 }
 
 /**
@@ -385,7 +416,16 @@ export function measureClampedStream() {
   const sent = 100;
   for (let i = 0; i < sent; i++) {
     // x from 5 to 25 mm: beyond what a 1 kgf cm rating holds with 2 kg (about 3 mm).
-    board.sendBytes(binaryFrame([32768 + Math.round((0.2 + i * 0.008) * 32768), 32768, 32768, 32768, 32768, 32768]));
+    board.sendBytes(
+      binaryFrame([
+        32768 + Math.round((0.2 + i * 0.008) * 32768),
+        32768,
+        32768,
+        32768,
+        32768,
+        32768,
+      ]),
+    );
     board.runMs(2);
   }
   board.runMs(50);

@@ -129,7 +129,9 @@ export class EmulatedBoard {
     });
 
     mcu.onBreak = (code) => {
-      this.fail(`firmware stopped: breakpoint/UDF #${code} at PC 0x${mcu.core.PC.toString(16)} (a panic?)`);
+      this.fail(
+        `firmware stopped: breakpoint/UDF #${code} at PC 0x${mcu.core.PC.toString(16)} (a panic?)`,
+      );
     };
     // Gap 7: the flash chip (the same array as before a reset), written through the ROM.
     attachFlashChip(mcu, this.flash, {
@@ -153,7 +155,9 @@ export class EmulatedBoard {
     this.uart0 = mcu.uart[0].pl011;
     this.uart0.onTxLost = (byte) => {
       // The PL011 drops a byte written while TXFF is set; firmware must check TXFF first.
-      this.fail(`firmware wrote 0x${byte.toString(16)} to UART0 while its TX FIFO was full: byte lost`);
+      this.fail(
+        `firmware wrote 0x${byte.toString(16)} to UART0 while its TX FIFO was full: byte lost`,
+      );
     };
     this.input = new PacedUartInput(mcu, mcu.uart[0]);
     this.usb?.host.attach(mcu);

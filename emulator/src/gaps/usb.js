@@ -36,13 +36,7 @@
 //    Not modelled: resume signalling, VBUS (the firmware forces VBUS detect, as a Pico must),
 //    EP0 traffic's share of the bus, errors and retries on the wire.
 
-import {
-  createSetupPacket,
-  DataDirection,
-  SetupRecipient,
-  SetupType,
-  USBCDC,
-} from 'rp2040js';
+import { createSetupPacket, DataDirection, SetupRecipient, SetupType, USBCDC } from 'rp2040js';
 
 // USB controller registers and DPRAM (RP2040 datasheet, 4.1.4).
 const SIE_STATUS = 0x50;

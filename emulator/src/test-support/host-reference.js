@@ -24,14 +24,23 @@ export function buildHostReference() {
   const output = execFileSync(
     'cargo',
     ['build', '--quiet', '-p', 'host-tests', '--example', EXAMPLE, '--message-format=json'],
-    { cwd: REPO, encoding: 'utf8', maxBuffer: 64 * 1024 * 1024, stdio: ['ignore', 'pipe', 'inherit'] },
+    {
+      cwd: REPO,
+      encoding: 'utf8',
+      maxBuffer: 64 * 1024 * 1024,
+      stdio: ['ignore', 'pipe', 'inherit'],
+    },
   );
   for (const line of output.split('\n')) {
     if (!line.startsWith('{')) {
       continue;
     }
     const message = JSON.parse(line);
-    if (message.reason === 'compiler-artifact' && message.target?.name === EXAMPLE && message.executable) {
+    if (
+      message.reason === 'compiler-artifact' &&
+      message.target?.name === EXAMPLE &&
+      message.executable
+    ) {
       cachedBinary = message.executable;
     }
   }
@@ -58,7 +67,9 @@ export function configLines({ layout, servos, payload = {} }) {
   const p = payload;
   return [
     `layout ${l.base_radius_mm} ${l.base_half_angle_deg} ${l.platform_radius_mm} ${l.platform_half_angle_deg} ${l.arm_mm} ${l.rod_mm}`,
-    ...servos.map((s, i) => `servo ${i + 1} ${s.trim_us} ${s.rate_us_rad} ${s.dir} ${s.min_us} ${s.max_us}`),
+    ...servos.map(
+      (s, i) => `servo ${i + 1} ${s.trim_us} ${s.rate_us_rad} ${s.dir} ${s.min_us} ${s.max_us}`,
+    ),
     `payload ${orZero(p.payload_g)} ${orZero(p.payload_com_x_mm)} ${orZero(p.payload_com_y_mm)} ${orZero(p.payload_com_z_mm)}`,
     `ratings ${servos.map((s) => orZero(s.torque_kgcm)).join(' ')}`,
   ];
@@ -79,7 +90,10 @@ export class HostReference {
     if (result.status !== 0) {
       throw new Error(`${this.binary} failed (${result.status}): ${result.stderr}`);
     }
-    const answers = result.stdout.trim().split('\n').map((line) => JSON.parse(line));
+    const answers = result.stdout
+      .trim()
+      .split('\n')
+      .map((line) => JSON.parse(line));
     if (answers.length !== requests.length) {
       throw new Error(`${requests.length} requests, ${answers.length} answers`);
     }

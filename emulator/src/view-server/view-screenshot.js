@@ -16,7 +16,9 @@ import {
   waitForPose,
 } from '../test-support/view-browser.js';
 
-const out = process.argv[2] ?? join(dirname(fileURLToPath(import.meta.url)), '..', '..', 'view', 'screenshot.png');
+const out =
+  process.argv[2] ??
+  join(dirname(fileURLToPath(import.meta.url)), '..', '..', 'view', 'screenshot.png');
 /** "combined" in the README's golden table: x y z (mm), roll pitch yaw (deg). */
 const POSE = [4, -6, 5, 3, -4, 6];
 

@@ -46,8 +46,16 @@ const MAX_PAGE_LINE = 1024;
 /** URL prefix -> directory, and the sub-folders of it that may be served. */
 const STATIC = [
   { prefix: '/view/', dir: join(EMULATOR, 'view'), allow: [''] },
-  { prefix: '/vendor/three/', dir: join(EMULATOR, 'node_modules', 'three'), allow: ['build', 'examples/jsm'] },
-  { prefix: '/vendor/xterm/', dir: join(EMULATOR, 'node_modules', '@xterm', 'xterm'), allow: ['lib', 'css'] },
+  {
+    prefix: '/vendor/three/',
+    dir: join(EMULATOR, 'node_modules', 'three'),
+    allow: ['build', 'examples/jsm'],
+  },
+  {
+    prefix: '/vendor/xterm/',
+    dir: join(EMULATOR, 'node_modules', '@xterm', 'xterm'),
+    allow: ['lib', 'css'],
+  },
 ];
 
 const CONTENT_TYPES = {
