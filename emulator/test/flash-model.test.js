@@ -28,6 +28,10 @@ before(() => {
 });
 
 /** A bare chip with the flash model: `{ mcu, chip, faults, cuts, call(code, args) }`. */
+/**
+ * @param {{ timing?: 'typical' | 'max' | { sectorEraseMs: number, pageProgramMs: number } }}
+ *   [options]
+ */
 function bareChip({ timing = 'typical' } = {}) {
   const mcu = new RP2040();
   patchEmulatorGaps(mcu);

@@ -54,7 +54,10 @@ function solve(pose, settings = defaultSettings()) {
   return answer;
 }
 
-/** The default settings with a payload and (optionally) a rating on every servo. */
+/**
+ * The default settings with a payload and (optionally) a rating on every servo.
+ * @param {{ g?: number, com?: number[], rating?: number | 'off' }} [options]
+ */
 function withPayload({ g = 2000, com = [0, 0, 30], rating = 'off' } = {}) {
   const settings = defaultSettings();
   settings.payload = {
@@ -69,6 +72,10 @@ function withPayload({ g = 2000, com = [0, 0, 30], rating = 'off' } = {}) {
   return settings;
 }
 
+/**
+ * @param {import('../src/chip/board.js').EmulatedBoard} board
+ * @param {{ g?: number, com?: number[], rating?: number | 'off' }} [options]
+ */
 function setPayload(board, { g = 2000, com = [0, 0, 30], rating = 'off' } = {}) {
   ok(board, `set payload_g ${g}`);
   ['x', 'y', 'z'].forEach((axis, i) => ok(board, `set payload_com_${axis}_mm ${com[i]}`));

@@ -53,7 +53,10 @@ function crc32(bytes) {
   return (crc ^ 0xffffffff) >>> 0;
 }
 
-/** What a sector holds: 'erased', `{ sequence }` of a good record, or 'unusable'. */
+/**
+ * What a sector holds: 'erased', `{ sequence }` of a good record, or 'unusable'.
+ * @returns {any}
+ */
 function sectorState(board, sector) {
   const { offset } = board.settingsStorage;
   const page = board.flash.read(offset + sector * SECTOR_BYTES, 256);

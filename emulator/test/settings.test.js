@@ -129,6 +129,7 @@ test('servo trim, direction, rate and limits change the pins as the host core pr
   assertPins(board, solve(settings, pose), 'defaults');
 
   // Each change applies at once to the pose being held.
+  /** @type {[string, (settings: any) => void][]} */
   const steps = [
     [
       'servo2.trim_us 1520',

@@ -53,7 +53,7 @@ function bitNanos(baud) {
 
 /** A bare chip with UART0 set up like firmware does: 8N1, FIFOs on, `baud`, levels `ifls`. */
 function bareUart({ baud = 115200, ifls = 0x12, imsc = 0 } = {}) {
-  const mcu = new RP2040();
+  const mcu = /** @type {import('../src/gaps/index.js').Mcu} */ (new RP2040());
   patchEmulatorGaps(mcu);
   const uart = mcu.uart[0];
   const chip = {

@@ -138,7 +138,12 @@ test("the terminal's line editing is followed as the firmware does it", () => {
   assert.equal(input.heldLines, 0);
 });
 
-/** An HTTP request to the view server: resolves to `{ status, body }`. */
+/**
+ * An HTTP request to the view server: resolves to `{ status, body }`.
+ * @param {number} port
+ * @param {{ method?: string, path?: string, headers?: Record<string, string>, body?: string }}
+ *   [options]
+ */
 function http(port, { method = 'GET', path = '/', headers = {}, body } = {}) {
   return new Promise((resolve, reject) => {
     const req = request({ host: '127.0.0.1', port, method, path, headers }, (res) => {
@@ -175,6 +180,10 @@ function events(port) {
   });
   req.end();
   return {
+    /**
+     * @param {string} event
+     * @param {{ board?: EmulatedBoard }} [options]
+     */
     async next(event, { board } = {}) {
       for (;;) {
         const index = queue.findIndex((m) => m.event === event);

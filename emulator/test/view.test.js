@@ -114,7 +114,10 @@ test('the 3D view shows the pose the pins carry, tilts with a roll, and says whe
       );
       // The page's line went over the one UART: the shell's terminal saw its echo and reply too.
       await page.waitForFunction(
-        () => /pose 0 0 10 0 0 0\s+ok/.test(document.querySelector('#terminal').innerText),
+        () =>
+          /pose 0 0 10 0 0 0\s+ok/.test(
+            /** @type {HTMLElement} */ (document.querySelector('#terminal')).innerText,
+          ),
         null,
         { timeout: SETTLE_TIMEOUT_MS },
       );

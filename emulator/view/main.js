@@ -32,7 +32,9 @@ const terminal = new PageTerminal({
   note: $('send-note'),
 });
 buildPinRows();
-for (const button of document.querySelectorAll('[data-camera]')) {
+for (const button of /** @type {NodeListOf<HTMLElement>} */ (
+  document.querySelectorAll('[data-camera]')
+)) {
   button.addEventListener('click', () => scene.setCamera(button.dataset.camera));
 }
 

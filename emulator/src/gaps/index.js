@@ -35,6 +35,16 @@ export { BULK_PACKET_BYTES, BULK_PACKET_NANOS, BULK_PACKETS_PER_FRAME, UsbCdcHos
 export { onWatchdogExpiry } from './watchdog.js';
 export { wakeIfInterruptPending } from './wfi.js';
 
+/**
+ * rp2040js's `RP2040` as this harness uses it, with what its declared types leave out: its
+ * clock is a `SimulationClock` (`tick`, `nextAlarm`), and after `patchEmulatorGaps` each UART
+ * carries its PL011 model (`uart.pl011`).
+ * @typedef {import('rp2040js').RP2040 & {
+ *   clock: { tick(deltaNanos: number): void, nextAlarm: { nanos: number } | null },
+ *   uart: Array<import('rp2040js').RP2040['uart'][number] & { pl011: Pl011 }>,
+ * }} Mcu
+ */
+
 /** Applies gaps 1 and 2 to a fresh `RP2040`: `uart.pl011` is each UART's model. */
 export function patchEmulatorGaps(mcu) {
   mcu.logger = new ConsoleLogger(LogLevel.Error, true);

@@ -146,7 +146,9 @@ export class UsbCdcHost {
    * `onUSBEnabled`).
    */
   plugIn(reset) {
-    const cdc = new USBCDC(this.usb);
+    // `any`: the fields used here (`initialized`, `outEndpoint`, `descriptors`,
+    // `cdcSetControlLineState`) are private in rp2040js's types.
+    const cdc = /** @type {any} */ (new USBCDC(this.usb));
     this.cdc = cdc;
     // Gap 10: the line state goes to the interface, when the host wants it.
     cdc.cdcSetControlLineState = () => {

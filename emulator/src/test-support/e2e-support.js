@@ -69,6 +69,7 @@ export function defaultSettings() {
       dir: n % 2 === 0 ? 'normal' : 'reversed',
       min_us: 1100,
       max_us: 1900,
+      /** @type {number | 'off'} */
       torque_kgcm: 'off',
     })),
     // No payload.

@@ -62,6 +62,10 @@ function orZero(value) {
  * `{ trim_us, rate_us_rad, dir, min_us, max_us, torque_kgcm }`; `payload` (optional) is
  * `{ payload_g, payload_com_x_mm, payload_com_y_mm, payload_com_z_mm }`.
  */
+/**
+ * @param {{ layout: Record<string, number>, servos: Record<string, number | string>[],
+ *   payload?: Record<string, number> }} settings
+ */
 export function configLines({ layout, servos, payload = {} }) {
   const l = layout;
   const p = payload;

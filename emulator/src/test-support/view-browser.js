@@ -24,11 +24,19 @@ export function haveChromium() {
  * the view's address, from what it prints), `exited` (a promise of `{ code, signal }`),
  * `stdoutText` (UART0 as the shell terminal shows it) and `stderrText`.
  */
+/**
+ * @typedef {import('node:child_process').ChildProcessWithoutNullStreams & {
+ *   url: Promise<string>, exited: Promise<{ code: number | null, signal: string | null }>,
+ *   stdoutText: string, stderrText: string }} Runner
+ */
+/** @returns {Runner} */
 export function startRunner(args = []) {
-  const runner = spawn(join(REPO, 'dev'), ['run', '--view-port', '0', ...args], {
-    cwd: REPO,
-    stdio: ['pipe', 'pipe', 'pipe'],
-  });
+  const runner = /** @type {Runner} */ (
+    spawn(join(REPO, 'dev'), ['run', '--view-port', '0', ...args], {
+      cwd: REPO,
+      stdio: ['pipe', 'pipe', 'pipe'],
+    })
+  );
   runner.stdoutText = '';
   runner.stderrText = '';
   runner.stdout.on('data', (data) => {

@@ -78,6 +78,9 @@ const CONTENT_TYPES = {
  *   `onOutput(listener)`: `board.usb`, `board.uart`; default the board, UART0)
  * @param {import('./shared-input.js').SharedInput} options.input
  * @param {string} [options.link] what the terminal side is, for the page ('terminal', 'pty')
+ * @param {number} [options.port] the port to listen on (default `DEFAULT_VIEW_PORT`)
+ * @param {boolean} [options.fallback] take any free port if `port` is taken (default true)
+ * @param {string} [options.wasm] the view's WebAssembly module (default: the release build)
  */
 export async function startViewServer({
   board,
@@ -115,6 +118,7 @@ export class ViewServer {
     input.onLine((text, source) => this.lineSent(text, source));
   }
 
+  /** @returns {Promise<void>} */
   listen(port, fallback) {
     this.server = createServer((req, res) => this.handle(req, res));
     return new Promise((resolvePromise, reject) => {
@@ -128,7 +132,7 @@ export class ViewServer {
       this.server.on('error', onError);
       this.server.once('listening', () => {
         this.server.off('error', onError);
-        this.port = this.server.address().port;
+        this.port = /** @type {import('node:net').AddressInfo} */ (this.server.address()).port;
         resolvePromise();
       });
       this.server.listen(port, '127.0.0.1');
