@@ -88,6 +88,7 @@ fn main() -> ! {
     // 1 ms, against a 3 ms frame at 333 Hz and the 500 ms watchdog; BENCHMARKS.md). The one
     // exception is a `save`'s flash write (a sector erase: tens to hundreds of milliseconds
     // with interrupts masked, USB's too), alone in its pass, with the watchdog given longer.
+    //
     // The link whose input went first in the last pass that read input (they take turns).
     let mut turn = 0;
     loop {
