@@ -55,7 +55,7 @@ function referenceSettings() {
 
 /** The tool's binary, built once (the path cargo reports). */
 function buildTool() {
-  const output = execFileSync('cargo', ['build', '--quiet', '-p', 'cli', '--message-format=json'], {
+  const output = execFileSync('cargo', ['build', '--quiet', '-p', 'hexapod', '--message-format=json'], {
     cwd: REPO,
     encoding: 'utf8',
     maxBuffer: 64 * 1024 * 1024,
