@@ -61,12 +61,16 @@ function referenceSettings() {
 
 /** The tool's binary, built once (the path cargo reports). */
 function buildTool() {
-  const output = execFileSync('cargo', ['build', '--quiet', '-p', 'cli', '--message-format=json'], {
-    cwd: REPO,
-    encoding: 'utf8',
-    maxBuffer: 64 * 1024 * 1024,
-    stdio: ['ignore', 'pipe', 'inherit'],
-  });
+  const output = execFileSync(
+    'cargo',
+    ['build', '--quiet', '-p', 'hexapod', '--message-format=json'],
+    {
+      cwd: REPO,
+      encoding: 'utf8',
+      maxBuffer: 64 * 1024 * 1024,
+      stdio: ['ignore', 'pipe', 'inherit'],
+    },
+  );
   for (const line of output.split('\n')) {
     if (line.startsWith('{')) {
       const message = JSON.parse(line);
