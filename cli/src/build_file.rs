@@ -267,7 +267,7 @@ fn toml_value(id: SettingId, value: SettingValue) -> String {
 
 /// What a setting is, with its range from the firmware's own [`Kind`], for the comments.
 fn describe(id: SettingId) -> String {
-    let what = setting_meaning(id);
+    let what = id.meaning();
     match id.kind() {
         Kind::Whole {
             min,
@@ -301,51 +301,12 @@ fn describe(id: SettingId) -> String {
 fn header(source: &str) -> String {
     format!(
         "# hexapod build file: the settings of {source}.\n\
-         # Keys are the firmware's `set` names (README, \"Settings\"):\n\
+         # Keys are the firmware's `set` names (docs/settings.md in the firmware's repository):\n\
          # `[servo3] trim_us = 1512` is `set servo3.trim_us 1512`.\n\
          # Lengths in mm, angles in degrees, pulses in microseconds.\n\
          # A key left out is the firmware's default. `hexapod apply FILE` (no port) checks it;\n\
          # `hexapod apply FILE --port PORT` sends `defaults`, every `set`, then `save`.\n\n"
     )
-}
-
-/// What a setting is, for a build file's comments (its range comes from the firmware).
-pub fn setting_meaning(id: control::settings::SettingId) -> &'static str {
-    use control::settings::{LayoutParam as L, ServoParam as P, SettingId as S};
-    use kinematics_core::pose::Axis;
-    match id {
-        S::FrameHz => "servo frame rate",
-        S::Baud => "UART0 baud rate",
-        S::Echo => "echo and prompt on the link",
-        S::SpeedMmS => "linear speed limit",
-        S::SpeedDegS => "angular speed limit",
-        S::AccelMmS2 => "linear acceleration limit",
-        S::AccelDegS2 => "angular acceleration limit",
-        S::LinkTimeoutS => "return home after this long without a command",
-        S::Layout(L::BaseRadiusMm) => "servo shaft circle radius",
-        S::Layout(L::BaseHalfAngleDeg) => "half the angle between a servo pair",
-        S::Layout(L::PlatformRadiusMm) => "platform joint circle radius",
-        S::Layout(L::PlatformHalfAngleDeg) => "half the angle between a joint pair",
-        S::Layout(L::ArmMm) => "servo arm (horn) length a",
-        S::Layout(L::RodMm) => "rod length s",
-        S::Servo(_, P::TrimUs) => "home pulse W0",
-        S::Servo(_, P::RateUsRad) => "servo rate r",
-        S::Servo(_, P::Dir) => "direction",
-        S::Servo(_, P::MinUs) => "lowest pulse",
-        S::Servo(_, P::MaxUs) => "highest pulse",
-        S::Servo(_, P::TorqueKgcm) => "rated torque",
-        S::StreamScale(Axis::X | Axis::Y | Axis::Z) => "stream full scale of the axis",
-        S::StreamScale(_) => "stream full scale of the axis",
-        S::StreamBits => "bits of a text frame's counts",
-        S::StreamAxis(_) => "the axis this text-frame count drives",
-        S::EstopPin => "emergency-stop input",
-        S::EstopAction => "what an open e-stop does",
-        S::PowerPin => "servo-power enable output",
-        S::PayloadG => "mass the platform carries (0: none)",
-        S::PayloadCom(0) => "payload centre of mass, platform frame x",
-        S::PayloadCom(1) => "payload centre of mass, platform frame y",
-        S::PayloadCom(_) => "payload centre of mass, platform frame z (up)",
-    }
 }
 
 /// A build file without a payload: how to give one (commented, so the file still says the
