@@ -21,8 +21,10 @@
 //!   an [`ik::Solver`] is the IK of one geometry: it owns it (and its rotation centre), derives
 //!   the home arm angles `alpha0` (eq. 12) and holds what it computes once per geometry.
 //! - [`legs`]: the legs at a pose: linear [`legs::Struts`] (lengths, unit vectors, strokes) and
-//!   servo arms ([`legs::ArmState`]); the [`legs::Actuators`] trait both implement.
-//! - [`jacobian`]: joint rates per unit twist, condition number, Euler-angle rates.
+//!   servo arms ([`legs::ArmState`]).
+//! - [`jacobian`]: joint rates per unit twist, condition number, Euler-angle rates; the
+//!   [`jacobian::Actuators`] trait both kinds of leg implement (joint values and Jacobian),
+//!   which the modules below take.
 //! - [`rates`]: joint rates from a twist and back, servo speed limits.
 //! - [`statics`]: joint forces for a wrench, holding torques of a payload, stiffness, compliance.
 //! - [`dynamics`]: link and arm motions along a trajectory, actuation with inertia.
@@ -58,6 +60,7 @@ pub mod pose;
 pub mod rates;
 pub mod servo;
 pub mod statics;
+pub mod types;
 pub mod workspace;
 
 pub use error::KinematicsError;
@@ -66,14 +69,7 @@ pub use ik::{IkError, Solution, Solver};
 pub use math::{FloatRoutines, Libm, Math};
 pub use pose::Pose;
 pub use servo::{Direction, ServoConfig, ServoError, ServoSet};
-
-/// Number of legs (and servos) of a Stewart platform.
-pub const LEGS: usize = 6;
-
-/// A 3-vector in millimetres (base or platform frame, as the name of the value says).
-pub type Vec3 = nalgebra::Vector3<f32>;
-/// A 3x3 rotation matrix.
-pub type Mat3 = nalgebra::Matrix3<f32>;
+pub use types::{Mat3, Vec3, LEGS};
 
 /// Helpers shared by the unit tests.
 #[cfg(test)]

@@ -11,7 +11,7 @@ use core::fmt;
 
 use crate::fixed::{from_fixed, from_fixed32, to_fixed, wide_mul, ARM_FRAC};
 use crate::math::{abs_bits, Libm, Math, Real};
-use crate::LEGS;
+use crate::types::LEGS;
 
 /// Default home pulse `W0`, us ("nominally 1500 us" in "The Mathematics of the Stewart
 /// Platform").
