@@ -638,11 +638,11 @@ impl FixedTable {
         // The platform is planar: `R`'s third column only turns the centre's `z`.
         let r = pose.rotation_fixed::<M>(centre.is_some_and(|c| c[2] != 0));
         // (A check against the `Math` in use, whatever its sines: the bounds of `fixed` hold.)
-        if !r
-            .iter()
-            .flatten()
-            .all(|v| v.unsigned_abs() < MAX_ROTATION_ENTRY as u32)
-        {
+        let bounded = |row: &[i32; 3]| {
+            row.iter()
+                .all(|v| v.unsigned_abs() < MAX_ROTATION_ENTRY as u32)
+        };
+        if !(bounded(&r[0]) && bounded(&r[1]) && bounded(&r[2])) {
             return None;
         }
         let mut position = position.map(|v| to_fixed(v, MM_FRAC));

@@ -213,6 +213,21 @@ pub fn lt(a: f32, b: f32) -> bool {
     not_nan(a_bits) && not_nan(b_bits) && !le(b, a)
 }
 
+/// IEEE `lo <= x && x <= hi` in integer instructions, as [`le`] twice but with `x`'s order key
+/// and NaN check computed once (the IK asks it of every pulse).
+#[inline]
+pub fn within(x: f32, lo: f32, hi: f32) -> bool {
+    let (x, lo, hi) = (x.to_bits(), lo.to_bits(), hi.to_bits());
+    let not_nan = |v: u32| v & 0x7fff_ffff <= 0x7f80_0000;
+    let key = |v: u32| (v ^ ((v as i32 >> 31) as u32 >> 1)) as i32;
+    let key_x = key(x);
+    not_nan(x)
+        && not_nan(lo)
+        && not_nan(hi)
+        && (key(lo) <= key_x || (lo | x) << 1 == 0)
+        && (key_x <= key(hi) || (x | hi) << 1 == 0)
+}
+
 /// `u . v` with `M`'s arithmetic.
 pub(crate) fn dot<M: Math>(u: Vec3, v: Vec3) -> f32 {
     let r = Real::<M>::new;
@@ -327,6 +342,9 @@ mod tests {
             for b in values {
                 assert_eq!(le(a, b), a <= b, "{a} <= {b}");
                 assert_eq!(lt(a, b), a < b, "{a} < {b}");
+                for x in values {
+                    assert_eq!(within(x, a, b), a <= x && x <= b, "{a} <= {x} <= {b}");
+                }
             }
         }
     }
