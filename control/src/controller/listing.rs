@@ -38,15 +38,16 @@ impl Writing {
 
 /// `status` with a payload: the report, whose holding torques are computed (a slice), then
 /// listed.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Copy)]
 pub(super) struct StatusTorques(pub StatusReport);
 
 impl StatusTorques {
     /// The slice: the holding torques at the report's pose, with its arm angles; the listing
     /// to write.
-    pub fn step<M: Math>(mut self, check: PoseCheck<'_>) -> Listing {
-        self.0.torque_kgcm = Some(self.torques::<M>(check));
-        Listing::Status(self.0)
+    pub fn step<M: Math>(&self, check: PoseCheck<'_>) -> Listing {
+        let mut report = self.0;
+        report.torque_kgcm = Some(self.torques::<M>(check));
+        Listing::Status(report)
     }
 
     /// The holding torques `status` shows: at its pose, with its arm angles (with pulses set

@@ -546,9 +546,10 @@ impl<M: Math> Controller<M> {
         }
     }
 
-    /// A slice of the job in progress, advanced where it is held by its own `step` (a job is
-    /// moved out of its place only when it ends; see [`Job`]): `None` while it goes on, else
-    /// how it ended (and it is gone, or a job that follows from it has taken its place).
+    /// A slice of the job in progress, advanced where it is held by its own `step` (see
+    /// [`Job`]; when it ends, only what its outcome needs is copied or moved out): `None` while
+    /// it goes on, else how it ended (and it is gone, or a job that follows from it has taken
+    /// its place).
     fn step_job(&mut self, out: &mut impl Write) -> Option<Done> {
         let check = PoseCheck {
             settings: &self.settings,
@@ -557,9 +558,9 @@ impl<M: Math> Controller<M> {
         match self.job.as_mut()? {
             Job::Path(path) => {
                 let result = path.step::<M>(check)?;
-                let Some(Job::Path(path)) = self.job.take() else {
-                    return None;
-                };
+                // Copied out (not the whole job, which `take` would move), then ended.
+                let path = *path;
+                self.job = None;
                 Some(self.finish_path(path, result))
             }
             Job::Clamp(clamp) => {
@@ -575,11 +576,10 @@ impl<M: Math> Controller<M> {
                 self.job = None;
                 Some(Done::Ok)
             }
-            Job::Status(_) => {
-                let Some(Job::Status(status)) = self.job.take() else {
-                    return None;
-                };
-                Some(Done::List(status.step::<M>(check)))
+            Job::Status(status) => {
+                let listing = status.step::<M>(check);
+                self.job = None;
+                Some(Done::List(listing))
             }
             Job::Limits(limits) => {
                 let listing = limits.step::<M>(check)?;

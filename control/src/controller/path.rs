@@ -42,7 +42,7 @@ impl Purpose {
 }
 
 /// A reachable target whose straight path is being checked.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Copy)]
 pub(super) struct PathCheck {
     pub purpose: Purpose,
     /// The target's solution (solved when the command came).
