@@ -1,6 +1,6 @@
 //! Notices (faults, link loss, warnings, the e-stop): kept for every link to show, the latest
-//! [`NOTICE_QUEUE`](super::NOTICE_QUEUE) of them, each with its sequence number; each link's [`Session`] remembers
-//! which it has shown. They are written by
+//! [`NOTICE_QUEUE`](super::NOTICE_QUEUE) of them, each with its sequence number; each link's
+//! [`Session`] remembers which it has shown. They are written by
 //! [`Controller::write_notices`](super::Controller::write_notices) and before a link's next
 //! reply; a link that is closed is shown the latest few by its banner when it opens again.
 

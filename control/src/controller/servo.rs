@@ -1,14 +1,14 @@
-//!
 //! Driving servos one by one (`servo n us`): the pulse goes to that servo (within its limits;
 //! refused while a move is in progress or the e-stop is on; a stream ends), and the job finds
-//! the pose the six pulses correspond to by forward kinematics ([`Newton`](kinematics_core::forward::Newton), one
-//! iteration per slice) along a continuation from the pose the platform was at
-//! ([`FK_STEP_RAD`](super::FK_STEP_RAD)), then checks it with the IK (and, with torque ratings, its holding
-//! torques); the pulse is given when that is done. FK runs there, once per change of the
-//! pulses, not in `status`: `status` shows the pose found (or that there is none), and moves,
-//! `check` and `limits` start from it, so that a move after `servo` does not jump (with no pose
-//! they are refused). A settings change while the pulses are set this way keeps them and finds
-//! their pose again. An accepted move or stream frame ends it.
+//! the pose the six pulses correspond to by forward kinematics
+//! ([`Newton`](kinematics_core::forward::Newton), one iteration per slice) along a
+//! continuation from the pose the platform was at ([`FK_STEP_RAD`](super::FK_STEP_RAD)), then
+//! checks it with the IK (and, with torque ratings, its holding torques); the pulse is given
+//! when that is done. FK runs there, once per change of the pulses, not in `status`: `status`
+//! shows the pose found (or that there is none), and moves, `check` and `limits` start from
+//! it, so that a move after `servo` does not jump (with no pose they are refused). A settings
+//! change while the pulses are set this way keeps them and finds their pose again. An accepted
+//! move or stream frame ends it.
 //!
 //! The forward kinematics job is `controller/locate.rs`'s; here is what starts it and what its
 //! outcome does.

@@ -2,9 +2,10 @@
 //! frame wins (the board feeds every waiting byte, then calls [`Controller::apply_stream`],
 //! which applies only the newest frame). An unreachable target is clamped: the last reachable
 //! pose on the straight line from the current pose to it, found by bisection
-//! ([`CLAMP_STEPS`] IK solutions, as a job a slice per pass: so a clamped frame takes effect
-//! a few passes, well under a millisecond, later), and counted. With every speed and acceleration limit off
-//! the pose is applied at once (pass-through, like a jump: [`Controller::take_new_pulses`]);
+//! ([`CLAMP_STEPS`](super::CLAMP_STEPS) IK solutions, as a job a slice per pass: so a clamped
+//! frame takes effect a few passes, well under a millisecond, later), and counted. With every
+//! speed and acceleration limit off the pose is applied at once (pass-through, like a jump:
+//! [`Controller::take_new_pulses`]);
 //! otherwise each axis follows it at the servo frame rate within the limits
 //! ([`crate::tracker`]); a step that would leave the workspace (the axes' own paths to a
 //! reachable goal can) stops the tracker where it is, counted as a clamp too. An accepted
