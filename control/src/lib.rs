@@ -13,8 +13,8 @@
 //! - [`session`]: one serial link's state: line buffer ([`protocol`]), echo, prompt, notices
 //!   shown; a fresh start when the link opens again.
 //! - [`protocol`]: bytes -> lines (terminal line editing, like grbl's `protocol`/`serial`) and
-//!   stream frames among them; [`stream`]: the stream frames' grammar (binary, SimTools text)
-//!   and what their counts mean (the `stream.*` settings).
+//!   stream frames among them; [`stream`]: the stream frames' grammar (binary, SimTools text),
+//!   `Frame`, and what their counts mean (the `stream.*` settings); a leaf `protocol` uses.
 //! - [`number`]: strict decimal parsing; [`word`]: quoting what the user typed.
 //! - [`command`]: one line -> one [`command::Command`] or a [`command::ParseError`] (like
 //!   grbl's `gcode`); [`command::Verb`] is the list of command words.
@@ -34,9 +34,17 @@
 //!   output conventions are documented there): `errors` (codes and messages, and the
 //!   generated list `docs/error-codes.md`), `format` (numbers, poses, values), `replies` (the
 //!   writers: status, config, help, notices, echo).
-//! - [`controller`]: [`Controller`], the platform's state, which ties them together: runs
-//!   commands and the jobs done a slice at a time (path checks, listings, `limits`, `servo`'s
-//!   forward kinematics, settings rebuilds, `save`, stream clamps).
+//! - [`controller`]: [`Controller`], the platform's state, which ties them together. `mod.rs`
+//!   holds the state, the public API and the dispatch (a line to its command in `run`, a slice
+//!   to the job in progress in `work`, a frame to the motion in `on_frame`). The jobs done a
+//!   slice at a time are one state machine per file, each its own type with a `step`, knowing
+//!   nothing of the controller: `path` (a target's straight path checked), `stream_goal`
+//!   (what a stream follows; the clamp of a target out of reach), `locate` (`servo`'s forward
+//!   kinematics along a continuation), `rebuild` (new build numbers' geometry and IK), `save`
+//!   (the board's flash write), `listing` (a listing a line per slice; `status`' torques),
+//!   `limits`, sharing `pose_check` (whether a pose can be taken). What the controller does
+//!   with them is one `impl Controller` file per job: `moves`, `streaming`, `servo`,
+//!   `settings_change`, `link_loss`, `estop`, `status`, `notices`.
 //!
 //! Each layer returns an error enum with the payload (which field, leg, servo, limit) and words
 //! nothing; [`report`] words everything, and host programs print the board's own words through
