@@ -1,0 +1,114 @@
+// One benchmark of `./dev bench` alone, printed rather than written to BENCHMARKS.md: a quick
+// figure while working on one part (seconds to a minute instead of the whole bench's minutes).
+//
+//   node src/quick-bench.js ik|stream|tracker-profile [--poses N] [--seed S]
+//
+//   ik               cycles per IK on the benchmark firmware (every variant it carries)
+//   stream           a clamp and tracker frames (`Controller::on_frame` while streaming), as
+//                    BENCHMARKS.md's "The stream pipeline" table measures them (first 40 poses)
+//   tracker-profile  where a tracker frame's cycles go: per function of the ELF's symbol table
+//                    (inlined code counts in the function it was inlined into; the boot ROM as
+//                    one), per measured frame
+//
+// Expects `cargo fw` to have built the firmware and the benchmark firmware. The same
+// measurements, in the same harness, as `./dev bench` (emulator/src/ik-bench.js).
+
+import { parseArgs } from 'node:util';
+
+import { EmulatedBoard } from './board.js';
+import { symbolRanges } from './elf.js';
+import { BENCH_ELF, benchPoses, runIkBench, runStreamBench } from './ik-bench.js';
+
+const { values: args, positionals } = parseArgs({
+  allowPositionals: true,
+  options: {
+    poses: { type: 'string', default: '40' },
+    seed: { type: 'string', default: '1' },
+  },
+});
+
+const fmt = (x) => Math.round(x).toLocaleString('en-US');
+const row = (what, s) => `${what}: mean ${fmt(s.mean)}, min ${fmt(s.min)}, max ${fmt(s.max)} cycles`;
+
+const which = positionals[0];
+const poses = benchPoses(Number(args.poses), Number(args.seed));
+if (which === 'ik') {
+  for (const v of runIkBench(poses).variants) {
+    const sum = v.cycles.reduce((a, b) => a + b, 0);
+    const s = { mean: sum / v.cycles.length, min: Math.min(...v.cycles), max: Math.max(...v.cycles) };
+    console.log(row(`IK (${v.name})`, s));
+  }
+} else if (which === 'stream') {
+  const stream = runStreamBench(poses.slice(0, 40), { frames: 3, dzMm: 60 });
+  console.log(row(`clamp (${stream.clamp.clamped} clamped)`, stream.clamp));
+  console.log(row(`tracker frame (${stream.track.moved} of ${stream.track.frames} moved)`, stream.track));
+  if (stream.trackClamped.frames > 0) {
+    console.log(row(`tracker frame, step left the workspace (${stream.trackClamped.frames})`, stream.trackClamped));
+  }
+} else if (which === 'tracker-profile') {
+  profileTracker(poses.slice(0, 40), 3);
+} else {
+  console.error('usage: node src/quick-bench.js ik|stream|tracker-profile [--poses N] [--seed S]');
+  process.exit(2);
+}
+
+/** The cycles of `frames` tracker frames towards each pose, per function. */
+function profileTracker(list, frames) {
+  const ROM_END = 0x4000;
+  const MARKER_GPIO = 16;
+  const board = new EmulatedBoard({ elf: BENCH_ELF });
+  board.waitForLine(/^bench ready/, { timeoutMs: 1000 });
+  const ranges = symbolRanges(BENCH_ELF, () => true)
+    .filter((r) => r.end > r.start)
+    .sort((a, b) => a.start - b.start);
+  const nameOf = (pc) => {
+    if (pc < ROM_END) {
+      return 'boot ROM';
+    }
+    let lo = 0;
+    let hi = ranges.length - 1;
+    while (lo <= hi) {
+      const mid = (lo + hi) >> 1;
+      if (ranges[mid].end <= pc) {
+        lo = mid + 1;
+      } else if (ranges[mid].start > pc) {
+        hi = mid - 1;
+      } else {
+        return ranges[mid].name;
+      }
+    }
+    return `? ${pc.toString(16)}`;
+  };
+  let high = false;
+  board.mcu.gpio[MARKER_GPIO].addListener((state) => {
+    high = state === 1;
+  });
+  const core = board.mcu.core;
+  const execute = core.executeInstruction.bind(core);
+  const rows = new Map();
+  core.executeInstruction = () => {
+    const pc = core.PC;
+    const before = core.cycles;
+    const result = execute();
+    if (high) {
+      const name = nameOf(pc);
+      rows.set(name, (rows.get(name) ?? 0) + core.cycles - before);
+    }
+    return result;
+  };
+  const f32Hex = (x) => {
+    const view = new DataView(new ArrayBuffer(4));
+    view.setFloat32(0, x);
+    return view.getUint32(0).toString(16).padStart(8, '0');
+  };
+  for (const pose of list) {
+    board.request(`k ${[...pose.pose_bits, f32Hex(frames)].join(' ')}`, { final: /^(k |error)/, timeoutMs: 2000 });
+  }
+  const perFrame = list.length * frames;
+  const sorted = [...rows].sort((a, b) => b[1] - a[1]);
+  const total = sorted.reduce((sum, [, c]) => sum + c, 0);
+  console.log(`per frame (${perFrame} frames, empty brackets included): ${fmt(total / perFrame)} cycles`);
+  for (const [name, cycles] of sorted) {
+    console.log(`${fmt(cycles / perFrame).padStart(8)}  ${name}`);
+  }
+}
