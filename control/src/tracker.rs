@@ -25,7 +25,8 @@
 //! `i32`, within +-2^30 units (+-1024 mm, +-4 rad; an axis whose position or target lies
 //! beyond is held where it is: no platform reaches that far). Velocities are units per frame;
 //! each frame the limits become whole units per frame, `v_max dt`, and per frame per frame,
-//! `h = a_max dt^2` (the products in `f32`, then rounded down to a whole unit), so the rule
+//! `h = a_max dt^2` (the products in `f32`, then rounded down to a whole unit; kept while the
+//! limits and the frame time stay the same), so the rule
 //! above holds exactly in these units: the braking speed is the exact floor of its formula (an
 //! integer square root and two integer divisions), and every velocity change, the landing
 //! included, is at most `h`. A target lands exactly: the axis' pose is then the target's own
@@ -81,7 +82,7 @@ fn frac_of(index: usize) -> u32 {
 }
 
 /// Where the tracker is and how fast it goes.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy)]
 pub struct Tracker {
     /// The pose of the last step, as the IK gets it: an axis on its target holds the target's
     /// own `f32`.
@@ -92,6 +93,26 @@ pub struct Tracker {
     velocity: [i32; 6],
     /// The frame time the velocities are per, s (0 before the first step).
     frame_s: f32,
+    /// The bits of the limits and the frame time [`Tracker::per_frame`] was computed from
+    /// ([`TrackLimits`]' fields in order, then the frame time; none before the first step).
+    limits_from: [u32; 5],
+    /// The limits per frame of x, y, z and of roll, pitch, yaw: computed when the limits or
+    /// the frame time change (the products are library calls on the RP2040), else kept.
+    per_frame: [FrameLimits; 2],
+}
+
+impl PartialEq for Tracker {
+    /// The same state: poses of the same bits (no float comparisons: library calls on the
+    /// RP2040), positions, velocities and their frame time.
+    fn eq(&self, other: &Tracker) -> bool {
+        // (Word by word, all of them: an array comparison is a `memcmp` call.)
+        let differ = (0..6).fold(self.frame_s.to_bits() ^ other.frame_s.to_bits(), |d, i| {
+            d | (self.pose[i].to_bits() ^ other.pose[i].to_bits())
+                | (self.position[i] ^ other.position[i]) as u32
+                | (self.velocity[i] ^ other.velocity[i]) as u32
+        });
+        differ == 0
+    }
 }
 
 impl Tracker {
@@ -103,6 +124,9 @@ impl Tracker {
             position: core::array::from_fn(|i| to_units(pose[i], frac_of(i)).unwrap_or(OUTSIDE)),
             velocity: [0; 6],
             frame_s: 0.0,
+            // (Not the bits of a frame time: a NaN.)
+            limits_from: [u32::MAX; 5],
+            per_frame: [FrameLimits::OFF; 2],
         }
     }
 
@@ -113,14 +137,14 @@ impl Tracker {
 
     /// True if every axis is at rest.
     pub fn at_rest(&self) -> bool {
-        self.velocity == [0; 6]
+        self.velocity.iter().fold(0, |d, &v| d | v) == 0
     }
 
     /// The tracker one frame (`dt_s`, > 0) later, chasing `target` within `limits`. `self` is
     /// unchanged: the caller keeps the new one once it has checked its pose can be driven. (A
     /// `dt_s` that is not a positive number is no time at all: nothing moves.) `M`'s `f32`
-    /// multiplication turns the limits into units (five products a frame, none while every
-    /// axis rests on its target).
+    /// multiplication turns the limits into units (six products, when the limits or the frame
+    /// time change).
     pub fn step<M: Math>(&self, target: &Pose, limits: &TrackLimits, dt_s: f32) -> Tracker {
         if !positive_finite(dt_s) {
             return *self;
@@ -132,22 +156,26 @@ impl Tracker {
             next.velocity = self.velocity_per(dt);
             next.frame_s = dt;
         }
-        // Each group's limits in units, computed when an axis of it first needs them.
-        let mut groups: [Option<FrameLimits>; 2] = [None, None];
+        let from = [
+            limits.mm_per_s.to_bits(),
+            limits.mm_per_s2.to_bits(),
+            limits.rad_per_s.to_bits(),
+            limits.rad_per_s2.to_bits(),
+            dt.to_bits(),
+        ];
+        if (0..5).fold(0, |d, i| d | (from[i] ^ self.limits_from[i])) != 0 {
+            next.limits_from = from;
+            next.per_frame = [
+                FrameLimits::new::<M>(limits.mm_per_s, limits.mm_per_s2, dt, MM_FRAC),
+                FrameLimits::new::<M>(limits.rad_per_s, limits.rad_per_s2, dt, RAD_FRAC),
+            ];
+        }
         for (i, &goal) in target.iter().enumerate() {
             // At rest on its target, an axis stays there (most axes of a stream often are).
             if goal.to_bits() == self.pose[i].to_bits() && next.velocity[i] == 0 {
                 continue;
             }
-            let group = usize::from(i >= 3);
-            let limits = *groups[group].get_or_insert_with(|| {
-                let (speed, accel) = if group == 0 {
-                    (limits.mm_per_s, limits.mm_per_s2)
-                } else {
-                    (limits.rad_per_s, limits.rad_per_s2)
-                };
-                FrameLimits::new::<M>(speed, accel, dt, frac_of(i))
-            });
+            let limits = next.per_frame[usize::from(i >= 3)];
             let axis = Axis {
                 pose: self.pose[i],
                 position: self.position[i],
@@ -190,6 +218,11 @@ struct FrameLimits {
 }
 
 impl FrameLimits {
+    const OFF: FrameLimits = FrameLimits {
+        speed: None,
+        accel: None,
+    };
+
     /// From `speed` (per s) and `accel` (per s^2) for a frame of `dt` s (positive, at most
     /// [`MAX_FRAME_S`]), in units of 2^-`frac`.
     fn new<M: Math>(speed: f32, accel: f32, dt: f32, frac: u32) -> FrameLimits {
@@ -264,11 +297,15 @@ impl Axis {
             wanted as i32
         };
         let velocity = match limits.accel {
-            // Between the velocity and the one wanted: an i32.
+            // Towards the one wanted by at most h (h <= 2^31: saturated, as i32 at 2^31 - 1,
+            // which no velocity needs to change by).
             Some(h) => {
-                let change = i64::from(wanted) - i64::from(self.velocity);
-                let h = i64::from(h);
-                (i64::from(self.velocity) + change.clamp(-h, h)) as i32
+                let h = h.min(i32::MAX as u32) as i32;
+                if wanted > self.velocity {
+                    wanted.min(self.velocity.saturating_add(h))
+                } else {
+                    wanted.max(self.velocity.saturating_sub(h))
+                }
             }
             None => wanted,
         };
@@ -333,7 +370,7 @@ fn isqrt(x: u32) -> u32 {
         return 0;
     }
     // The highest power of four at most x.
-    let mut bit = 1u32 << ((31 - x.leading_zeros()) & !1);
+    let mut bit = 1u32 << ((31 - normalise(x).1) & !1);
     let (mut rest, mut root) = (x, 0u32);
     while bit != 0 {
         if rest >= root + bit {
@@ -345,6 +382,20 @@ fn isqrt(x: u32) -> u32 {
         bit >>= 2;
     }
     root
+}
+
+/// `x` (not 0) shifted left until its leading one is bit 31, and the shift (its leading zeros):
+/// a few compares in line, where `leading_zeros` is a library call on the M0+ (no such
+/// instruction).
+fn normalise(x: u32) -> (u32, u32) {
+    let (mut x, mut zeros) = (x, 0);
+    for width in [16, 8, 4, 2, 1] {
+        if x >> (32 - width) == 0 {
+            x <<= width;
+            zeros += width;
+        }
+    }
+    (x, zeros)
 }
 
 /// `x * 2^frac` rounded to the nearest whole unit (halves away from zero), by its bits; `None`
@@ -386,9 +437,7 @@ fn to_f32(units: i32, frac: u32) -> f32 {
         return 0.0;
     }
     let sign = units as u32 & 0x8000_0000;
-    let magnitude = units.unsigned_abs();
-    let zeros = magnitude.leading_zeros();
-    let normal = magnitude << zeros; // leading one in bit 31
+    let (normal, zeros) = normalise(units.unsigned_abs()); // leading one in bit 31
     let mantissa = normal >> 8; // 24 bits, the leading one in bit 23
     let cut = normal & 0xff;
     let up = u32::from(cut > 0x80 || (cut == 0x80 && mantissa & 1 == 1));
@@ -673,7 +722,7 @@ mod tests {
     }
 
     #[test]
-    fn the_square_root_is_the_floor() {
+    fn the_square_root_is_the_floor_and_the_leading_zeros_are_counted() {
         let mut rng = Rng(0x9e37_79b9);
         let edges = [
             0,
@@ -692,6 +741,13 @@ mod tests {
             .into_iter()
             .chain((0..200_000).map(|_| rng.spread(32)))
         {
+            if x != 0 {
+                assert_eq!(
+                    normalise(x),
+                    (x << x.leading_zeros(), x.leading_zeros()),
+                    "{x}"
+                );
+            }
             let r = u64::from(isqrt(x));
             assert!(
                 r * r <= u64::from(x) && (r + 1) * (r + 1) > u64::from(x),

@@ -30,6 +30,9 @@ const { values: args, positionals } = parseArgs({
 const fmt = (x) => Math.round(x).toLocaleString('en-US');
 const row = (what, s) => `${what}: mean ${fmt(s.mean)}, min ${fmt(s.min)}, max ${fmt(s.max)} cycles`;
 
+/** Functions also measured with what they call, when they are not inlined. */
+const INCLUSIVE = /^(control::tracker::Tracker::step|kinematics_core::ik::Solver::solve)/;
+
 const which = positionals[0];
 const poses = benchPoses(Number(args.poses), Number(args.seed));
 if (which === 'ik') {
@@ -86,13 +89,29 @@ function profileTracker(list, frames) {
   const core = board.mcu.core;
   const execute = core.executeInstruction.bind(core);
   const rows = new Map();
+  // Inclusive: from the entry of a function not inlined to the return to its caller.
+  const inclusive = new Map();
+  const open = [];
+  const entries = new Map(ranges.filter((r) => INCLUSIVE.test(r.name)).map((r) => [r.start, r.name]));
   core.executeInstruction = () => {
     const pc = core.PC;
+    const lr = core.registers[14];
     const before = core.cycles;
     const result = execute();
     if (high) {
       const name = nameOf(pc);
-      rows.set(name, (rows.get(name) ?? 0) + core.cycles - before);
+      const cycles = core.cycles - before;
+      rows.set(name, (rows.get(name) ?? 0) + cycles);
+      while (open.length > 0 && open[open.length - 1].back === pc) {
+        open.pop();
+      }
+      const entered = entries.get(pc);
+      if (entered) {
+        open.push({ name: entered, back: lr & ~1 });
+      }
+      for (const name of new Set(open.map((o) => o.name))) {
+        inclusive.set(name, (inclusive.get(name) ?? 0) + cycles);
+      }
     }
     return result;
   };
@@ -109,6 +128,10 @@ function profileTracker(list, frames) {
   const total = sorted.reduce((sum, [, c]) => sum + c, 0);
   console.log(`per frame (${perFrame} frames, empty brackets included): ${fmt(total / perFrame)} cycles`);
   for (const [name, cycles] of sorted) {
+    console.log(`${fmt(cycles / perFrame).padStart(8)}  ${name}`);
+  }
+  console.log('inclusive (with what they call):');
+  for (const [name, cycles] of inclusive) {
     console.log(`${fmt(cycles / perFrame).padStart(8)}  ${name}`);
   }
 }
