@@ -1,7 +1,7 @@
 // One benchmark of `./dev bench` alone, printed rather than written to BENCHMARKS.md: a quick
 // figure while working on one part (seconds to a minute instead of the whole bench's minutes).
 //
-//   node src/quick-bench.js ik|stream|tracker-profile [--poses N] [--seed S]
+//   node src/quick-bench.js ik|stream|tracker-profile|pose-profile [--poses N] [--seed S]
 //
 //   ik               cycles per IK on the benchmark firmware (every variant it carries)
 //   stream           a clamp and tracker frames (`Controller::on_frame` while streaming), as
@@ -9,13 +9,18 @@
 //   tracker-profile  where a tracker frame's cycles go: per function of the ELF's symbol table
 //                    (inlined code counts in the function it was inlined into; the boot ROM as
 //                    one), per measured frame
+//   pose-profile     where a `pose` line's cycles go on the real firmware (echo and speeds
+//                    off, 921,600 baud, 200 lines of small steps each answered before the
+//                    next): every cycle the core runs from a line's first byte to its reply, per
+//                    function, per line
 //
 // Expects `cargo fw` to have built the firmware and the benchmark firmware. The same
 // measurements, in the same harness, as `./dev bench` (emulator/src/ik-bench.js).
 
 import { parseArgs } from 'node:util';
 
-import { EmulatedBoard } from './board.js';
+import { DEFAULT_ELF, EmulatedBoard } from './board.js';
+import { streamingBoard } from './firmware-bench.js';
 import { symbolRanges } from './elf.js';
 import { BENCH_ELF, benchPoses, runIkBench, runStreamBench } from './ik-bench.js';
 
@@ -34,7 +39,7 @@ const row = (what, s) => `${what}: mean ${fmt(s.mean)}, min ${fmt(s.min)}, max $
 const INCLUSIVE = /^(control::tracker::Tracker::step|kinematics_core::ik::Solver::solve)/;
 
 const which = positionals[0];
-const poses = benchPoses(Number(args.poses), Number(args.seed));
+const poses = which === 'pose-profile' ? [] : benchPoses(Number(args.poses), Number(args.seed));
 if (which === 'ik') {
   for (const v of runIkBench(poses).variants) {
     const sum = v.cycles.reduce((a, b) => a + b, 0);
@@ -48,10 +53,12 @@ if (which === 'ik') {
   if (stream.trackClamped.frames > 0) {
     console.log(row(`tracker frame, step left the workspace (${stream.trackClamped.frames})`, stream.trackClamped));
   }
+} else if (which === 'pose-profile') {
+  profilePoseLines(200);
 } else if (which === 'tracker-profile') {
   profileTracker(poses.slice(0, 40), 3);
 } else {
-  console.error('usage: node src/quick-bench.js ik|stream|tracker-profile [--poses N] [--seed S]');
+  console.error('usage: node src/quick-bench.js ik|stream|tracker-profile|pose-profile [--poses N] [--seed S]');
   process.exit(2);
 }
 
@@ -133,5 +140,70 @@ function profileTracker(list, frames) {
   console.log('inclusive (with what they call):');
   for (const [name, cycles] of inclusive) {
     console.log(`${fmt(cycles / perFrame).padStart(8)}  ${name}`);
+  }
+}
+
+/** Names the function of a PC from the ELF's symbol table (the boot ROM as one). */
+function functionNames(elf) {
+  const ranges = symbolRanges(elf, () => true)
+    .filter((r) => r.end > r.start)
+    .sort((a, b) => a.start - b.start);
+  return (pc) => {
+    if (pc < 0x4000) {
+      return 'boot ROM';
+    }
+    let lo = 0;
+    let hi = ranges.length - 1;
+    while (lo <= hi) {
+      const mid = (lo + hi) >> 1;
+      if (ranges[mid].end <= pc) {
+        lo = mid + 1;
+      } else if (ranges[mid].start > pc) {
+        hi = mid - 1;
+      } else {
+        return ranges[mid].name;
+      }
+    }
+    return `? ${pc.toString(16)}`;
+  };
+}
+
+/** Every cycle from each `pose` line's first byte to its `ok`, per function, per line. */
+function profilePoseLines(count) {
+  const { board } = streamingBoard({ baud: 921600 });
+  const nameOf = functionNames(DEFAULT_ELF);
+  const core = board.mcu.core;
+  const execute = core.executeInstruction.bind(core);
+  const rows = new Map();
+  let on = false;
+  core.executeInstruction = () => {
+    const pc = core.PC;
+    const before = core.cycles;
+    const result = execute();
+    if (on) {
+      const name = nameOf(pc);
+      rows.set(name, (rows.get(name) ?? 0) + core.cycles - before);
+    }
+    return result;
+  };
+  let bytes = 0;
+  for (let i = 0; i < count; i++) {
+    const a = i * 0.01;
+    const v = [10 * Math.cos(a), 10 * Math.sin(a), 2 * Math.sin(3 * a), 3 * Math.sin(a), 3 * Math.cos(2 * a), 5 * Math.sin(a / 2)];
+    const line = `pose ${v.map((x) => x.toFixed(3)).join(' ')}`;
+    bytes += line.length + 1;
+    board.runMs(3); // a quiet stretch between lines (frames run there, not counted)
+    on = true;
+    const { reply } = board.request(line);
+    on = false;
+    if (reply !== 'ok') {
+      throw new Error(`${line}: ${reply}`);
+    }
+  }
+  const sorted = [...rows].sort((a, b) => b[1] - a[1]);
+  const total = sorted.reduce((sum, [, c]) => sum + c, 0);
+  console.log(`per line (${count} lines, ${(bytes / count).toFixed(1)} bytes each): ${fmt(total / count)} cycles`);
+  for (const [name, cycles] of sorted.slice(0, 40)) {
+    console.log(`${fmt(cycles / count).padStart(8)}  ${name}`);
   }
 }
