@@ -1,7 +1,7 @@
 // One benchmark of `./dev bench` alone, printed rather than written to BENCHMARKS.md: a quick
 // figure while working on one part (seconds to a minute instead of the whole bench's minutes).
 //
-//   node src/quick-bench.js ik|stream|tracker-profile|pose-profile [--poses N] [--seed S]
+//   node src/bench/quick-bench.js ik|stream|tracker-profile|pose-profile [--poses N] [--seed S]
 //
 //   ik               cycles per IK on the benchmark firmware (every variant it carries)
 //   stream           a clamp and tracker frames (`Controller::on_frame` while streaming), as
@@ -15,13 +15,13 @@
 //                    function, per line
 //
 // Expects `cargo fw` to have built the firmware and the benchmark firmware. The same
-// measurements, in the same harness, as `./dev bench` (emulator/src/ik-bench.js).
+// measurements, in the same harness, as `./dev bench` (emulator/src/bench/ik-bench.js).
 
 import { parseArgs } from 'node:util';
 
-import { DEFAULT_ELF, EmulatedBoard } from './board.js';
+import { DEFAULT_ELF, EmulatedBoard } from '../chip/board.js';
 import { streamingBoard } from './firmware-bench.js';
-import { symbolRanges } from './elf.js';
+import { symbolRanges } from '../chip/elf.js';
 import { BENCH_ELF, benchPoses, runIkBench, runStreamBench } from './ik-bench.js';
 
 const { values: args, positionals } = parseArgs({
@@ -58,7 +58,7 @@ if (which === 'ik') {
 } else if (which === 'tracker-profile') {
   profileTracker(poses.slice(0, 40), 3);
 } else {
-  console.error('usage: node src/quick-bench.js ik|stream|tracker-profile|pose-profile [--poses N] [--seed S]');
+  console.error('usage: node src/bench/quick-bench.js ik|stream|tracker-profile|pose-profile [--poses N] [--seed S]');
   process.exit(2);
 }
 
