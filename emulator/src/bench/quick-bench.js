@@ -33,7 +33,8 @@ const { values: args, positionals } = parseArgs({
 });
 
 const fmt = (x) => Math.round(x).toLocaleString('en-US');
-const row = (what, s) => `${what}: mean ${fmt(s.mean)}, min ${fmt(s.min)}, max ${fmt(s.max)} cycles`;
+const row = (what, s) =>
+  `${what}: mean ${fmt(s.mean)}, min ${fmt(s.min)}, max ${fmt(s.max)} cycles`;
 
 /** Functions also measured with what they call, when they are not inlined. */
 const INCLUSIVE = /^(control::tracker::Tracker::step|kinematics_core::ik::Solver::solve)/;
@@ -42,23 +43,30 @@ const which = positionals[0];
 const poses = which === 'pose-profile' ? [] : benchPoses(Number(args.poses), Number(args.seed));
 if (which === 'ik') {
   for (const v of runIkBench(poses).variants) {
-    const sum = v.cycles.reduce((a, b) => a + b, 0);
-    const s = { mean: sum / v.cycles.length, min: Math.min(...v.cycles), max: Math.max(...v.cycles) };
-    console.log(row(`IK (${v.name})`, s));
+    console.log(row(`IK (${v.name})`, v));
   }
 } else if (which === 'stream') {
   const stream = runStreamBench(poses.slice(0, 40), { frames: 3, dzMm: 60 });
   console.log(row(`clamp (${stream.clamp.clamped} clamped)`, stream.clamp));
-  console.log(row(`tracker frame (${stream.track.moved} of ${stream.track.frames} moved)`, stream.track));
+  console.log(
+    row(`tracker frame (${stream.track.moved} of ${stream.track.frames} moved)`, stream.track),
+  );
   if (stream.trackClamped.frames > 0) {
-    console.log(row(`tracker frame, step left the workspace (${stream.trackClamped.frames})`, stream.trackClamped));
+    console.log(
+      row(
+        `tracker frame, step left the workspace (${stream.trackClamped.frames})`,
+        stream.trackClamped,
+      ),
+    );
   }
 } else if (which === 'pose-profile') {
   profilePoseLines(200);
 } else if (which === 'tracker-profile') {
   profileTracker(poses.slice(0, 40), 3);
 } else {
-  console.error('usage: node src/bench/quick-bench.js ik|stream|tracker-profile|pose-profile [--poses N] [--seed S]');
+  console.error(
+    'usage: node src/bench/quick-bench.js ik|stream|tracker-profile|pose-profile [--poses N] [--seed S]',
+  );
   process.exit(2);
 }
 
@@ -99,7 +107,9 @@ function profileTracker(list, frames) {
   // Inclusive: from the entry of a function not inlined to the return to its caller.
   const inclusive = new Map();
   const open = [];
-  const entries = new Map(ranges.filter((r) => INCLUSIVE.test(r.name)).map((r) => [r.start, r.name]));
+  const entries = new Map(
+    ranges.filter((r) => INCLUSIVE.test(r.name)).map((r) => [r.start, r.name]),
+  );
   core.executeInstruction = () => {
     const pc = core.PC;
     const lr = core.registers[14];
@@ -128,12 +138,17 @@ function profileTracker(list, frames) {
     return view.getUint32(0).toString(16).padStart(8, '0');
   };
   for (const pose of list) {
-    board.request(`k ${[...pose.pose_bits, f32Hex(frames)].join(' ')}`, { final: /^(k |error)/, timeoutMs: 2000 });
+    board.request(`k ${[...pose.pose_bits, f32Hex(frames)].join(' ')}`, {
+      final: /^(k |error)/,
+      timeoutMs: 2000,
+    });
   }
   const perFrame = list.length * frames;
   const sorted = [...rows].sort((a, b) => b[1] - a[1]);
   const total = sorted.reduce((sum, [, c]) => sum + c, 0);
-  console.log(`per frame (${perFrame} frames, empty brackets included): ${fmt(total / perFrame)} cycles`);
+  console.log(
+    `per frame (${perFrame} frames, empty brackets included): ${fmt(total / perFrame)} cycles`,
+  );
   for (const [name, cycles] of sorted) {
     console.log(`${fmt(cycles / perFrame).padStart(8)}  ${name}`);
   }
@@ -189,7 +204,14 @@ function profilePoseLines(count) {
   let bytes = 0;
   for (let i = 0; i < count; i++) {
     const a = i * 0.01;
-    const v = [10 * Math.cos(a), 10 * Math.sin(a), 2 * Math.sin(3 * a), 3 * Math.sin(a), 3 * Math.cos(2 * a), 5 * Math.sin(a / 2)];
+    const v = [
+      10 * Math.cos(a),
+      10 * Math.sin(a),
+      2 * Math.sin(3 * a),
+      3 * Math.sin(a),
+      3 * Math.cos(2 * a),
+      5 * Math.sin(a / 2),
+    ];
     const line = `pose ${v.map((x) => x.toFixed(3)).join(' ')}`;
     bytes += line.length + 1;
     board.runMs(3); // a quiet stretch between lines (frames run there, not counted)
@@ -202,7 +224,9 @@ function profilePoseLines(count) {
   }
   const sorted = [...rows].sort((a, b) => b[1] - a[1]);
   const total = sorted.reduce((sum, [, c]) => sum + c, 0);
-  console.log(`per line (${count} lines, ${(bytes / count).toFixed(1)} bytes each): ${fmt(total / count)} cycles`);
+  console.log(
+    `per line (${count} lines, ${(bytes / count).toFixed(1)} bytes each): ${fmt(total / count)} cycles`,
+  );
   for (const [name, cycles] of sorted.slice(0, 40)) {
     console.log(`${fmt(cycles / count).padStart(8)}  ${name}`);
   }
