@@ -60,7 +60,7 @@ test('a text stream survives any byte: damaged frames counted, never applied or 
   assert.ok(answer.ok);
   assertPins(board, answer.pulse_us, 'on the last frame');
   board.sendLine('set echo off');
-  board.waitForLine('ok');
+  board.waitForLine(/^ok$/);
   const counts = status(board).stream;
   assert.equal(counts.damaged, damage.length, JSON.stringify(counts));
   assert.equal(counts.frames, whole, JSON.stringify(counts));
