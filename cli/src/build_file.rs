@@ -30,7 +30,8 @@
 //! value (`servos.trim_us` then `servo3.trim_us`). If no order works, the first key that
 //! cannot be applied is the error, in the board's words, with its file, line and key.
 //!
-//! The `[sizing]` table holds what the board has no setting for (`crate::sizing`).
+//! The `[sizing]` table holds what the board has no setting for (`crate::sizing`); the `[cue]`
+//! table is `hexapod cue`'s (`crate::cue::config`), skipped here.
 //!
 //! Values: numbers as typed (TOML's `1_000` and `0x10` are the numbers they mean), words as
 //! strings (`dir = "reversed"`, `speed_mm_s = "off"`). Units are those of the names (`_mm`,
@@ -86,6 +87,9 @@ pub fn parse(file: &str, text: &str) -> Result<BuildFile, Problem> {
     })?;
     let mut found = Vec::new();
     for (key, value) in table.get_ref() {
+        if key.get_ref() == crate::cue::config::TABLE {
+            continue; // `hexapod cue`'s (crate::cue::config), never the board's
+        }
         let line = line_of(key.span().start);
         match value.get_ref() {
             DeValue::Table(inner) => {

@@ -10,6 +10,8 @@
 //! - [`trajectory`]: trajectory CSV files, and each row as the board will get it, checked;
 //!   [`demo`]: built-in trajectories; [`streamer`]: sending them at their own timing;
 //!   [`drive`]: `stream` and `demo`;
+//! - [`cue`]: `cue` and `cue-plot`: a flight simulator's telemetry to motion cues (washout
+//!   filter) to stream frames;
 //! - [`flash_image`]: `uf2`, with the settings sectors written as the board's `save` does;
 //! - [`elf`]: the load segments of an ELF file, where a programmer writes them;
 //! - [`uf2`]: a UF2 file of those segments, for the RP2040's USB drag-and-drop bootloader, and
@@ -18,6 +20,7 @@
 pub mod board;
 pub mod build_file;
 pub mod configure;
+pub mod cue;
 pub mod demo;
 pub mod draw;
 pub mod drive;

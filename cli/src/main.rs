@@ -11,7 +11,7 @@ use clap::{Args, Parser, Subcommand};
 use cli::link::Link;
 use cli::messages::Problem;
 use cli::trajectory::Mode;
-use cli::{configure, demo, draw, drive, flash_image, size, streamer};
+use cli::{configure, cue, demo, draw, drive, flash_image, size, streamer};
 
 #[derive(Parser)]
 #[command(
@@ -169,6 +169,44 @@ enum Command {
         edge_fraction: f64,
         #[command(flatten)]
         stream: StreamOptions,
+    },
+
+    /// Fly it: a flight simulator's telemetry (UDP: JSBSim, FlightGear, or a bridge; see
+    /// docs/cueing.md) turned into motion cues by a washout filter and streamed to the board as
+    /// binary frames; a stall or the end of the telemetry eases the platform home
+    Cue {
+        #[command(flatten)]
+        port: Port,
+        /// Where to listen for telemetry
+        #[arg(long, default_value = "127.0.0.1:5139")]
+        listen: String,
+        /// Frames per second (at most, and by default, the board's frame_hz)
+        #[arg(long)]
+        rate: Option<f64>,
+        /// The build file whose [cue] table tunes the washout (the defaults without it)
+        #[arg(long)]
+        settings: Option<PathBuf>,
+        /// Write what came in and what was sent to this CSV file (see cue-plot)
+        #[arg(long)]
+        record: Option<PathBuf>,
+        /// No valid telemetry within this long is an error, s
+        #[arg(long, default_value_t = 30.0)]
+        wait_s: f64,
+        /// Stop this long after the telemetry ends (once home), s; without it, run until
+        /// stopped
+        #[arg(long)]
+        idle_exit_s: Option<f64>,
+    },
+    /// Plot a `cue --record` file (SVG and PNG): per axis the aircraft's specific force or
+    /// rate beside what the platform delivers
+    CuePlot {
+        /// The record (CSV)
+        record: PathBuf,
+        /// Where to write: FILE.svg and FILE.png
+        #[arg(short, long, default_value = "cue")]
+        output: PathBuf,
+        #[command(flatten)]
+        formats: Formats,
     },
 
     // Flash it.
@@ -374,6 +412,31 @@ fn main() -> ExitCode {
                 &options,
             )
         }),
+        Command::Cue {
+            port,
+            listen,
+            rate,
+            settings,
+            record,
+            wait_s,
+            idle_exit_s,
+        } => cue::settings(settings.as_deref()).and_then(|tuning| {
+            let options = cue::run::Options {
+                listen,
+                rate_hz: rate,
+                record,
+                wait_s,
+                idle_exit_s,
+                live: true,
+            };
+            let mut link = port.link.open(&port.port)?;
+            cue::run::run(&mut link, &tuning, &options)
+        }),
+        Command::CuePlot {
+            record,
+            output,
+            formats,
+        } => cue::record::plot(&record, &output, !formats.png_only, !formats.svg_only),
         Command::Uf2 {
             elf,
             output,

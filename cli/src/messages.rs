@@ -18,6 +18,8 @@ pub fn board_words(error: &control::Error) -> String {
 /// (and key or field), or the port.
 #[derive(Debug)]
 pub enum Problem {
+    /// `cue` and `cue-plot`'s (their words are `crate::cue::words`').
+    Cue(Box<crate::cue::words::CueProblem>),
     /// A file could not be read or written.
     File {
         /// The file.
@@ -232,6 +234,7 @@ fn file_line(f: &mut Formatter<'_>, file: &str, line: impl Display) -> fmt::Resu
 impl Display for Problem {
     fn fmt(&self, f: &mut Formatter<'_>) -> fmt::Result {
         match self {
+            Problem::Cue(why) => write!(f, "{why}"),
             Problem::File { path, error } => write!(f, "{path}: {error}"),
             Problem::Toml {
                 file,
