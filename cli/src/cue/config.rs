@@ -52,7 +52,7 @@ impl Default for CueSettings {
             margin: 0.8,
             knee: 0.6,
             stall_s: 0.25,
-            ease_s: 1.5,
+            ease_s: 3.0,
             pivot_mm: [0.0; 3],
         }
     }
@@ -348,5 +348,24 @@ mod tests {
                 assert!((k.min..=k.max).contains(&v), "{} = {v}", k.name);
             }
         }
+    }
+
+    #[test]
+    fn the_documented_defaults_are_the_defaults_and_name_every_key() {
+        let doc =
+            std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../docs/cueing.md"))
+                .unwrap();
+        let block = doc
+            .split("<!-- the defaults, written out")
+            .nth(1)
+            .and_then(|rest| rest.split("```toml\n").nth(1))
+            .and_then(|rest| rest.split("```").next())
+            .unwrap();
+        assert_eq!(
+            parse("docs/cueing.md", block).unwrap(),
+            CueSettings::default()
+        );
+        let keys = block.lines().filter(|l| l.contains(" = ")).count();
+        assert_eq!(keys, KEYS.len(), "{block}");
     }
 }

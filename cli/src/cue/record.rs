@@ -169,12 +169,16 @@ pub fn parse(file: &str, text: &str) -> Result<Vec<Row>, Problem> {
     Ok(rows)
 }
 
+/// Rows either side of the differences' middle row: wider than one frame, so that the jitter
+/// of the frames' times (the host's) does not swamp the second differences.
+pub const SPAN: usize = 2;
+
 /// What the platform delivers at each row (specific force m/s^2 in its axes, rates deg/s),
 /// from the poses alone; `None` at the ends (and where time does not advance).
 pub fn delivered(rows: &[Row]) -> Vec<Option<([f64; 3], [f64; 3])>> {
     let mut out = vec![None; rows.len()];
-    for i in 1..rows.len().saturating_sub(1) {
-        let (a, b, c) = (&rows[i - 1], &rows[i], &rows[i + 1]);
+    for i in SPAN..rows.len().saturating_sub(SPAN) {
+        let (a, b, c) = (&rows[i - SPAN], &rows[i], &rows[i + SPAN]);
         let (h1, h2) = (b.time_s - a.time_s, c.time_s - b.time_s);
         if h1 <= 0.0 || h2 <= 0.0 {
             continue;
@@ -243,7 +247,7 @@ pub fn scene(rows: &[Row], title: &str) -> Scene {
         let row = (panel % 3) as f64;
         let axes = Axes {
             left: 90.0 + col * 580.0,
-            top: 80.0 + row * 265.0,
+            top: 105.0 + row * 265.0,
             width: 480.0,
             height: 190.0,
             x: (t0, t1),
@@ -266,7 +270,7 @@ pub fn scene(rows: &[Row], title: &str) -> Scene {
     }
     legend(
         &mut scene,
-        [420.0, 52.0],
+        [440.0, 46.0],
         &[
             (PALETTE[0], words::LEGEND_AIRCRAFT.to_string(), false),
             (PALETTE[5], words::LEGEND_PLATFORM.to_string(), false),
@@ -305,7 +309,7 @@ mod tests {
     fn a_still_level_platform_delivers_one_g_up_and_no_rate() {
         let rows: Vec<Row> = (0..5).map(|i| row(f64::from(i) * 0.02, [0.0; 6])).collect();
         let d = delivered(&rows);
-        assert!(d[0].is_none() && d[4].is_none());
+        assert!(d[1].is_none() && d[3].is_none());
         let (f, r) = d[2].unwrap();
         assert_eq!(f, [0.0, 0.0, G]);
         assert_eq!(r, [0.0; 3]);

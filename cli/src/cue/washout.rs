@@ -306,9 +306,9 @@ impl Default for Tuning {
             tilt: Tilt {
                 scale: 0.6,
                 order: 2,
-                lp_hz: 0.8,
+                lp_hz: 0.4,
                 zeta: 1.0,
-                rate_deg_s: 4.0,
+                rate_deg_s: 3.0,
                 max_deg: 10.0,
             },
         }

@@ -319,7 +319,10 @@ pub const LEGEND_PLATFORM: &str = "platform delivers (from the poses sent)";
 pub const TIME_LABEL: &str = "time (s)";
 /// The plot's title.
 pub fn plot_title(file: &str) -> String {
-    format!("Motion cues of {file}: what the aircraft felt, what the platform gave")
+    format!(
+        "Motion cues of {file}: what the aircraft felt, what the platform gave \
+         (platform axes: x forward, y left, z up)"
+    )
 }
 
 /// The plot written.
