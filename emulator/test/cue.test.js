@@ -229,16 +229,18 @@ test('a JSBSim flight drives the emulated platform through hexapod cue, judged o
   t.diagnostic(`take-off run: pitch down to ${noseUp.toFixed(2)} deg (nose up)`);
   assert.ok(noseUp < -3, `take-off run pitch reached only ${noseUp}`);
 
-  // The turn: rolled and yawed on the way in, back towards level while it lasts.
+  // The turn: rolled and yawed on the way in, back towards level while it lasts. Yaw washes
+  // back all the way; roll keeps the small tilt of the turn's slight sideways force (about
+  // 0.1 m/s^2, 0.3 degrees with the default tilt.scale 0.6).
   const turn = during(phases.turn, phases.end);
   const peak = (poseList, axis) => Math.max(...poseList.map((p) => Math.abs(p[axis])));
   const lastSeconds = during(phases.end - 4000, phases.end);
-  for (const [name, axis] of [['roll', ROLL], ['yaw', YAW]]) {
+  for (const [name, axis, left] of [['roll', ROLL, 0.5], ['yaw', YAW, 0.25]]) {
     const most = peak(turn, axis);
     const late = peak(lastSeconds, axis);
     t.diagnostic(`turn: ${name} up to ${most.toFixed(2)} deg, ${late.toFixed(2)} deg in its last 4 s`);
-    assert.ok(most > 0.5, `${name} moved in the turn: ${most}`);
-    assert.ok(late < 0.35 * most, `${name} washed back: ${late} of ${most}`);
+    assert.ok(most > 0.8, `${name} moved in the turn: ${most}`);
+    assert.ok(late < left * most && late < 0.6, `${name} washed back: ${late} of ${most}`);
   }
 
   // The end: home, on every pin, within one PWM count.
