@@ -269,3 +269,138 @@ fn a_bad_cue_key_is_named_before_anything_is_sent() {
     let apply = hexapod(&dir, &["apply", "b.toml"]);
     assert!(apply.status.success(), "{:?}", text(&apply));
 }
+
+/// Ctrl-C mid-flight (SIGINT, as a terminal sends it): the tool takes no more telemetry, eases
+/// the platform home over `ease_s` in frames at its rate, and then exits normally, saying so.
+#[cfg(unix)]
+#[test]
+fn ctrl_c_eases_the_platform_home_before_exiting() {
+    use std::process::{Command, Stdio};
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::Arc;
+
+    let dir = scratch("cue-ctrl-c");
+    let board = SimBoard::start();
+    let setup = hexapod(
+        &dir,
+        &[
+            "send",
+            "--port",
+            &board.path,
+            "set speed_mm_s off",
+            "set speed_deg_s off",
+        ],
+    );
+    assert!(setup.status.success(), "{:?}", text(&setup));
+    std::fs::write(
+        dir.join("build.toml"),
+        "[cue]\nease_s = 1.0\n[cue.tilt]\nrate_deg_s = 8\n",
+    )
+    .unwrap();
+    let port = free_port();
+    let listen = format!("127.0.0.1:{port}");
+    let child = Command::new(env!("CARGO_BIN_EXE_hexapod"))
+        .args([
+            "cue",
+            "--port",
+            &board.path,
+            "--listen",
+            &listen,
+            "--settings",
+            "build.toml",
+            "--record",
+            "flight.csv",
+            "--wait-s",
+            "10",
+        ])
+        .current_dir(&dir)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("hexapod runs");
+    // A sustained forward push, sent until the test stops it (also after the Ctrl-C: it must
+    // not be taken).
+    let sending = Arc::new(AtomicBool::new(true));
+    let sender = {
+        let sending = sending.clone();
+        thread::spawn(move || {
+            thread::sleep(Duration::from_millis(700));
+            let socket = UdpSocket::bind("127.0.0.1:0").unwrap();
+            let g_ft = 9.80665 / 0.3048;
+            let push_ft = 3.0 / 0.3048;
+            let mut k = 0u32;
+            while sending.load(Ordering::Relaxed) {
+                let t = f64::from(k) * 0.01;
+                let ax = if t < 0.3 { 0.0 } else { push_ft };
+                let _ = socket.send_to(line(t, [ax, 0.0, -g_ft]).as_bytes(), ("127.0.0.1", port));
+                k += 1;
+                thread::sleep(Duration::from_millis(10));
+            }
+        })
+    };
+    // Mid-push: the platform is away from home (tilted nose up, forward).
+    thread::sleep(Duration::from_millis(2200));
+    let kill = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .expect("kill runs");
+    assert!(kill.success());
+    let cue = child.wait_with_output().expect("hexapod exits");
+    sending.store(false, Ordering::Relaxed);
+    sender.join().unwrap();
+    let (out, err) = text(&cue);
+    assert!(cue.status.success(), "{:?}: {out}{err}", cue.status);
+    assert!(
+        err.contains("cue: stopping (Ctrl-C): easing the platform home"),
+        "{err}"
+    );
+    assert!(
+        out.contains("stopped by Ctrl-C, the platform eased home"),
+        "{out}"
+    );
+    assert!(out.contains("damaged=0 clamped=0 refused=0"), "{out}");
+
+    // The record: away from home when stopped, then eased rows at the frame rate, ending at
+    // home with no step larger than a smooth second-long ease allows.
+    let record = std::fs::read_to_string(dir.join("flight.csv")).unwrap();
+    let rows: Vec<Vec<f64>> = record
+        .lines()
+        .skip(2)
+        .map(|l| {
+            l.split(',')
+                .map(|f| f.parse().unwrap_or(f64::NAN))
+                .collect()
+        })
+        .collect();
+    let last_live = rows
+        .iter()
+        .rposition(|r| r[15] == 0.0)
+        .expect("frames followed the cues");
+    let away = &rows[last_live];
+    assert!(away[12] < -3.0, "pitch when stopped: {}", away[12]);
+    let easing = &rows[last_live + 1..];
+    // One second at the board's 50 Hz.
+    assert!(
+        (40..=60).contains(&easing.len()),
+        "{} easing frames",
+        easing.len()
+    );
+    let end = easing.last().unwrap();
+    assert!(end[8..14].iter().all(|v| v.abs() < 1e-6), "{end:?}");
+    // A smooth ease of a pitch p over 1 s moves at most 1.5 p per second: at 50 Hz, 0.03 p
+    // a frame (a little more for the frames' jitter).
+    let most_step = easing
+        .windows(2)
+        .map(|w| (w[1][12] - w[0][12]).abs())
+        .fold(0.0, f64::max);
+    assert!(
+        most_step < 0.05 * away[12].abs(),
+        "{most_step} of {}",
+        away[12]
+    );
+
+    // The board, at the end: home, every frame received whole.
+    let finished = board.finish();
+    let pose = finished.pose.to_array();
+    assert!(pose.iter().all(|v| v.abs() < 1e-3), "{pose:?}");
+}

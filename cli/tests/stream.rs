@@ -280,7 +280,7 @@ fn demos_are_written_as_csv_that_streams_back() {
     assert!(demo.status.success(), "{:?}", text(&demo));
     let csv = std::fs::read_to_string(dir.join("eight.csv")).unwrap();
     assert_eq!(csv.lines().count(), 1 + 101);
-    let rows = cli::trajectory::parse("eight.csv", &csv).unwrap();
+    let rows = hexapod::trajectory::parse("eight.csv", &csv).unwrap();
     assert_eq!(rows.last().unwrap().time_s, 2.0);
     let nowhere = hexapod(&dir, &["demo", "circle"]);
     assert!(

@@ -9,10 +9,10 @@ import { dirname, join } from 'node:path';
 import { parseArgs } from 'node:util';
 import { fileURLToPath } from 'node:url';
 
-import { DEFAULT_ELF, EmulatedBoard } from './board.js';
-import { loadBootrom } from './bootrom.js';
-import { SharedInput } from './shared-input.js';
-import { DEFAULT_VIEW_PORT, startViewServer } from './view-server.js';
+import { DEFAULT_ELF, EmulatedBoard } from './chip/board.js';
+import { loadBootrom } from './chip/bootrom.js';
+import { SharedInput } from './view-server/shared-input.js';
+import { DEFAULT_VIEW_PORT, startViewServer } from './view-server/view-server.js';
 
 const USAGE = `usage: ./dev run [--uart] [--pty] [--local-echo] [--no-view] [--view-port N] [--elf PATH]
 
@@ -81,7 +81,10 @@ async function main() {
   // (shared-input.js).
   const input = options['no-view'] ? null : new SharedInput(serial);
   const link = input
-    ? { sendBytes: (bytes) => input.typed(bytes), onOutput: (listener) => serial.onOutput(listener) }
+    ? {
+        sendBytes: (bytes) => input.typed(bytes),
+        onOutput: (listener) => serial.onOutput(listener),
+      }
     : serial;
   const view = input && (await startView(board, serial, input, options, status));
   const connection = options.pty
@@ -99,7 +102,9 @@ async function main() {
     if (message) {
       process.stderr.write(`${message}\n`);
     }
-    await view?.close(message ? message.trim() : 'the runner was stopped (Ctrl-C, or its input ended)');
+    await view?.close(
+      message ? message.trim() : 'the runner was stopped (Ctrl-C, or its input ended)',
+    );
     process.exit(code);
   };
   connection.onQuit = () => quit(0);
@@ -119,11 +124,19 @@ async function startView(board, serial, input, options, status) {
     process.exit(2);
   }
   try {
-    const view = await startViewServer({ board, serial, input, port, link: options.pty ? 'pty' : 'terminal' });
+    const view = await startViewServer({
+      board,
+      serial,
+      input,
+      port,
+      link: options.pty ? 'pty' : 'terminal',
+    });
     status.message(`3D view: ${view.url}  (open it in a browser; --no-view skips it)`);
     return view;
   } catch (error) {
-    console.error(`cannot start the 3D view on port ${port}: ${error.message} (--no-view skips it)`);
+    console.error(
+      `cannot start the 3D view on port ${port}: ${error.message} (--no-view skips it)`,
+    );
     process.exit(1);
   }
 }
@@ -227,7 +240,9 @@ class PtyConnection {
     const bridgeScript = join(dirname(fileURLToPath(import.meta.url)), 'pty-bridge.py');
     this.bridge = spawn('python3', [bridgeScript], { stdio: ['pipe', 'pipe', 'inherit'] });
     this.bridge.on('error', (error) => {
-      process.stderr.write(`cannot start the pty bridge (python3 ${bridgeScript}): ${error.message}\n`);
+      process.stderr.write(
+        `cannot start the pty bridge (python3 ${bridgeScript}): ${error.message}\n`,
+      );
       this.onQuit();
     });
     this.bridge.on('exit', () => this.onQuit());

@@ -12,8 +12,13 @@
 import assert from 'node:assert/strict';
 import { before, test } from 'node:test';
 
-import { FINAL_REPLY } from '../src/board.js';
-import { bootedBoard, firmwareBootrom, FRAME_MS, steadyPulses } from '../src/e2e-support.js';
+import { FINAL_REPLY } from '../src/chip/board.js';
+import {
+  bootedBoard,
+  firmwareBootrom,
+  FRAME_MS,
+  steadyPulses,
+} from '../src/test-support/e2e-support.js';
 
 const MAX_LINE = 128; // documented line buffer
 const BYTE_MS = (10 / 115_200) * 1000; // 8N1 at the default baud rate
@@ -130,7 +135,10 @@ function accountForEveryLine(board, from, sent, expectedReply) {
   let lastRun = null;
   let overflowErrors = 0;
   out.forEach((line, k) => {
-    if (line.startsWith('# warning: receive queue overflowed') || line.startsWith('# warning: UART receive error')) {
+    if (
+      line.startsWith('# warning: receive queue overflowed') ||
+      line.startsWith('# warning: UART receive error')
+    ) {
       noticeUnanswered = true;
       return;
     }
@@ -147,7 +155,10 @@ function accountForEveryLine(board, from, sent, expectedReply) {
     assert.ok(echo.startsWith('> '), `no echo before ${line}: ${echo}`);
     const text = echo.slice(2);
     const index = sent.indexOf(text, next);
-    assert.ok(index >= 0, `ran a line that was never sent (or out of order): ${JSON.stringify(text)}`);
+    assert.ok(
+      index >= 0,
+      `ran a line that was never sent (or out of order): ${JSON.stringify(text)}`,
+    );
     if (index > next) {
       assert.ok(refusedSinceLastRun, `lines ${next}..${index - 1} vanished without an rx-overflow`);
     }
@@ -214,7 +225,10 @@ test('binary garbage (seeded) is refused and never moves a servo', () => {
   board.sendBytes(garbage);
   board.runMs(garbage.length * BYTE_MS + 100);
   const replies = finalsFrom(board, from);
-  assert.ok(replies.length > 0 && replies.length <= lineEnds, `${replies.length} replies, ${lineEnds} line ends`);
+  assert.ok(
+    replies.length > 0 && replies.length <= lineEnds,
+    `${replies.length} replies, ${lineEnds} line ends`,
+  );
   for (const r of replies) {
     assert.ok(codeOf(r) !== null, `garbage was accepted: ${r}`);
   }
@@ -252,9 +266,16 @@ test('a burst at the line rate is answered in order, one final reply per line', 
   assert.equal(replies.length, burst.length);
   replies.forEach((reply, i) => {
     const want = burst[i][1];
-    assert.equal(want === 'ok' ? reply : codeOf(reply), want, `line ${i} (${burst[i][0]}): ${reply}`);
+    assert.equal(
+      want === 'ok' ? reply : codeOf(reply),
+      want,
+      `line ${i} (${burst[i][0]}): ${reply}`,
+    );
   });
-  assert.ok(!board.lines.slice(from).some((l) => l.includes('overflow')), 'overflow at the line rate');
+  assert.ok(
+    !board.lines.slice(from).some((l) => l.includes('overflow')),
+    'overflow at the line rate',
+  );
   assert.equal(board.rxFifoDroppedBytes, 0);
 
   // Where the last move put it (z = 11.4 mm: the moves only touch z).
@@ -289,7 +310,11 @@ test('faster than the firmware can act: lost bytes are reported, never lost sile
   board.sendBytes(sent.map((line) => `${line}\n`).join(''));
   board.runMs(totalBytes * BYTE_MS + 6000);
   assert.equal(board.inputPending, 0);
-  assert.equal(board.rxFifoDroppedBytes, 0, 'bytes lost in the hardware FIFO, where nobody can see it');
+  assert.equal(
+    board.rxFifoDroppedBytes,
+    0,
+    'bytes lost in the hardware FIFO, where nobody can see it',
+  );
 
   const out = board.lines.slice(from);
   const notices = out.filter((l) =>
@@ -337,7 +362,9 @@ test('bytes the hardware FIFO could not take (interrupts held off) are reported'
   // The UART cannot tell how many bytes an overrun lost: the warning and the refusal say
   // "at least".
   assert.ok(
-    board.lines.slice(from).some((l) => /^# warning: UART receive error, input lost \(at least \d+ bytes?\)$/.test(l)),
+    board.lines
+      .slice(from)
+      .some((l) => /^# warning: UART receive error, input lost \(at least \d+ bytes?\)$/.test(l)),
     `no notice in ${JSON.stringify(board.lines.slice(from))}`,
   );
   // The lines before the gap ran; the one it cut was refused; after the loss the firmware
@@ -374,11 +401,17 @@ test('after a UART overrun, a lone line end closes the cut line and a resync wor
   // FIFO after the loss, so it carries the PL011's overrun flag, and it is good), then
   // `status`, reading until its final reply.
   const cut = board.request('');
-  assert.match(cut.reply, /^error:rx-overflow input lost \(at least \d+ bytes?, some in the UART\); the line was discarded/);
+  assert.match(
+    cut.reply,
+    /^error:rx-overflow input lost \(at least \d+ bytes?, some in the UART\); the line was discarded/,
+  );
   const { reply, lines } = board.request('status');
   assert.equal(reply, 'ok', JSON.stringify(board.lines.slice(from)));
   assert.ok(lines.some((l) => l.startsWith('# state: ')));
-  assert.deepEqual(board.lines.slice(from).filter((l) => FINAL_REPLY.test(l)), [cut.reply, 'ok']);
+  assert.deepEqual(
+    board.lines.slice(from).filter((l) => FINAL_REPLY.test(l)),
+    [cut.reply, 'ok'],
+  );
 });
 
 test('a line split across long pauses is one line', () => {
@@ -414,7 +447,11 @@ test('CR, LF, CRLF and LF CR each end exactly one line', () => {
     board.sendBytes(line + end);
     board.runMs((line.length + end.length) * BYTE_MS + 50);
     assert.deepEqual(finalsFrom(board, from), Array(i + 1).fill('ok'), JSON.stringify(end));
-    assert.deepEqual(settle(board), referencePulses(line), `${JSON.stringify(end)} did not run ${line}`);
+    assert.deepEqual(
+      settle(board),
+      referencePulses(line),
+      `${JSON.stringify(end)} did not run ${line}`,
+    );
   });
   // All styles mixed back to back.
   const mixed = board.lines.length;

@@ -16,9 +16,15 @@ import { dirname, join } from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { after, before, test } from 'node:test';
 
-import { DEFAULT_ELF, EmulatedBoard } from '../src/board.js';
-import { COUNT_US, defaultSettings, firmwareBootrom, numbersIn, ok } from '../src/e2e-support.js';
-import { HostReference } from '../src/host-reference.js';
+import { DEFAULT_ELF, EmulatedBoard } from '../src/chip/board.js';
+import {
+  COUNT_US,
+  defaultSettings,
+  firmwareBootrom,
+  numbersIn,
+  ok,
+} from '../src/test-support/e2e-support.js';
+import { HostReference } from '../src/test-support/host-reference.js';
 
 const REPO = join(dirname(fileURLToPath(import.meta.url)), '..', '..');
 const RUNNER = join(REPO, 'emulator', 'src', 'run.js');
@@ -55,12 +61,16 @@ function referenceSettings() {
 
 /** The tool's binary, built once (the path cargo reports). */
 function buildTool() {
-  const output = execFileSync('cargo', ['build', '--quiet', '-p', 'cli', '--message-format=json'], {
-    cwd: REPO,
-    encoding: 'utf8',
-    maxBuffer: 64 * 1024 * 1024,
-    stdio: ['ignore', 'pipe', 'inherit'],
-  });
+  const output = execFileSync(
+    'cargo',
+    ['build', '--quiet', '-p', 'hexapod', '--message-format=json'],
+    {
+      cwd: REPO,
+      encoding: 'utf8',
+      maxBuffer: 64 * 1024 * 1024,
+      stdio: ['ignore', 'pipe', 'inherit'],
+    },
+  );
   for (const line of output.split('\n')) {
     if (line.startsWith('{')) {
       const message = JSON.parse(line);
@@ -164,10 +174,10 @@ test('apply a build file through the pty: every setting on the board, saved', as
     '# payload_g: 1500.0',
     '# payload_com_x_mm: 0.000',
     '# payload_com_z_mm: 20.000',
-    '# servo3: trim_us=1510.00 rate_us_rad=509.296 dir=reversed min_us=1100.00 max_us=1900.00 '
-      + 'torque_kgcm=25.00',
-    '# servo4: trim_us=1500.00 rate_us_rad=509.296 dir=normal min_us=1100.00 max_us=1900.00 '
-      + 'torque_kgcm=20.00',
+    '# servo3: trim_us=1510.00 rate_us_rad=509.296 dir=reversed min_us=1100.00 max_us=1900.00 ' +
+      'torque_kgcm=25.00',
+    '# servo4: trim_us=1500.00 rate_us_rad=509.296 dir=normal min_us=1100.00 max_us=1900.00 ' +
+      'torque_kgcm=20.00',
     '# saved: yes (these settings are the ones saved in flash)',
   ]) {
     assert.ok(config.stdout.split('\n').includes(line), `${line} in ${config.stdout}`);
@@ -185,7 +195,7 @@ test('apply a build file through the pty: every setting on the board, saved', as
   assert.doesNotMatch(pulled, /No payload/);
 });
 
-test('the board\'s holding torques at home are those describe gives for the file', async () => {
+test("the board's holding torques at home are those describe gives for the file", async () => {
   const check = await hexapod(['send', ...onPort(), 'check 0 0 0 0 0 0']);
   assert.equal(check.status, 0, check.stderr);
   const board = numbersIn(check.stdout.split('\n').find((l) => l.startsWith('# torque_kgcm:')));
@@ -216,7 +226,7 @@ test('a text stream: a pose line per row, every reply ok', async () => {
   assert.match(stream.stdout, /errors: 0$/m);
 });
 
-test('a 10-second binary stream arrives whole; the pins end at the host IK\'s pulses', async () => {
+test("a 10-second binary stream arrives whole; the pins end at the host IK's pulses", async () => {
   // 10 s at 50 rows/s: from home to END along a smooth step, with a circle on the way.
   const rows = ['time,x,y,z,roll,pitch,yaw'];
   for (let i = 0; i <= 500; i++) {
@@ -225,8 +235,8 @@ test('a 10-second binary stream arrives whole; the pins end at the host IK\'s pu
     const s = u * u * (3 - 2 * u);
     const wiggle = Math.sin(Math.PI * u);
     const pose = END.map((e) => e * s);
-    pose[0] += 4 * wiggle * Math.sin(2 * Math.PI * t / 2.5);
-    pose[1] += 4 * wiggle * (1 - Math.cos(2 * Math.PI * t / 2.5));
+    pose[0] += 4 * wiggle * Math.sin((2 * Math.PI * t) / 2.5);
+    pose[1] += 4 * wiggle * (1 - Math.cos((2 * Math.PI * t) / 2.5));
     rows.push([t.toFixed(2), ...pose.map((v) => v.toFixed(4))].join(','));
   }
   writeFileSync(join(dir, 'ten.csv'), `${rows.join('\n')}\n`);
@@ -268,6 +278,18 @@ test('a text stream: a row the board refuses is reported, the rows after it stil
   // alone is reachable, so the host's check passes them and the board refuses the second.
   const limits = await hexapod(['send', ...onPort(), 'set speed_mm_s 50', 'set speed_deg_s 60']);
   assert.equal(limits.status, 0, limits.stderr);
+  // The rows go at wall-clock times, while the emulator may run far slower than real time: the
+  // platform is brought to the first row's pose (and seen there on the pins) before the stream,
+  // so the second row's path starts from the first pose however slow the emulation is.
+  const first = [-28, 19, -2.5, 11, 2, -20];
+  const start = await hexapod(['send', ...onPort(), `pose ${first.join(' ')}`]);
+  assert.equal(start.status, 0, start.stderr);
+  const [there] = reference().solve(referenceSettings(), [first]);
+  assert.ok(there.ok, JSON.stringify(there));
+  const reached = await pinsReach(there.pulse_us);
+  reached.forEach((w, i) => {
+    assert.ok(Math.abs(w - there.pulse_us[i]) <= COUNT_US + 1e-9, `servo ${i + 1}: pin ${w} us`);
+  });
   writeFileSync(
     join(dir, 'blocked.csv'),
     'time,x,y,z,roll,pitch,yaw\n0,-28,19,-2.5,11,2,-20\n3,30,-12,-13.5,5,-13,28\n3.1,0,0,2,0,0,0\n',
@@ -300,7 +322,10 @@ test('uf2 --settings: the chip booted from the file starts with the build file s
   const board = new EmulatedBoard({ bootrom: firmwareBootrom(), segments });
   const { offset } = board.settingsStorage;
   const sector = 0x10000000 + offset;
-  assert.ok(segments.some((s) => s.address === sector), 'the settings sector is in the file');
+  assert.ok(
+    segments.some((s) => s.address === sector),
+    'the settings sector is in the file',
+  );
   board.boot();
   board.runMs(50);
   assert.doesNotMatch(board.output, /# warning/);
@@ -310,8 +335,8 @@ test('uf2 --settings: the chip booted from the file starts with the build file s
     'speed_deg_s: off',
     'stream.z_mm: 16.000',
     'payload_g: 1500.0',
-    'servo3: trim_us=1510.00 rate_us_rad=509.296 dir=reversed min_us=1100.00 max_us=1900.00 '
-      + 'torque_kgcm=25.00',
+    'servo3: trim_us=1510.00 rate_us_rad=509.296 dir=reversed min_us=1100.00 max_us=1900.00 ' +
+      'torque_kgcm=25.00',
     'saved: yes (these settings are the ones saved in flash)',
   ]) {
     assert.ok(config.includes(line), `${line} in ${JSON.stringify(config)}`);

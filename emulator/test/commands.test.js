@@ -1,12 +1,12 @@
 // Every command through the real firmware binary, over UART0 and over the USB port: the exact
 // reply shape, the data lines, and the servo pins. Expected pulses come from the host build of
-// kinematics-core (src/host-reference.js), expected formats and defaults from README.md.
+// kinematics-core (src/test-support/host-reference.js), expected formats and defaults from README.md.
 
 import assert from 'node:assert/strict';
 import { readFileSync } from 'node:fs';
 import { before, test } from 'node:test';
 
-import { EmulatedBoard } from '../src/board.js';
+import { EmulatedBoard } from '../src/chip/board.js';
 import {
   assertClose,
   assertConstant,
@@ -26,8 +26,8 @@ import {
   runFrames,
   status,
   widthsNanos,
-} from '../src/e2e-support.js';
-import { HostReference } from '../src/host-reference.js';
+} from '../src/test-support/e2e-support.js';
+import { HostReference } from '../src/test-support/host-reference.js';
 
 // Reported numbers vs the host core: the firmware computes in f32 with the ROM's routines, the
 // reference with libm; they print with 3 (angles) and 2 (pulses) decimals.
@@ -90,87 +90,119 @@ linkTest('help lists every command, all on # lines, then ok', (link) => {
   assert.match(text, /echo off/);
 });
 
-linkTest('pose: ok alone, then the pins reach the host core pulses for that pose within one count', (link) => {
-  const board = link.quiet(bootrom);
-  const poses = [
-    [10, 0, 0, 0, 0, 5],
-    [-5, 8, -6, 3, -4, 10],
-    [0, 0, 12, 0, 0, 0],
-    [4, -3, 2, -8, 6, -15],
-    [0.25, -0.125, 0.5, 0.75, -1.5, 2.25],
-  ];
-  let from = HOME;
-  let worstUs = 0;
-  for (const pose of poses) {
-    moveAndSettle(board, `pose ${poseText(pose)}`, from, pose);
-    const expected = solve(pose);
-    assertPins(board, expected.pulse_us, `after pose ${pose}`);
-    board.servos().forEach((servo, i) => {
-      worstUs = Math.max(worstUs, Math.abs(servo.widthUs - expected.pulse_us[i]));
-    });
-    const s = status(board);
-    assert.equal(s.state, 'idle');
-    assertClose(s.pose, pose, 0.0005, 'status pose');
-    assertClose(s.target, pose, 0.0005, 'status target');
-    assertClose(s.arm_deg, expected.arm_deg, ARM_TOLERANCE_DEG, 'status arm_deg');
-    assertClose(s.pulse_us, expected.pulse_us, PULSE_TOLERANCE_US, 'status pulse_us');
-    from = pose;
-  }
-  assert.ok(worstUs <= COUNT_US, `worst pin error ${worstUs} us`);
-});
+linkTest(
+  'pose: ok alone, then the pins reach the host core pulses for that pose within one count',
+  (link) => {
+    const board = link.quiet(bootrom);
+    const poses = [
+      [10, 0, 0, 0, 0, 5],
+      [-5, 8, -6, 3, -4, 10],
+      [0, 0, 12, 0, 0, 0],
+      [4, -3, 2, -8, 6, -15],
+      [0.25, -0.125, 0.5, 0.75, -1.5, 2.25],
+    ];
+    let from = HOME;
+    let worstUs = 0;
+    for (const pose of poses) {
+      moveAndSettle(board, `pose ${poseText(pose)}`, from, pose);
+      const expected = solve(pose);
+      assertPins(board, expected.pulse_us, `after pose ${pose}`);
+      board.servos().forEach((servo, i) => {
+        worstUs = Math.max(worstUs, Math.abs(servo.widthUs - expected.pulse_us[i]));
+      });
+      const s = status(board);
+      assert.equal(s.state, 'idle');
+      assertClose(s.pose, pose, 0.0005, 'status pose');
+      assertClose(s.target, pose, 0.0005, 'status target');
+      assertClose(s.arm_deg, expected.arm_deg, ARM_TOLERANCE_DEG, 'status arm_deg');
+      assertClose(s.pulse_us, expected.pulse_us, PULSE_TOLERANCE_US, 'status pulse_us');
+      from = pose;
+    }
+    assert.ok(worstUs <= COUNT_US, `worst pin error ${worstUs} us`);
+  },
+);
 
-linkTest('check: reports the host core arm angles, pulses and planned duration; nothing moves', (link) => {
-  const board = link.quiet(bootrom);
-  const before = status(board);
-  const widths = widthsNanos(board);
-  for (const pose of [[10, 0, 0, 0, 0, 5], [3, -5, 2, 4, -2, -10], [2, 2, -4, 0, 6, -20], [0, 0, -9, 0, 0, 0]]) {
-    let data;
-    const pulses = capture(board, () => {
-      data = ok(board, `check ${poseText(pose)}`);
-    }, 5);
-    assertConstant(pulses, widths, `during check ${pose}`);
-    assert.equal(data.length, 3, JSON.stringify(data));
-    assert.match(data[0], /^arm_deg: (-?\d+\.\d{3} ){5}-?\d+\.\d{3}$/);
-    assert.match(data[1], /^pulse_us: (\d+\.\d{2} ){5}\d+\.\d{2}$/);
-    assert.match(data[2], /^duration_s: \d+\.\d{3}$/);
-    const expected = solve(pose);
-    assertClose(data[0].split(' ').slice(1).map(Number), expected.arm_deg, ARM_TOLERANCE_DEG, 'arm_deg');
-    assertClose(data[1].split(' ').slice(1).map(Number), expected.pulse_us, PULSE_TOLERANCE_US, 'pulse_us');
-    const seconds = plannedFrames(HOME, pose, DEFAULTS) / DEFAULTS.frame_hz;
-    assert.equal(Number(data[2].split(' ')[1]), Number(seconds.toFixed(3)), `duration of ${pose}`);
-  }
-  // Refused like pose, and still nothing moved.
-  const reply = refused(board, 'check 0 0 80 0 0 0', 'unreachable');
-  assert.match(reply, /\bleg \d\b/);
-  const after = status(board);
-  assert.deepEqual(after.pose, before.pose);
-  assert.deepEqual(after.target, before.target);
-  assert.deepEqual(widthsNanos(board), widths);
-});
+linkTest(
+  'check: reports the host core arm angles, pulses and planned duration; nothing moves',
+  (link) => {
+    const board = link.quiet(bootrom);
+    const before = status(board);
+    const widths = widthsNanos(board);
+    for (const pose of [
+      [10, 0, 0, 0, 0, 5],
+      [3, -5, 2, 4, -2, -10],
+      [2, 2, -4, 0, 6, -20],
+      [0, 0, -9, 0, 0, 0],
+    ]) {
+      let data;
+      const pulses = capture(
+        board,
+        () => {
+          data = ok(board, `check ${poseText(pose)}`);
+        },
+        5,
+      );
+      assertConstant(pulses, widths, `during check ${pose}`);
+      assert.equal(data.length, 3, JSON.stringify(data));
+      assert.match(data[0], /^arm_deg: (-?\d+\.\d{3} ){5}-?\d+\.\d{3}$/);
+      assert.match(data[1], /^pulse_us: (\d+\.\d{2} ){5}\d+\.\d{2}$/);
+      assert.match(data[2], /^duration_s: \d+\.\d{3}$/);
+      const expected = solve(pose);
+      assertClose(
+        data[0].split(' ').slice(1).map(Number),
+        expected.arm_deg,
+        ARM_TOLERANCE_DEG,
+        'arm_deg',
+      );
+      assertClose(
+        data[1].split(' ').slice(1).map(Number),
+        expected.pulse_us,
+        PULSE_TOLERANCE_US,
+        'pulse_us',
+      );
+      const seconds = plannedFrames(HOME, pose, DEFAULTS) / DEFAULTS.frame_hz;
+      assert.equal(
+        Number(data[2].split(' ')[1]),
+        Number(seconds.toFixed(3)),
+        `duration of ${pose}`,
+      );
+    }
+    // Refused like pose, and still nothing moved.
+    const reply = refused(board, 'check 0 0 80 0 0 0', 'unreachable');
+    assert.match(reply, /\bleg \d\b/);
+    const after = status(board);
+    assert.deepEqual(after.pose, before.pose);
+    assert.deepEqual(after.target, before.target);
+    assert.deepEqual(widthsNanos(board), widths);
+  },
+);
 
-linkTest('move sets only the named axes (absolute), nudge moves them relative to the target', (link) => {
-  const board = link.quiet(bootrom);
-  const start = [2, -3, 4, 1, -2, 3];
-  moveAndSettle(board, `pose ${poseText(start)}`, HOME, start);
+linkTest(
+  'move sets only the named axes (absolute), nudge moves them relative to the target',
+  (link) => {
+    const board = link.quiet(bootrom);
+    const start = [2, -3, 4, 1, -2, 3];
+    moveAndSettle(board, `pose ${poseText(start)}`, HOME, start);
 
-  const moved = [2, -3, 8, 4, -2, 3];
-  moveAndSettle(board, 'move z=8 roll=4', start, moved);
-  assertClose(status(board).target, moved, 0.0005, 'after move');
-  assertPins(board, solve(moved).pulse_us, 'after move');
+    const moved = [2, -3, 8, 4, -2, 3];
+    moveAndSettle(board, 'move z=8 roll=4', start, moved);
+    assertClose(status(board).target, moved, 0.0005, 'after move');
+    assertPins(board, solve(moved).pulse_us, 'after move');
 
-  const nudged = [0.5, -3, 8, 4, -2, 5];
-  moveAndSettle(board, 'nudge x=-1.5 yaw=2', moved, nudged);
-  assertClose(status(board).target, nudged, 0.0005, 'after nudge');
-  assertPins(board, solve(nudged).pulse_us, 'after nudge');
+    const nudged = [0.5, -3, 8, 4, -2, 5];
+    moveAndSettle(board, 'nudge x=-1.5 yaw=2', moved, nudged);
+    assertClose(status(board).target, nudged, 0.0005, 'after nudge');
+    assertPins(board, solve(nudged).pulse_us, 'after nudge');
 
-  // Nudges add up from the target, even while the move is still under way.
-  ok(board, 'nudge z=-1');
-  ok(board, 'nudge z=-1');
-  const twice = [0.5, -3, 6, 4, -2, 5];
-  assertClose(status(board).target, twice, 0.0005, 'two nudges');
-  runFrames(board, 10);
-  assertPins(board, solve(twice).pulse_us, 'after two nudges');
-});
+    // Nudges add up from the target, even while the move is still under way.
+    ok(board, 'nudge z=-1');
+    ok(board, 'nudge z=-1');
+    const twice = [0.5, -3, 6, 4, -2, 5];
+    assertClose(status(board).target, twice, 0.0005, 'two nudges');
+    runFrames(board, 10);
+    assertPins(board, solve(twice).pulse_us, 'after two nudges');
+  },
+);
 
 linkTest('home returns to the home pulses', (link) => {
   const board = link.quiet(bootrom);
@@ -181,53 +213,63 @@ linkTest('home returns to the home pulses', (link) => {
   assert.deepEqual(s.pose, HOME);
   assert.equal(s.state, 'idle');
   assertPins(board, solve(HOME).pulse_us);
-  assertPins(board, DEFAULTS.servos.map((servo) => servo.trim_us), 'home = trims');
+  assertPins(
+    board,
+    DEFAULTS.servos.map((servo) => servo.trim_us),
+    'home = trims',
+  );
 });
 
-linkTest('status while moving: state with elapsed and planned duration, target ahead of pose', (link) => {
-  const board = link.quiet(bootrom);
-  const target = [15, 0, 0, 0, 0, 0]; // 15 mm at 50 mm/s: 0.3 s = 15 frames
-  const frames = plannedFrames(HOME, target, DEFAULTS);
-  assert.equal(frames, 15);
-  ok(board, `pose ${poseText(target)}`);
-  runFrames(board, 5);
-  const s = status(board);
-  const match = s.state.match(/^moving (\d+\.\d{3}) of (\d+\.\d{3}) s$/);
-  assert.ok(match, s.state);
-  assert.equal(Number(match[2]), frames / 50);
-  assert.ok(Number(match[1]) > 0 && Number(match[1]) < Number(match[2]), s.state);
-  assertClose(s.target, target, 0.0005);
-  assert.ok(s.pose[0] > 0 && s.pose[0] < 15, `pose x ${s.pose[0]} between start and target`);
-  // The reported pulses are those of the reported pose.
-  assertClose(s.pulse_us, solve(s.pose).pulse_us, 0.05, 'pulses of the reported pose');
-});
+linkTest(
+  'status while moving: state with elapsed and planned duration, target ahead of pose',
+  (link) => {
+    const board = link.quiet(bootrom);
+    const target = [15, 0, 0, 0, 0, 0]; // 15 mm at 50 mm/s: 0.3 s = 15 frames
+    const frames = plannedFrames(HOME, target, DEFAULTS);
+    assert.equal(frames, 15);
+    ok(board, `pose ${poseText(target)}`);
+    runFrames(board, 5);
+    const s = status(board);
+    const match = s.state.match(/^moving (\d+\.\d{3}) of (\d+\.\d{3}) s$/);
+    assert.ok(match, s.state);
+    assert.equal(Number(match[2]), frames / 50);
+    assert.ok(Number(match[1]) > 0 && Number(match[1]) < Number(match[2]), s.state);
+    assertClose(s.target, target, 0.0005);
+    assert.ok(s.pose[0] > 0 && s.pose[0] < 15, `pose x ${s.pose[0]} between start and target`);
+    // The reported pulses are those of the reported pose.
+    assertClose(s.pulse_us, solve(s.pose).pulse_us, 0.05, 'pulses of the reported pose');
+  },
+);
 
-linkTest('stop mid-move freezes where it is: pins constant, pose on the line between start and target', (link) => {
-  const board = link.quiet(bootrom);
-  ok(board, 'set speed_mm_s 10');
-  const settings = { ...DEFAULTS, speed_mm_s: 10 };
-  const target = [12, -6, 9, 0, 0, 0]; // 16.2 mm at 10 mm/s: 1.62 s
-  ok(board, `pose ${poseText(target)}`);
-  runFrames(board, 30);
-  ok(board, 'stop');
-  runFrames(board, 2); // the frame in flight
-  const held = widthsNanos(board);
-  const pulses = capture(board, () => {}, 20);
-  assertConstant(pulses, held, 'after stop');
+linkTest(
+  'stop mid-move freezes where it is: pins constant, pose on the line between start and target',
+  (link) => {
+    const board = link.quiet(bootrom);
+    ok(board, 'set speed_mm_s 10');
+    const settings = { ...DEFAULTS, speed_mm_s: 10 };
+    const target = [12, -6, 9, 0, 0, 0]; // 16.2 mm at 10 mm/s: 1.62 s
+    ok(board, `pose ${poseText(target)}`);
+    runFrames(board, 30);
+    ok(board, 'stop');
+    runFrames(board, 2); // the frame in flight
+    const held = widthsNanos(board);
+    const pulses = capture(board, () => {}, 20);
+    assertConstant(pulses, held, 'after stop');
 
-  const s = status(board);
-  assert.equal(s.state, 'idle');
-  assert.deepEqual(s.target, s.pose, 'target = where it stopped');
-  // On the straight line HOME -> target, strictly between.
-  const t = s.pose[0] / target[0];
-  assert.ok(t > 0.1 && t < 0.9, `stopped at fraction ${t}`);
-  assertClose(s.pose, lerpPose(HOME, target, t), 0.002, 'on the line');
-  assertPins(board, solve(s.pose, settings).pulse_us, 'pins = pulses of the stopped pose');
-  // Stop while standing still is fine too; the next move starts from the stopped pose.
-  ok(board, 'stop');
-  moveAndSettle(board, 'home', s.pose, HOME, settings);
-  assertPins(board, solve(HOME).pulse_us);
-});
+    const s = status(board);
+    assert.equal(s.state, 'idle');
+    assert.deepEqual(s.target, s.pose, 'target = where it stopped');
+    // On the straight line HOME -> target, strictly between.
+    const t = s.pose[0] / target[0];
+    assert.ok(t > 0.1 && t < 0.9, `stopped at fraction ${t}`);
+    assertClose(s.pose, lerpPose(HOME, target, t), 0.002, 'on the line');
+    assertPins(board, solve(s.pose, settings).pulse_us, 'pins = pulses of the stopped pose');
+    // Stop while standing still is fine too; the next move starts from the stopped pose.
+    ok(board, 'stop');
+    moveAndSettle(board, 'home', s.pose, HOME, settings);
+    assertPins(board, solve(HOME).pulse_us);
+  },
+);
 
 /**
  * The default paired layout (README.md: three pairs of servos 120 degrees apart;
@@ -258,41 +300,52 @@ function documentedGeometry() {
   });
 }
 
-linkTest('geometry reports b_i, p_i, beta_i, a, s, h0 and alpha0 of the documented default build', (link) => {
-  const board = link.quiet(bootrom);
-  const data = ok(board, 'geometry');
-  const expected = documentedGeometry();
-  // The documented figures (README): h0 118.458 mm, alpha0 -0.252 deg.
-  assert.equal(expected[0].h0.toFixed(3), '118.458');
-  assert.equal(expected[0].alpha0Deg.toFixed(3), '-0.252');
+linkTest(
+  'geometry reports b_i, p_i, beta_i, a, s, h0 and alpha0 of the documented default build',
+  (link) => {
+    const board = link.quiet(bootrom);
+    const data = ok(board, 'geometry');
+    const expected = documentedGeometry();
+    // The documented figures (README): h0 118.458 mm, alpha0 -0.252 deg.
+    assert.equal(expected[0].h0.toFixed(3), '118.458');
+    assert.equal(expected[0].alpha0Deg.toFixed(3), '-0.252');
 
-  const value = (key) => {
-    const line = data.find((text) => text.startsWith(key));
-    assert.ok(line, `no '${key}' in ${JSON.stringify(data)}`);
-    return line;
-  };
-  assert.match(value('layout:'), /paired base_radius_mm=75\.000 base_half_angle_deg=20\.000 platform_radius_mm=60\.000 platform_half_angle_deg=20\.000/);
-  assert.equal(value('arm_mm'), 'arm_mm (a): 20.000');
-  assert.equal(value('rod_mm'), 'rod_mm (s): 120.000');
-  assert.equal(value('home_height_mm'), `home_height_mm (h0): ${expected[0].h0.toFixed(3)}`);
-  const legLines = data.filter((text) => text.startsWith('leg '));
-  assert.equal(legLines.length, 6);
-  legLines.forEach((text, i) => {
-    const m = text.match(/^leg (\d): b_mm=\((\S+), (\S+), (\S+)\) p_mm=\((\S+), (\S+), (\S+)\) beta_deg=(\S+) alpha0_deg=(\S+)$/);
-    assert.ok(m, text);
-    assert.equal(Number(m[1]), i + 1);
-    const e = expected[i];
-    assertClose(m.slice(2, 5).map(Number), e.b, 0.0011, `leg ${i + 1} b`);
-    assertClose(m.slice(5, 8).map(Number), e.p, 0.0011, `leg ${i + 1} p`);
-    // beta as an angle: equal modulo 360.
-    const dBeta = (((Number(m[8]) - e.beta) % 360) + 540) % 360 - 180;
-    assert.ok(Math.abs(dBeta) < 0.0011, `leg ${i + 1} beta ${m[8]} vs ${e.beta}`);
-    assert.ok(Math.abs(Number(m[9]) - e.alpha0Deg) < 0.0011, `leg ${i + 1} alpha0 ${m[9]} vs ${e.alpha0Deg}`);
-  });
-  // ... and the same as the host core's geometry.
-  const core = reference.geometry(DEFAULTS);
-  assert.ok(Math.abs(core.h0_mm - expected[0].h0) < 0.001, `core h0 ${core.h0_mm}`);
-});
+    const value = (key) => {
+      const line = data.find((text) => text.startsWith(key));
+      assert.ok(line, `no '${key}' in ${JSON.stringify(data)}`);
+      return line;
+    };
+    assert.match(
+      value('layout:'),
+      /paired base_radius_mm=75\.000 base_half_angle_deg=20\.000 platform_radius_mm=60\.000 platform_half_angle_deg=20\.000/,
+    );
+    assert.equal(value('arm_mm'), 'arm_mm (a): 20.000');
+    assert.equal(value('rod_mm'), 'rod_mm (s): 120.000');
+    assert.equal(value('home_height_mm'), `home_height_mm (h0): ${expected[0].h0.toFixed(3)}`);
+    const legLines = data.filter((text) => text.startsWith('leg '));
+    assert.equal(legLines.length, 6);
+    legLines.forEach((text, i) => {
+      const m = text.match(
+        /^leg (\d): b_mm=\((\S+), (\S+), (\S+)\) p_mm=\((\S+), (\S+), (\S+)\) beta_deg=(\S+) alpha0_deg=(\S+)$/,
+      );
+      assert.ok(m, text);
+      assert.equal(Number(m[1]), i + 1);
+      const e = expected[i];
+      assertClose(m.slice(2, 5).map(Number), e.b, 0.0011, `leg ${i + 1} b`);
+      assertClose(m.slice(5, 8).map(Number), e.p, 0.0011, `leg ${i + 1} p`);
+      // beta as an angle: equal modulo 360.
+      const dBeta = ((((Number(m[8]) - e.beta) % 360) + 540) % 360) - 180;
+      assert.ok(Math.abs(dBeta) < 0.0011, `leg ${i + 1} beta ${m[8]} vs ${e.beta}`);
+      assert.ok(
+        Math.abs(Number(m[9]) - e.alpha0Deg) < 0.0011,
+        `leg ${i + 1} alpha0 ${m[9]} vs ${e.alpha0Deg}`,
+      );
+    });
+    // ... and the same as the host core's geometry.
+    const core = reference.geometry(DEFAULTS);
+    assert.ok(Math.abs(core.h0_mm - expected[0].h0) < 0.001, `core h0 ${core.h0_mm}`);
+  },
+);
 
 linkTest('config lists every documented setting with its documented default', (link) => {
   const board = link.quiet(bootrom);
@@ -376,39 +429,51 @@ linkTest('LF, CRLF and CR each end a line, with the same replies', (link) => {
   assert.equal(board.lines.filter((line) => line === 'ok').length, 1 + 3); // + set echo off
 });
 
-linkTest('echo on: typed characters come back, backspace and DEL erase, a prompt follows each reply', (link) => {
-  const board = link.terminal(bootrom);
-  assert.ok(board.runUntil(() => board.partialLine === '> ', { timeoutMs: 20 }), 'no prompt');
-  const start = board.outputBytes.length;
-  // "statux" <BS> "s": the line is "status". Then "cheq" <DEL> "ck 0 0 1 0 0 0".
-  board.sendBytes('statux\x08s\n');
-  board.waitForLine(/^ok$/);
-  board.sendBytes('cheq\x7fck 0 0 1 0 0 0\r\n');
-  board.waitForLine(/^ok$/);
-  board.runMs(5);
-  const text = Buffer.from(board.outputBytes.slice(start)).toString('latin1');
-  assert.ok(text.startsWith('statux\x08 \x08s\r\n# state: idle\r\n'), JSON.stringify(text));
-  assert.ok(text.includes('ok\r\n> cheq\x08 \x08ck 0 0 1 0 0 0\r\n# arm_deg: '), JSON.stringify(text));
-  assert.ok(text.endsWith('ok\r\n> '), JSON.stringify(text));
+linkTest(
+  'echo on: typed characters come back, backspace and DEL erase, a prompt follows each reply',
+  (link) => {
+    const board = link.terminal(bootrom);
+    assert.ok(
+      board.runUntil(() => board.partialLine === '> ', { timeoutMs: 20 }),
+      'no prompt',
+    );
+    const start = board.outputBytes.length;
+    // "statux" <BS> "s": the line is "status". Then "cheq" <DEL> "ck 0 0 1 0 0 0".
+    board.sendBytes('statux\x08s\n');
+    board.waitForLine(/^ok$/);
+    board.sendBytes('cheq\x7fck 0 0 1 0 0 0\r\n');
+    board.waitForLine(/^ok$/);
+    board.runMs(5);
+    const text = Buffer.from(board.outputBytes.slice(start)).toString('latin1');
+    assert.ok(text.startsWith('statux\x08 \x08s\r\n# state: idle\r\n'), JSON.stringify(text));
+    assert.ok(
+      text.includes('ok\r\n> cheq\x08 \x08ck 0 0 1 0 0 0\r\n# arm_deg: '),
+      JSON.stringify(text),
+    );
+    assert.ok(text.endsWith('ok\r\n> '), JSON.stringify(text));
 
-  // Echo off: no echo, no prompt; only the replies.
-  board.sendBytes('set echo off\n');
-  board.waitForLine(/^ok$/);
-  const quiet = board.outputBytes.length;
-  board.sendBytes('help\n');
-  board.waitForLine(/^ok$/);
-  board.runMs(5);
-  const replies = Buffer.from(board.outputBytes.slice(quiet)).toString('latin1');
-  const replyLines = replies.split('\r\n');
-  assert.equal(replyLines.pop(), '', 'ends with a line end, no prompt');
-  assert.equal(replyLines.pop(), 'ok');
-  assert.ok(replyLines.length > 5 && replyLines.every((line) => line.startsWith('# ')), JSON.stringify(replies));
-  // And back on.
-  board.sendBytes('set echo on\n');
-  board.waitForLine(/^ok$/);
-  board.runMs(5);
-  assert.equal(board.partialLine, '> ');
-});
+    // Echo off: no echo, no prompt; only the replies.
+    board.sendBytes('set echo off\n');
+    board.waitForLine(/^ok$/);
+    const quiet = board.outputBytes.length;
+    board.sendBytes('help\n');
+    board.waitForLine(/^ok$/);
+    board.runMs(5);
+    const replies = Buffer.from(board.outputBytes.slice(quiet)).toString('latin1');
+    const replyLines = replies.split('\r\n');
+    assert.equal(replyLines.pop(), '', 'ends with a line end, no prompt');
+    assert.equal(replyLines.pop(), 'ok');
+    assert.ok(
+      replyLines.length > 5 && replyLines.every((line) => line.startsWith('# ')),
+      JSON.stringify(replies),
+    );
+    // And back on.
+    board.sendBytes('set echo on\n');
+    board.waitForLine(/^ok$/);
+    board.runMs(5);
+    assert.equal(board.partialLine, '> ');
+  },
+);
 
 linkTest('a blank line gets no reply; every other line exactly one, last', (link) => {
   const board = link.quiet(bootrom);
@@ -418,37 +483,52 @@ linkTest('a blank line gets no reply; every other line exactly one, last', (link
   board.runMs(20);
   const lines = board.lines.slice(first);
   assert.equal(lines.filter((line) => /^(ok|error:)/.test(line)).length, 1, JSON.stringify(lines));
-  assert.ok(lines.slice(0, -1).every((line) => line.startsWith('# ')), JSON.stringify(lines));
+  assert.ok(
+    lines.slice(0, -1).every((line) => line.startsWith('# ')),
+    JSON.stringify(lines),
+  );
 });
 
-linkTest('line editing: ctrl-u erases the line, ctrl-c abandons it (no reply), arrow keys and other control bytes are ignored', (link) => {
-  const board = link.quiet(bootrom);
-  const first = board.lines.length;
-  // "fly" erased by ctrl-u, then "status": one ok with the status lines.
-  board.sendBytes('fly\x15status\n');
-  board.waitForLine(/^(ok|error:)/);
-  // Abandoned with ctrl-c: no reply at all; then an arrow key (ESC [ A) and a bell (0x07)
-  // inside a good line change nothing.
-  board.sendBytes('pose 0 0 80 0 0 0\x03');
-  board.sendBytes('che\x1b[Ack 1 2\x07 3 0 0 0\n');
-  board.waitForLine(/^(ok|error:)/);
-  board.runMs(20);
-  const replies = board.lines.slice(first).filter((line) => !line.startsWith('# '));
-  assert.deepEqual(replies, ['ok', 'ok']);
-  assert.ok(board.lines.slice(first).some((line) => line.startsWith('# state: ')), 'the first line was status');
-  assert.ok(board.lines.slice(first).some((line) => line.startsWith('# duration_s: ')), 'the second was check');
-});
+linkTest(
+  'line editing: ctrl-u erases the line, ctrl-c abandons it (no reply), arrow keys and other control bytes are ignored',
+  (link) => {
+    const board = link.quiet(bootrom);
+    const first = board.lines.length;
+    // "fly" erased by ctrl-u, then "status": one ok with the status lines.
+    board.sendBytes('fly\x15status\n');
+    board.waitForLine(/^(ok|error:)/);
+    // Abandoned with ctrl-c: no reply at all; then an arrow key (ESC [ A) and a bell (0x07)
+    // inside a good line change nothing.
+    board.sendBytes('pose 0 0 80 0 0 0\x03');
+    board.sendBytes('che\x1b[Ack 1 2\x07 3 0 0 0\n');
+    board.waitForLine(/^(ok|error:)/);
+    board.runMs(20);
+    const replies = board.lines.slice(first).filter((line) => !line.startsWith('# '));
+    assert.deepEqual(replies, ['ok', 'ok']);
+    assert.ok(
+      board.lines.slice(first).some((line) => line.startsWith('# state: ')),
+      'the first line was status',
+    );
+    assert.ok(
+      board.lines.slice(first).some((line) => line.startsWith('# duration_s: ')),
+      'the second was check',
+    );
+  },
+);
 
-linkTest('ctrl-x abandons a line like ctrl-c: no reply, and what follows starts a new line', (link) => {
-  const board = link.quiet(bootrom);
-  const first = board.lines.length;
-  board.sendBytes('home\x18');
-  board.runMs(50);
-  assert.deepEqual(board.lines.slice(first), [], 'no reply to an abandoned line');
-  board.sendBytes('st\x18atus\n');
-  const reply = board.waitForLine(/^(ok|error:)/);
-  assert.equal(reply, "error:unknown-command 'atus' is not a command; type help");
-});
+linkTest(
+  'ctrl-x abandons a line like ctrl-c: no reply, and what follows starts a new line',
+  (link) => {
+    const board = link.quiet(bootrom);
+    const first = board.lines.length;
+    board.sendBytes('home\x18');
+    board.runMs(50);
+    assert.deepEqual(board.lines.slice(first), [], 'no reply to an abandoned line');
+    board.sendBytes('st\x18atus\n');
+    const reply = board.waitForLine(/^(ok|error:)/);
+    assert.equal(reply, "error:unknown-command 'atus' is not a command; type help");
+  },
+);
 
 linkTest('what terminals send for keys is ignored whole; a lone ESC swallows nothing', (link) => {
   const board = link.quiet(bootrom);
@@ -458,13 +538,27 @@ linkTest('what terminals send for keys is ignored whole; a lone ESC swallows not
   // Keys inside a line, as xterm and friends send them: arrows in both modes, Home, End,
   // Delete, PgUp, F1, F5, F12, Ctrl-Right, Shift-F3, and bracketed paste around the line.
   const keys = [
-    '\x1b[A', '\x1bOB', '\x1b[H', '\x1b[F', '\x1b[1~', '\x1b[4~', '\x1b[3~', '\x1b[5~',
-    '\x1bOP', '\x1b[15~', '\x1b[24~', '\x1b[1;5C', '\x1b[1;2R',
+    '\x1b[A',
+    '\x1bOB',
+    '\x1b[H',
+    '\x1b[F',
+    '\x1b[1~',
+    '\x1b[4~',
+    '\x1b[3~',
+    '\x1b[5~',
+    '\x1bOP',
+    '\x1b[15~',
+    '\x1b[24~',
+    '\x1b[1;5C',
+    '\x1b[1;2R',
   ];
   for (const key of keys) {
     const { reply, lines } = board.request(`st${key}atus`);
     assert.equal(reply, 'ok', `${JSON.stringify(key)}: ${JSON.stringify(lines)}`);
-    assert.ok(lines.some((l) => l.startsWith('# state: ')), JSON.stringify(key));
+    assert.ok(
+      lines.some((l) => l.startsWith('# state: ')),
+      JSON.stringify(key),
+    );
   }
   assert.equal(board.request('\x1b[200~home\x1b[201~').reply, 'ok');
 });
@@ -477,4 +571,3 @@ linkTest('a line of separators only is not blank: it is refused, in words', (lin
   );
   assert.equal(board.request('status').reply, 'ok');
 });
-

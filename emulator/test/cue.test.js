@@ -20,9 +20,14 @@ import { dirname, join } from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { after, before, test } from 'node:test';
 
-import { DEFAULT_ELF } from '../src/board.js';
-import { COUNT_US, defaultSettings, firmwareBootrom, numbersIn } from '../src/e2e-support.js';
-import { HostReference } from '../src/host-reference.js';
+import { DEFAULT_ELF } from '../src/chip/board.js';
+import {
+  COUNT_US,
+  defaultSettings,
+  firmwareBootrom,
+  numbersIn,
+} from '../src/test-support/e2e-support.js';
+import { HostReference } from '../src/test-support/host-reference.js';
 
 const REPO = join(dirname(fileURLToPath(import.meta.url)), '..', '..');
 const RUNNER = join(REPO, 'emulator', 'src', 'run.js');
@@ -36,16 +41,24 @@ const END_S = 50;
 const FRAME_HZ = 100;
 
 function buildTool() {
-  const output = execFileSync('cargo', ['build', '--quiet', '-p', 'cli', '--message-format=json'], {
-    cwd: REPO,
-    encoding: 'utf8',
-    maxBuffer: 64 * 1024 * 1024,
-    stdio: ['ignore', 'pipe', 'inherit'],
-  });
+  const output = execFileSync(
+    'cargo',
+    ['build', '--quiet', '-p', 'hexapod', '--message-format=json'],
+    {
+      cwd: REPO,
+      encoding: 'utf8',
+      maxBuffer: 64 * 1024 * 1024,
+      stdio: ['ignore', 'pipe', 'inherit'],
+    },
+  );
   for (const line of output.split('\n')) {
     if (line.startsWith('{')) {
       const message = JSON.parse(line);
-      if (message.reason === 'compiler-artifact' && message.target?.name === 'hexapod' && message.executable) {
+      if (
+        message.reason === 'compiler-artifact' &&
+        message.target?.name === 'hexapod' &&
+        message.executable
+      ) {
         return message.executable;
       }
     }
@@ -111,7 +124,12 @@ after(() => {
   }
 });
 
-/** Runs a program; resolves to its outcome. `onLine` sees each stdout or stderr line as it comes. */
+/**
+ * Runs a program; resolves to its outcome. `onLine` sees each stdout or stderr line as it comes.
+ * @param {string} program
+ * @param {string[]} args
+ * @param {(line: string, at: number) => void} [onLine]
+ */
 function run(program, args, onLine = () => {}) {
   return new Promise((resolve) => {
     const child = spawn(program, args, { cwd: dir });
@@ -125,8 +143,16 @@ function run(program, args, onLine = () => {}) {
         }
       }
     };
-    child.stdout.on('data', (d) => take(d, (c) => { stdout += c; }));
-    child.stderr.on('data', (d) => take(d, (c) => { stderr += c; }));
+    child.stdout.on('data', (d) =>
+      take(d, (c) => {
+        stdout += c;
+      }),
+    );
+    child.stderr.on('data', (d) =>
+      take(d, (c) => {
+        stderr += c;
+      }),
+    );
     child.on('close', (status) => resolve({ status, stdout, stderr }));
   });
 }
@@ -144,8 +170,14 @@ function freeUdpPort() {
 
 test('a JSBSim flight drives the emulated platform through hexapod cue, judged on the pins', async (t) => {
   const setup = await run(tool, [
-    'send', '--port', port, '--timeout-s', '30',
-    'set speed_mm_s off', 'set speed_deg_s off', `set frame_hz ${FRAME_HZ}`,
+    'send',
+    '--port',
+    port,
+    '--timeout-s',
+    '30',
+    'set speed_mm_s off',
+    'set speed_deg_s off',
+    `set frame_hz ${FRAME_HZ}`,
   ]);
   assert.equal(setup.status, 0, setup.stdout + setup.stderr);
   const udp = await freeUdpPort();
@@ -156,8 +188,19 @@ test('a JSBSim flight drives the emulated platform through hexapod cue, judged o
   const cue = run(
     tool,
     [
-      'cue', '--port', port, '--timeout-s', '30', '--listen', `127.0.0.1:${udp}`,
-      '--record', 'flight.csv', '--idle-exit-s', '2', '--wait-s', '120',
+      'cue',
+      '--port',
+      port,
+      '--timeout-s',
+      '30',
+      '--listen',
+      `127.0.0.1:${udp}`,
+      '--record',
+      'flight.csv',
+      '--idle-exit-s',
+      '2',
+      '--wait-s',
+      '120',
     ],
     (line) => {
       if (line.startsWith('cue: listening')) {
@@ -166,11 +209,21 @@ test('a JSBSim flight drives the emulated platform through hexapod cue, judged o
     },
   );
   await ready;
+  /** @type {Record<string, number>} */
   const phases = {};
   const flight = await run(
     'python3',
-    [FLIGHT, '--port', String(udp), '--speed', String(SPEED), '--rate', String(TELEMETRY_HZ),
-      '--end-s', String(END_S)],
+    [
+      FLIGHT,
+      '--port',
+      String(udp),
+      '--speed',
+      String(SPEED),
+      '--rate',
+      String(TELEMETRY_HZ),
+      '--end-s',
+      String(END_S),
+    ],
     (line, at) => {
       const found = line.match(/^phase (\S+) /);
       if (found) {
@@ -181,7 +234,10 @@ test('a JSBSim flight drives the emulated platform through hexapod cue, judged o
   assert.equal(flight.status, 0, flight.stdout + flight.stderr);
   const done = await cue;
   assert.equal(done.status, 0, done.stdout + done.stderr);
-  done.stdout.trim().split('\n').forEach((line) => t.diagnostic(line));
+  done.stdout
+    .trim()
+    .split('\n')
+    .forEach((line) => t.diagnostic(line));
   for (const phase of ['take-off-run', 'rotate', 'turn', 'end']) {
     assert.ok(phases[phase], `the flight reached ${phase}: ${flight.stdout}`);
   }
@@ -189,9 +245,14 @@ test('a JSBSim flight drives the emulated platform through hexapod cue, judged o
   // The tool's account: every frame the board received whole, none clamped.
   const sent = Number(done.stdout.match(/frames sent: (\d+)/)?.[1]);
   assert.ok(sent > 1000, done.stdout);
-  assert.match(done.stdout, new RegExp(`the board counted frames=${sent} applied=\\d+ damaged=0 clamped=0 refused=0`));
+  assert.match(
+    done.stdout,
+    new RegExp(`the board counted frames=${sent} applied=\\d+ damaged=0 clamped=0 refused=0`),
+  );
   assert.match(done.stdout, /dropped: none/);
-  const latency = done.stdout.match(/latency \(packet arrival to frame written\): min ([\d.]+) ms, median ([\d.]+) ms, 99% ([\d.]+) ms, max ([\d.]+) ms/);
+  const latency = done.stdout.match(
+    /latency \(packet arrival to frame written\): min ([\d.]+) ms, median ([\d.]+) ms, 99% ([\d.]+) ms, max ([\d.]+) ms/,
+  );
   assert.ok(latency, done.stdout);
   // The aim (issue 24): under 2 ms from a packet's arrival to its frame leaving the tool.
   assert.ok(Number(latency[2]) < 2, `median latency ${latency[2]} ms`);
@@ -213,7 +274,10 @@ test('a JSBSim flight drives the emulated platform through hexapod cue, judged o
   // Poses from the pins (every 4th reading), by the core's forward kinematics.
   const sampled = flying.filter((_, i) => i % 4 === 0);
   const poses = new HostReference()
-    .runWith(settings, sampled.map((p) => `fk ${p.us.join(' ')} 0 0 0 0 0 0`))
+    .runWith(
+      settings,
+      sampled.map((p) => `fk ${p.us.join(' ')} 0 0 0 0 0 0`),
+    )
     .map((answer, i) => {
       assert.ok(answer.ok, `${sampled[i].us}: ${JSON.stringify(answer)}`);
       return { at: sampled[i].at, pose: answer.pose };
@@ -235,10 +299,17 @@ test('a JSBSim flight drives the emulated platform through hexapod cue, judged o
   const turn = during(phases.turn, phases.end);
   const peak = (poseList, axis) => Math.max(...poseList.map((p) => Math.abs(p[axis])));
   const lastSeconds = during(phases.end - 4000, phases.end);
-  for (const [name, axis, left] of [['roll', ROLL, 0.5], ['yaw', YAW, 0.25]]) {
+  /** @type {[string, number, number][]} the axis, its index, the fraction of its peak left */
+  const washes = [
+    ['roll', ROLL, 0.5],
+    ['yaw', YAW, 0.25],
+  ];
+  for (const [name, axis, left] of washes) {
     const most = peak(turn, axis);
     const late = peak(lastSeconds, axis);
-    t.diagnostic(`turn: ${name} up to ${most.toFixed(2)} deg, ${late.toFixed(2)} deg in its last 4 s`);
+    t.diagnostic(
+      `turn: ${name} up to ${most.toFixed(2)} deg, ${late.toFixed(2)} deg in its last 4 s`,
+    );
     assert.ok(most > 0.8, `${name} moved in the turn: ${most}`);
     assert.ok(late < left * most && late < 0.6, `${name} washed back: ${late} of ${most}`);
   }
@@ -246,7 +317,10 @@ test('a JSBSim flight drives the emulated platform through hexapod cue, judged o
   // The end: home, on every pin, within one PWM count.
   const last = pins.at(-1).us;
   last.forEach((w, i) => {
-    assert.ok(Math.abs(w - settings.servos[i].trim_us) <= COUNT_US + 1e-9, `servo ${i + 1} at ${w} us`);
+    assert.ok(
+      Math.abs(w - settings.servos[i].trim_us) <= COUNT_US + 1e-9,
+      `servo ${i + 1} at ${w} us`,
+    );
   });
 
   // The record plotted (the picture docs/cueing.md shows is made the same way).

@@ -4,8 +4,8 @@
 import assert from 'node:assert/strict';
 import { before, test } from 'node:test';
 
-import { EmulatedBoard, FINAL_REPLY } from '../src/board.js';
-import { bootedBoard, firmwareBootrom } from '../src/e2e-support.js';
+import { EmulatedBoard, FINAL_REPLY } from '../src/chip/board.js';
+import { bootedBoard, firmwareBootrom } from '../src/test-support/e2e-support.js';
 
 // The wiring and timing the firmware promises (docs: CONTEXT "Wiring"), restated here from
 // the spec rather than taken from the firmware: 125 MHz / divider 40 -> 320 ns per count.
@@ -43,7 +43,14 @@ test('at boot all six servos get 1500 us pulses at 50 Hz, exact to the count', (
   const servos = board.servos();
   assert.deepEqual(
     servos.map((servo) => [servo.servo, servo.gpio]),
-    [[1, 2], [2, 3], [3, 4], [4, 5], [5, 6], [6, 7]],
+    [
+      [1, 2],
+      [2, 3],
+      [3, 4],
+      [4, 5],
+      [5, 6],
+      [6, 7],
+    ],
   );
   for (const servo of servos) {
     assert.ok(servo.pulses >= 2, `servo ${servo.servo}: ${servo.pulses} pulses`);
@@ -90,8 +97,14 @@ test('input is paced at the baud rate: a line of n bytes takes n byte times', ()
   const bytes = 40 + board.outputBytes.length - outputBefore;
   const byteNanos = 1e9 * (10 / 115_200); // 8N1
   const elapsed = board.nanos - start;
-  assert.ok(elapsed >= bytes * byteNanos * 0.99, `reply after ${elapsed} ns (${bytes} bytes both ways)`);
-  assert.ok(elapsed < bytes * byteNanos + 1e6, `reply after ${elapsed} ns (${bytes} bytes both ways)`);
+  assert.ok(
+    elapsed >= bytes * byteNanos * 0.99,
+    `reply after ${elapsed} ns (${bytes} bytes both ways)`,
+  );
+  assert.ok(
+    elapsed < bytes * byteNanos + 1e6,
+    `reply after ${elapsed} ns (${bytes} bytes both ways)`,
+  );
 });
 
 test('runs are deterministic', () => {
@@ -99,7 +112,13 @@ test('runs are deterministic', () => {
     const board = bootedBoard(bootrom);
     const replies = ['help', 'pose 1 2 3', 'xyzzy'].map((line) => board.request(line).reply);
     board.runMs(45);
-    return { replies, nanos: board.nanos, cycles: board.cycles, output: board.output, servos: board.servos() };
+    return {
+      replies,
+      nanos: board.nanos,
+      cycles: board.cycles,
+      output: board.output,
+      servos: board.servos(),
+    };
   };
   assert.deepEqual(script(), script());
 });

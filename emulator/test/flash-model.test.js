@@ -1,4 +1,4 @@
-// The flash model of src/rp2040js-gaps.js (gap 7) on its own: a bare RP2040 with the boot ROM
+// The flash model of src/gaps/flash.js (gap 7) on its own: a bare RP2040 with the boot ROM
 // and no firmware, its patched ROM flash routines called as firmware calls them (registers,
 // a return address in SRAM), and every rule it enforces broken once on purpose. Expected
 // contents follow NOR flash semantics (an erase sets bytes to 0xFF, a program can only clear
@@ -9,8 +9,8 @@ import { before, test } from 'node:test';
 
 import { RP2040 } from 'rp2040js';
 
-import { loadBootrom } from '../src/bootrom.js';
-import { attachFlashChip, FlashChip, patchEmulatorGaps } from '../src/rp2040js-gaps.js';
+import { loadBootrom } from '../src/chip/bootrom.js';
+import { attachFlashChip, FlashChip, patchEmulatorGaps } from '../src/gaps/index.js';
 
 const SRAM = 0x20000000;
 const FLASH = 0x10000000;
@@ -28,6 +28,10 @@ before(() => {
 });
 
 /** A bare chip with the flash model: `{ mcu, chip, faults, cuts, call(code, args) }`. */
+/**
+ * @param {{ timing?: 'typical' | 'max' | { sectorEraseMs: number, pageProgramMs: number } }}
+ *   [options]
+ */
 function bareChip({ timing = 'typical' } = {}) {
   const mcu = new RP2040();
   patchEmulatorGaps(mcu);
@@ -101,23 +105,38 @@ test('erase: 0xFF over 4 KiB sectors; program: AND over pages; each in the datas
   let before = c.mcu.clock.nanos;
   sequence(c, () => c.call('RE', [SECTOR, 4096, 1 << 16, 0xd8]));
   assert.deepEqual(c.faults, []);
-  assert.ok(c.chip.read(SECTOR, 4096).every((b) => b === 0xff), 'the sector is erased');
+  assert.ok(
+    c.chip.read(SECTOR, 4096).every((b) => b === 0xff),
+    'the sector is erased',
+  );
   assert.equal(c.chip.image[SECTOR - 1], 0x5a, 'the byte before it is not');
   assert.equal(c.chip.image[SECTOR + 4096], 0x5a, 'the next sector is not');
   // W25Q80DV tSE typical: 45 ms (and the core was busy in the ROM all that time).
   assert.ok(Math.abs(c.mcu.clock.nanos - before - 45e6) < 1e4, `${c.mcu.clock.nanos - before} ns`);
   assert.ok(c.mcu.core.cycles >= 45e-3 * 125e6);
 
-  putPage(c.mcu, page((i) => i));
+  putPage(
+    c.mcu,
+    page((i) => i),
+  );
   before = c.mcu.clock.nanos;
   sequence(c, () => c.call('RP', [SECTOR, PAGE_DATA, 256]));
   assert.deepEqual(c.faults, []);
-  assert.deepEqual(c.chip.read(SECTOR, 256), page((i) => i));
+  assert.deepEqual(
+    c.chip.read(SECTOR, 256),
+    page((i) => i),
+  );
   assert.ok(Math.abs(c.mcu.clock.nanos - before - 0.7e6) < 1e4, 'tPP typical 0.7 ms');
   // Programming again can only clear bits: 0x0F over i gives i & 0x0F.
-  putPage(c.mcu, page(() => 0x0f));
+  putPage(
+    c.mcu,
+    page(() => 0x0f),
+  );
   sequence(c, () => c.call('RP', [SECTOR, PAGE_DATA, 256]));
-  assert.deepEqual(c.chip.read(SECTOR, 256), page((i) => i & 0x0f));
+  assert.deepEqual(
+    c.chip.read(SECTOR, 256),
+    page((i) => i & 0x0f),
+  );
   assert.deepEqual(
     c.chip.ops.map(({ routine, offset, bytes }) => [routine, offset, bytes]),
     [
@@ -205,12 +224,21 @@ test('a power cut stops an erase or a program at the chosen byte, half-way throu
   c.chip.cutPowerDuring({ routine: 'erase', bytes: 100, mask: 0x0f });
   sequence(c, () => c.call('RE', [SECTOR, 4096, 1 << 16, 0xd8]));
   assert.equal(c.cuts, 1);
-  assert.ok(c.chip.read(SECTOR, 100).every((b) => b === 0xff), 'the first 100 bytes erased');
+  assert.ok(
+    c.chip.read(SECTOR, 100).every((b) => b === 0xff),
+    'the first 100 bytes erased',
+  );
   assert.equal(c.chip.image[SECTOR + 100], 0x0f, 'byte 100 half erased');
-  assert.ok(c.chip.read(SECTOR + 101, 4096 - 101).every((b) => b === 0), 'the rest untouched');
+  assert.ok(
+    c.chip.read(SECTOR + 101, 4096 - 101).every((b) => b === 0),
+    'the rest untouched',
+  );
 
   const d = bareChip();
-  putPage(d.mcu, page(() => 0x00));
+  putPage(
+    d.mcu,
+    page(() => 0x00),
+  );
   d.chip.cutPowerDuring({ routine: 'program', call: 2, bytes: 10, mask: 0xf0 });
   sequence(d, () => d.call('RP', [SECTOR, PAGE_DATA, 256])); // the first call: whole
   sequence(d, () => d.call('RP', [SECTOR + 256, PAGE_DATA, 256]));
@@ -224,7 +252,10 @@ test('a power cut stops an erase or a program at the chosen byte, half-way throu
 test('worn bits cannot be cleared by a program', () => {
   const c = bareChip();
   c.chip.wearOut(SECTOR + 3, 0x81);
-  putPage(c.mcu, page(() => 0x00));
+  putPage(
+    c.mcu,
+    page(() => 0x00),
+  );
   sequence(c, () => c.call('RP', [SECTOR, PAGE_DATA, 256]));
   assert.deepEqual([...c.chip.read(SECTOR, 5)], [0, 0, 0, 0x81, 0]);
 });

@@ -18,8 +18,8 @@ import {
   plannedFrames,
   poseText,
   widthsNanos,
-} from '../src/e2e-support.js';
-import { HostReference } from '../src/host-reference.js';
+} from '../src/test-support/e2e-support.js';
+import { HostReference } from '../src/test-support/host-reference.js';
 
 let bootrom;
 let reference;
@@ -62,11 +62,20 @@ test('moves started at every offset within a frame show every frame in order, no
     }
     board.runUntil(() => board.nanos >= sendAt, { timeoutMs: 50 });
     const start = widthsNanos(board);
-    const pulses = capture(board, () => {
-      board.sendLine(move.line);
-      assert.equal(board.waitForLine(/^(ok|error:)/), 'ok');
-    }, move.frames.length + 4, settings.frame_hz);
+    const pulses = capture(
+      board,
+      () => {
+        board.sendLine(move.line);
+        assert.equal(board.waitForLine(/^(ok|error:)/), 'ok');
+      },
+      move.frames.length + 4,
+      settings.frame_hz,
+    );
     // A frame computed right at a frame start may be held one period longer (never skipped).
-    assertMoveOnPins(pulses, start, move.frames, { periodNanos: period, servos: settings.servos, maxStretch: 1 });
+    assertMoveOnPins(pulses, start, move.frames, {
+      periodNanos: period,
+      servos: settings.servos,
+      maxStretch: 1,
+    });
   }
 });

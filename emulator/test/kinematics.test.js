@@ -1,6 +1,6 @@
 // `servo`, `limits` and the payload's holding torques through the real firmware binary: the
 // pins, the pose the pulses correspond to, the reach of each axis and the torques, compared
-// with the host build of kinematics-core (src/host-reference.js: its forward kinematics, IK,
+// with the host build of kinematics-core (src/test-support/host-reference.js: its forward kinematics, IK,
 // workspace search and statics), formats and rules from README.md. Refusals (torque-limit,
 // no-pose, servo-limit, ...) are in errors.test.js.
 
@@ -27,9 +27,9 @@ import {
   runFrames,
   status,
   widthsNanos,
-} from '../src/e2e-support.js';
-import { binaryFrame } from '../src/firmware-bench.js';
-import { HostReference } from '../src/host-reference.js';
+} from '../src/test-support/e2e-support.js';
+import { binaryFrame } from '../src/bench/firmware-bench.js';
+import { HostReference } from '../src/test-support/host-reference.js';
 
 // The firmware's numbers (boot ROM floats) vs the host core's (libm), as printed.
 const POSE_TOLERANCE = 0.005; // mm and degrees: the forward kinematics stops within 1e-3 mm
@@ -54,16 +54,28 @@ function solve(pose, settings = defaultSettings()) {
   return answer;
 }
 
-/** The default settings with a payload and (optionally) a rating on every servo. */
+/**
+ * The default settings with a payload and (optionally) a rating on every servo.
+ * @param {{ g?: number, com?: number[], rating?: number | 'off' }} [options]
+ */
 function withPayload({ g = 2000, com = [0, 0, 30], rating = 'off' } = {}) {
   const settings = defaultSettings();
-  settings.payload = { payload_g: g, payload_com_x_mm: com[0], payload_com_y_mm: com[1], payload_com_z_mm: com[2] };
+  settings.payload = {
+    payload_g: g,
+    payload_com_x_mm: com[0],
+    payload_com_y_mm: com[1],
+    payload_com_z_mm: com[2],
+  };
   for (const servo of settings.servos) {
     servo.torque_kgcm = rating;
   }
   return settings;
 }
 
+/**
+ * @param {import('../src/chip/board.js').EmulatedBoard} board
+ * @param {{ g?: number, com?: number[], rating?: number | 'off' }} [options]
+ */
 function setPayload(board, { g = 2000, com = [0, 0, 30], rating = 'off' } = {}) {
   ok(board, `set payload_g ${g}`);
   ['x', 'y', 'z'].forEach((axis, i) => ok(board, `set payload_com_${axis}_mm ${com[i]}`));
@@ -80,7 +92,10 @@ test('servo drives one pin to its pulse, the others hold; status shows the pose 
     if (i === 2) {
       assert.equal(last / 1000, quantisedUs(1620));
     } else {
-      assert.ok(servo.every((p) => p.widthNanos === before[i]), `servo ${i + 1} moved`);
+      assert.ok(
+        servo.every((p) => p.widthNanos === before[i]),
+        `servo ${i + 1} moved`,
+      );
     }
   });
   const lines = ok(board, 'status');
@@ -88,7 +103,11 @@ test('servo drives one pin to its pulse, the others hold; status shows the pose 
   assert.equal(field(lines, 'pulse_us'), '1500.00 1500.00 1620.00 1500.00 1500.00 1500.00');
   assert.equal(field(lines, 'servo_power'), 'on');
   const shown = poseIn(field(lines, 'pulse_pose'));
-  const core = reference.forwardKinematics(defaultSettings(), [1500, 1500, 1620, 1500, 1500, 1500], HOME);
+  const core = reference.forwardKinematics(
+    defaultSettings(),
+    [1500, 1500, 1620, 1500, 1500, 1500],
+    HOME,
+  );
   assert.ok(core.ok, JSON.stringify(core));
   assertClose(shown, core.pose, POSE_TOLERANCE, 'pulse_pose vs the host core');
   // That pose is where moves start from: pose and target show it.
@@ -114,7 +133,10 @@ test('after servo, a move runs from the pose of the pulses, frame by frame as th
   const pulses = capture(board, () => ok(board, `pose ${poseText(to)}`), n + 4);
   // No jump: the first frame is a step along the line from the pose found (the printed pose
   // is within 0.0005 mm of the firmware's, a small fraction of a count).
-  assertMoveOnPins(pulses, start, framesUs, { periodNanos: framePeriodNanos(50), servos: settings.servos });
+  assertMoveOnPins(pulses, start, framesUs, {
+    periodNanos: framePeriodNanos(50),
+    servos: settings.servos,
+  });
   const s = status(board);
   assert.equal(s.state, 'idle');
   assert.ok(!s.lines.some((l) => l.startsWith('pulse_pose')), 'a move ends direct driving');
@@ -128,8 +150,15 @@ test('servo pulses that correspond to no pose: status says so, the pins hold the
   runFrames(board, 3);
   assertPins(board, [1900, 1900, 1500, 1500, 1500, 1500]);
   const lines = ok(board, 'status');
-  assert.match(field(lines, 'pulse_pose'), /^none \(the rods cannot all reach their joints: no pose found in 8 iterations\)$/);
-  const core = reference.forwardKinematics(defaultSettings(), [1900, 1900, 1500, 1500, 1500, 1500], status(board).pose);
+  assert.match(
+    field(lines, 'pulse_pose'),
+    /^none \(the rods cannot all reach their joints: no pose found in 8 iterations\)$/,
+  );
+  const core = reference.forwardKinematics(
+    defaultSettings(),
+    [1900, 1900, 1500, 1500, 1500, 1500],
+    status(board).pose,
+  );
   assert.equal(core.ok, false);
 });
 
@@ -138,7 +167,9 @@ function limits(board) {
   const lines = ok(board, 'limits');
   assert.equal(lines.length, 12, JSON.stringify(lines));
   return lines.map((line) => {
-    const m = line.match(/^(x|y|z|roll|pitch|yaw)([-+]): (\d+\.\d{3}) (mm|deg) to (\w+)=(-?\d+\.\d{3}) \((.*)\)$/);
+    const m = line.match(
+      /^(x|y|z|roll|pitch|yaw)([-+]): (\d+\.\d{3}) (mm|deg) to (\w+)=(-?\d+\.\d{3}) \((.*)\)$/,
+    );
     assert.ok(m, `limits line: ${line}`);
     assert.equal(m[5], m[1]);
     assert.equal(m[4], ['x', 'y', 'z'].includes(m[1]) ? 'mm' : 'deg');
@@ -169,8 +200,14 @@ function assertLimits(got, want, label) {
     // The same search (march, then bisection to 0.01 mm / 1e-4 rad) with ROM floats: the same
     // answer but for a bisection step where a pose lies within rounding of the boundary.
     const tolerance = ['x', 'y', 'z'].includes(line.axis) ? 0.011 : 0.012;
-    assert.ok(Math.abs(line.distance - core.distance) <= tolerance, `${where}: ${line.distance} vs host core ${core.distance}`);
-    assert.ok(Math.abs(line.extreme - core.extreme) <= tolerance, `${where}: to ${line.extreme} vs ${core.extreme}`);
+    assert.ok(
+      Math.abs(line.distance - core.distance) <= tolerance,
+      `${where}: ${line.distance} vs host core ${core.distance}`,
+    );
+    assert.ok(
+      Math.abs(line.extreme - core.extreme) <= tolerance,
+      `${where}: to ${line.extreme} vs ${core.extreme}`,
+    );
     assert.equal(core.limit.kind, 'blocked', where);
     assert.equal(line.stop, stopText(core.limit), where);
   });
@@ -192,7 +229,10 @@ test('limits with a payload and ratings stop where a servo reaches its rating', 
   const board = bootQuiet(bootrom);
   setPayload(board, { rating: 1 });
   const got = limits(board);
-  assert.ok(got.some((l) => l.stop.includes('torque rating')), JSON.stringify(got));
+  assert.ok(
+    got.some((l) => l.stop.includes('torque rating')),
+    JSON.stringify(got),
+  );
   assertLimits(got, reference.limits(withPayload({ rating: 1 }), HOME), 'rated');
 });
 
@@ -205,18 +245,31 @@ test('check and status show the holding torques of the payload, as the host core
   const settings = withPayload({ g: 1500, com });
   const target = [10, 0, 0, 0, 0, 0];
   const lines = ok(board, `check ${poseText(target)}`);
-  assert.deepEqual(lines.map((l) => l.split(':')[0]), ['arm_deg', 'pulse_us', 'torque_kgcm', 'duration_s']);
+  assert.deepEqual(
+    lines.map((l) => l.split(':')[0]),
+    ['arm_deg', 'pulse_us', 'torque_kgcm', 'duration_s'],
+  );
   const torque = (text) => {
     assert.match(text, /^(-?\d+\.\d{3} ){5}-?\d+\.\d{3}$/);
     return text.split(' ').map(Number);
   };
   const [core] = reference.torques(settings, [target]);
-  assertClose(torque(field(lines, 'torque_kgcm')), core.torque_kgcm, TORQUE_TOLERANCE_KGCM, 'check');
+  assertClose(
+    torque(field(lines, 'torque_kgcm')),
+    core.torque_kgcm,
+    TORQUE_TOLERANCE_KGCM,
+    'check',
+  );
   const held = [-3, 4, 2, 1, 2, 3];
   ok(board, `pose ${poseText(held)}`);
   runFrames(board, plannedFrames(HOME, held, settings) + 3);
   const [atHeld] = reference.torques(settings, [held]);
-  assertClose(torque(field(ok(board, 'status'), 'torque_kgcm')), atHeld.torque_kgcm, TORQUE_TOLERANCE_KGCM, 'status');
+  assertClose(
+    torque(field(ok(board, 'status'), 'torque_kgcm')),
+    atHeld.torque_kgcm,
+    TORQUE_TOLERANCE_KGCM,
+    'status',
+  );
 });
 
 test('with ratings, a move whose every checkpoint is within them runs as without', () => {
@@ -231,7 +284,10 @@ test('with ratings, a move whose every checkpoint is within them runs as without
   const framesUs = reference.solve(settings, poses).map((a) => a.pulse_us);
   const start = widthsNanos(board);
   const pulses = capture(board, () => ok(board, `pose ${poseText(to)}`), n + 4);
-  assertMoveOnPins(pulses, start, framesUs, { periodNanos: framePeriodNanos(50), servos: settings.servos });
+  assertMoveOnPins(pulses, start, framesUs, {
+    periodNanos: framePeriodNanos(50),
+    servos: settings.servos,
+  });
 });
 
 test('a stream target that would overload a servo is clamped to the last pose within the ratings', () => {
@@ -252,8 +308,14 @@ test('a stream target that would overload a servo is clamped to the last pose wi
   assert.deepEqual(s.pose.slice(1), [0, 0, 0, 0, 0]);
   assertPins(board, solve(s.pose, settings).pulse_us);
   const [here, beyond] = reference.torques(settings, [s.pose, [x + 10 / 64 + 0.01, 0, 0, 0, 0, 0]]);
-  assert.ok(here.torque_kgcm.every((t) => Math.abs(t) <= 1 + TORQUE_TOLERANCE_KGCM), `${here.torque_kgcm}`);
-  assert.ok(beyond.torque_kgcm.some((t) => Math.abs(t) > 1), `x ${x} was clamped too early`);
+  assert.ok(
+    here.torque_kgcm.every((t) => Math.abs(t) <= 1 + TORQUE_TOLERANCE_KGCM),
+    `${here.torque_kgcm}`,
+  );
+  assert.ok(
+    beyond.torque_kgcm.some((t) => Math.abs(t) > 1),
+    `x ${x} was clamped too early`,
+  );
   for (const servo of board.servos()) {
     assert.ok(servo.widthUs >= 1100 - COUNT_US && servo.widthUs <= 1900 + COUNT_US);
   }

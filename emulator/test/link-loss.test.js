@@ -6,8 +6,13 @@
 import assert from 'node:assert/strict';
 import { before, test } from 'node:test';
 
-import { EmulatedBoard } from '../src/board.js';
-import { bootedBoard, firmwareBootrom, FRAME_MS, steadyPulses } from '../src/e2e-support.js';
+import { EmulatedBoard } from '../src/chip/board.js';
+import {
+  bootedBoard,
+  firmwareBootrom,
+  FRAME_MS,
+  steadyPulses,
+} from '../src/test-support/e2e-support.js';
 
 const COUNT_US = 0.32; // one PWM count
 
@@ -15,7 +20,6 @@ let bootrom;
 before(() => {
   bootrom = firmwareBootrom();
 });
-
 
 function bootedAndPulsing() {
   const board = bootedBoard(bootrom);
@@ -78,16 +82,26 @@ test('after link_timeout_s of silence the platform eases home at the configured 
     startedMs >= TIMEOUT_S * 1000 && startedMs <= TIMEOUT_S * 1000 + 3 * FRAME_MS,
     `started home ${startedMs} ms after the last command`,
   );
-  assert.ok(board.lines.some((l) => /^# link lost\b/.test(l)), 'no link-lost notice');
+  assert.ok(
+    board.lines.some((l) => /^# link lost\b/.test(l)),
+    'no link-lost notice',
+  );
 
   // Gradually, at the configured speed: distance / speed, to a frame or two.
   const arrived = samples.find((s) => s.ms - silentFrom > startedMs && same(s.us, home));
   assert.ok(arrived, 'never arrived home');
   const tookMs = arrived.ms - silentFrom - startedMs;
   const expectedMs = (DISTANCE_MM / SPEED_MM_S) * 1000;
-  assert.ok(Math.abs(tookMs - expectedMs) <= 2 * FRAME_MS, `took ${tookMs} ms, expected ${expectedMs}`);
-  t.diagnostic(`home run started ${startedMs.toFixed(1)} ms after the last command, took ${tookMs.toFixed(1)} ms`);
-  const way = samples.filter((s) => s.ms - silentFrom >= startedMs - FRAME_MS && s.ms <= arrived.ms);
+  assert.ok(
+    Math.abs(tookMs - expectedMs) <= 2 * FRAME_MS,
+    `took ${tookMs} ms, expected ${expectedMs}`,
+  );
+  t.diagnostic(
+    `home run started ${startedMs.toFixed(1)} ms after the last command, took ${tookMs.toFixed(1)} ms`,
+  );
+  const way = samples.filter(
+    (s) => s.ms - silentFrom >= startedMs - FRAME_MS && s.ms <= arrived.ms,
+  );
   assert.ok(way.length >= expectedMs / FRAME_MS, `${way.length} frames on the way`);
   for (let servo = 0; servo < 6; servo++) {
     const total = Math.abs(home[servo] - up[servo]);
@@ -167,7 +181,6 @@ test('link loss never comes before link_timeout_s, wherever in a frame the last 
   assert.ok(latestMs <= 100 + FRAME_MS + 10, `link loss ${latestMs} ms after the line`);
 });
 
-
 test('lines on UART0 or USB keep the link alive; silence on both is link loss', () => {
   const board = new EmulatedBoard({ bootrom, usb: true });
   board.boot();
@@ -192,6 +205,12 @@ test('lines on UART0 or USB keep the link alive; silence on both is link loss', 
   // Then neither: home, and both links hear why.
   board.runMs(1500);
   assert.deepEqual(steadyPulses(board), home);
-  assert.ok(board.lines.some((l) => /^# link lost: no command for 1 s/.test(l)), 'UART0 told');
-  assert.ok(board.usb.lines.some((l) => /^# link lost: no command for 1 s/.test(l)), 'USB told');
+  assert.ok(
+    board.lines.some((l) => /^# link lost: no command for 1 s/.test(l)),
+    'UART0 told',
+  );
+  assert.ok(
+    board.usb.lines.some((l) => /^# link lost: no command for 1 s/.test(l)),
+    'USB told',
+  );
 });

@@ -10,14 +10,14 @@
 // the boot ROM with interrupts masked, 45 ms in the emulator's typical W25Q080 timing): the
 // last test checks that each long pass is exactly a save's, and that the pins hold meanwhile.
 // Pass lengths are CPU cycles between watchdog feeds (the loop feeds it at the top of every
-// pass; emulator/src/loop-meter.js), which the emulator counts the same on every run.
+// pass; emulator/src/chip/loop-meter.js), which the emulator counts the same on every run.
 
 import assert from 'node:assert/strict';
 import { before, test } from 'node:test';
 
-import { EmulatedBoard, FINAL_REPLY } from '../src/board.js';
-import { bootQuiet, firmwareBootrom, FRAME_MS, ok } from '../src/e2e-support.js';
-import { binaryFrame } from '../src/firmware-bench.js';
+import { EmulatedBoard, FINAL_REPLY } from '../src/chip/board.js';
+import { bootQuiet, firmwareBootrom, FRAME_MS, ok } from '../src/test-support/e2e-support.js';
+import { binaryFrame } from '../src/bench/firmware-bench.js';
 
 /** The documented bound on a main-loop pass: 1 ms at 125 MHz. */
 const PASS_BOUND_CYCLES = 125_000;
@@ -65,7 +65,10 @@ function assertNoStall(board, what) {
     longestPassCycles < PASS_BOUND_CYCLES,
     `${what}: a main-loop pass took ${longestPassCycles} cycles (${(longestPassCycles / 125e3).toFixed(2)} ms)`,
   );
-  assert.ok(longestHandlerCycles < PASS_BOUND_CYCLES / 10, `${what}: a handler took ${longestHandlerCycles} cycles`);
+  assert.ok(
+    longestHandlerCycles < PASS_BOUND_CYCLES / 10,
+    `${what}: a handler took ${longestHandlerCycles} cycles`,
+  );
   assert.ok(board.frames.frames > 0, `${what}: no frames seen`);
   assert.equal(
     board.frames.missed,
@@ -105,7 +108,10 @@ test('twenty moves in flight at 921,600 baud', () => {
   measure(board);
   const lines = Array.from({ length: 20 }, (_, i) => `move x=${i % 2 ? '-10.1' : '-10.2'}`);
   const replies = pipeline(board, lines, { timeoutMs: 10_000 });
-  assert.deepEqual(replies, lines.map(() => 'ok'));
+  assert.deepEqual(
+    replies,
+    lines.map(() => 'ok'),
+  );
   board.runMs(200);
   assertNoStall(board, 'twenty moves');
 });
@@ -136,7 +142,11 @@ test('every long command class back to back at 333 Hz, echo on: no stall, replie
     ['pose 0 0 0 0 0 0', 'ok'], // a jump, 40 path checks
     ['check 30 -12 -13.5 5 -13 28', 'ok'],
   ];
-  const replies = pipeline(board, lines.map(([l]) => l), { timeoutMs: 10_000 });
+  const replies = pipeline(
+    board,
+    lines.map(([l]) => l),
+    { timeoutMs: 10_000 },
+  );
   replies.forEach((reply, i) => {
     assert.ok(reply.startsWith(lines[i][1]), `${lines[i][0]}: ${reply}`);
   });
@@ -170,7 +180,11 @@ test('servo (its pose found), limits, holding torques and torque-checked paths a
     ['set rod_mm 121', 'ok'], // with pulses set by servo: their pose found again
     ['defaults', 'ok'],
   ];
-  const replies = pipeline(board, lines.map(([l]) => l), { timeoutMs: 20_000 });
+  const replies = pipeline(
+    board,
+    lines.map(([l]) => l),
+    { timeoutMs: 20_000 },
+  );
   replies.forEach((reply, i) => {
     assert.ok(reply.startsWith(lines[i][1]), `${lines[i][0]}: ${reply}`);
   });
@@ -180,7 +194,13 @@ test('servo (its pose found), limits, holding torques and torque-checked paths a
 
 test('stream targets clamped to the torque ratings, a pose per pass: no stall', () => {
   const board = quietBoard();
-  for (const line of ['set speed_mm_s off', 'set speed_deg_s off', 'set payload_g 2000', 'set payload_com_z_mm 30', 'set servos.torque_kgcm 1']) {
+  for (const line of [
+    'set speed_mm_s off',
+    'set speed_deg_s off',
+    'set payload_g 2000',
+    'set payload_com_z_mm 30',
+    'set servos.torque_kgcm 1',
+  ]) {
     ok(board, line);
   }
   ok(board, 'set baud 921600');
@@ -189,7 +209,16 @@ test('stream targets clamped to the torque ratings, a pose per pass: no stall', 
   // Every frame beyond the ratings (x from 5 to 25 mm): each clamped by bisection, one pose
   // with its torques per pass; frames come faster than that, the newest wins.
   for (let i = 0; i < 40; i++) {
-    board.sendBytes(binaryFrame([32768 + Math.round((0.2 + i * 0.02) * 32768), 32768, 32768, 32768, 32768, 32768]));
+    board.sendBytes(
+      binaryFrame([
+        32768 + Math.round((0.2 + i * 0.02) * 32768),
+        32768,
+        32768,
+        32768,
+        32768,
+        32768,
+      ]),
+    );
     board.runMs(2);
   }
   board.runMs(50);
@@ -208,7 +237,10 @@ test('the return home after link loss is checked in slices too', () => {
   // every one of its 400 frames, a few poses per pass.
   board.waitForLine(/^# link lost: no command for 8 s/, { timeoutMs: 9000 });
   board.runMs(500);
-  assert.match(ok(board, 'status').find((l) => l.startsWith('state:')), /returning home/);
+  assert.match(
+    ok(board, 'status').find((l) => l.startsWith('state:')),
+    /returning home/,
+  );
   assertNoStall(board, 'link loss');
 });
 
@@ -265,12 +297,18 @@ test('both links busy at once at 333 Hz: UART0 and USB pipelining long commands,
     finalsFrom(board, uartFrom).length >= moves.length &&
     board.usb.lines.slice(usbFrom).filter((l) => FINAL_REPLY.test(l)).length >= usbLines.length;
   assert.ok(board.runUntil(done, { timeoutMs: 10_000 }));
-  assert.deepEqual(finalsFrom(board, uartFrom), moves.map(() => 'ok'));
+  assert.deepEqual(
+    finalsFrom(board, uartFrom),
+    moves.map(() => 'ok'),
+  );
   // USB: each line echoed after a prompt, then its data, then its ok, in order.
   const usbText = board.usb.lines.slice(usbFrom);
   const echoes = usbText.filter((l) => l.startsWith('> ')).map((l) => l.slice(2));
   assert.deepEqual(echoes, usbLines);
-  assert.deepEqual(usbText.filter((l) => FINAL_REPLY.test(l)), usbLines.map(() => 'ok'));
+  assert.deepEqual(
+    usbText.filter((l) => FINAL_REPLY.test(l)),
+    usbLines.map(() => 'ok'),
+  );
   board.runMs(100);
   assertNoStall(board, 'both links');
 });

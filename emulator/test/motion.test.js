@@ -1,7 +1,7 @@
 // Smooth motion measured on the pins of the real firmware: straight lines in pose space at the
 // configured speeds, one IK per servo frame, no glitches, and paths that leave the workspace
 // refused before anything moves. Frame counts are computed here from the documented rule
-// (README.md "Motion"); per-frame pulses come from the host core (src/host-reference.js).
+// (README.md "Motion"); per-frame pulses come from the host core (src/test-support/host-reference.js).
 
 import assert from 'node:assert/strict';
 import { before, test } from 'node:test';
@@ -29,8 +29,8 @@ import {
   runFrames,
   status,
   widthsNanos,
-} from '../src/e2e-support.js';
-import { HostReference } from '../src/host-reference.js';
+} from '../src/test-support/e2e-support.js';
+import { HostReference } from '../src/test-support/host-reference.js';
 
 let bootrom;
 let reference;
@@ -44,7 +44,10 @@ function expectedFrames(from, to, settings) {
   const n = plannedFrames(from, to, settings);
   const answers = reference.solve(settings, framePoses(from, to, n));
   return answers.map((answer, k) => {
-    assert.ok(answer.ok, `reference refuses frame ${k + 1} of ${from} -> ${to}: ${JSON.stringify(answer)}`);
+    assert.ok(
+      answer.ok,
+      `reference refuses frame ${k + 1} of ${from} -> ${to}: ${JSON.stringify(answer)}`,
+    );
     return answer.pulse_us;
   });
 }
@@ -147,15 +150,27 @@ test('a target whose straight path leaves the workspace is refused before anythi
   // The target alone is fine (check looks at the path from the current pose too).
   const held = widthsNanos(board);
   let reply;
-  const pulses = capture(board, () => {
-    reply = refused(board, `pose ${poseText(to)}`, 'path-blocked');
-  }, 25);
+  const pulses = capture(
+    board,
+    () => {
+      reply = refused(board, `pose ${poseText(to)}`, 'path-blocked');
+    },
+    25,
+  );
   assertConstant(pulses, held, 'after the refused move');
   const m = reply.match(/blocked (\d+\.\d)% of the way: (.*); nothing moved$/);
   assert.ok(m, reply);
-  assert.ok(Math.abs(Number(m[1]) / 100 - fraction) < 0.03, `${m[1]}% vs the core's first failure at ${(fraction * 100).toFixed(1)}%`);
+  assert.ok(
+    Math.abs(Number(m[1]) / 100 - fraction) < 0.03,
+    `${m[1]}% vs the core's first failure at ${(fraction * 100).toFixed(1)}%`,
+  );
   if (cause.code === 'servo-limit') {
-    assert.match(m[2], new RegExp(`^servo ${cause.servo} would need \\d+\\.\\d{2} us, outside its limits 1100\\.00\\.\\.1900\\.00 us$`));
+    assert.match(
+      m[2],
+      new RegExp(
+        `^servo ${cause.servo} would need \\d+\\.\\d{2} us, outside its limits 1100\\.00\\.\\.1900\\.00 us$`,
+      ),
+    );
   } else {
     assert.equal(cause.code, 'unreachable');
     assert.match(m[2], new RegExp(`^leg ${cause.leg} cannot reach`));
@@ -189,7 +204,10 @@ test('a new target while moving starts a new straight line from where the platfo
   const z0 = (s2.pose[2] - t * redirect[2]) / (1 - t);
   assert.ok(t > 0 && t < 1 && z0 > 0 && z0 < 10, `redirected from z = ${z0}, t = ${t}`);
   const u = s1.pose[0] / redirect[0];
-  assert.ok(Math.abs(s1.pose[2] - (z0 + u * (redirect[2] - z0))) < 0.003, `${s1.pose} on the line from z0 = ${z0}`);
+  assert.ok(
+    Math.abs(s1.pose[2] - (z0 + u * (redirect[2] - z0))) < 0.003,
+    `${s1.pose} on the line from z0 = ${z0}`,
+  );
   for (const p of [s1.pose, s2.pose]) {
     assert.deepEqual([p[1], p[3], p[4], p[5]], [0, 0, 0, 0]);
   }

@@ -9,7 +9,7 @@ import assert from 'node:assert/strict';
 import { existsSync } from 'node:fs';
 import { before, test } from 'node:test';
 
-import { BENCH_ELF, benchPoses, runIkBench, runKinematicsBench } from '../src/ik-bench.js';
+import { BENCH_ELF, benchPoses, runIkBench, runKinematicsBench } from '../src/bench/ik-bench.js';
 
 /** Largest pulse difference accepted, us (the PWM resolution is 0.32 us). */
 const PULSE_TOL_US = 0.01;
@@ -56,7 +56,7 @@ test('fsin leaves the cosine in r1; the ROM and the fixed-point routines match l
 test('the rest of the kinematics on the chip agrees with the f64 reference', () => {
   // Forward kinematics from the reference's pulses back to their pose, a frame's step away
   // (the bound of host-tests/tests/forward.rs), the Jacobian against finite differences, the
-  // torques against an f64 solve (see emulator/src/ik-bench.js).
+  // torques against an f64 solve (see emulator/src/bench/ik-bench.js).
   const { fk, jacobian, torque, limits } = kinematics;
   assert.equal(fk.failures + jacobian.failures + torque.failures, 0);
   assert.ok(fk.iterations.max <= 8, `${fk.iterations.max} iterations`);

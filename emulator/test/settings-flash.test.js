@@ -1,5 +1,5 @@
 // Settings saved in flash, through the real firmware ELF and the flash model (gap 7 of
-// src/rp2040js-gaps.js: the boot ROM's erase and program as the W25Q080 does them, its rules
+// src/gaps/flash.js: the boot ROM's erase and program as the W25Q080 does them, its rules
 // enforced): `save`, power cycles (a fresh chip, the same flash), power cuts at every step of a
 // save, a damaged copy, a thousand saves, and what the firmware does meanwhile (the pins hold,
 // the watchdog stays quiet). What to expect comes from README.md ("Saving the settings") and
@@ -8,7 +8,7 @@
 import assert from 'node:assert/strict';
 import { before, test } from 'node:test';
 
-import { BANNER, EmulatedBoard } from '../src/board.js';
+import { BANNER, EmulatedBoard } from '../src/chip/board.js';
 import {
   assertConstant,
   assertPins,
@@ -22,7 +22,7 @@ import {
   runFrames,
   status,
   widthsNanos,
-} from '../src/e2e-support.js';
+} from '../src/test-support/e2e-support.js';
 
 let bootrom;
 before(() => {
@@ -53,7 +53,10 @@ function crc32(bytes) {
   return (crc ^ 0xffffffff) >>> 0;
 }
 
-/** What a sector holds: 'erased', `{ sequence }` of a good record, or 'unusable'. */
+/**
+ * What a sector holds: 'erased', `{ sequence }` of a good record, or 'unusable'.
+ * @returns {any}
+ */
 function sectorState(board, sector) {
   const { offset } = board.settingsStorage;
   const page = board.flash.read(offset + sector * SECTOR_BYTES, 256);
@@ -124,7 +127,10 @@ test('save keeps the settings across a power cycle; the pins start at the saved 
   ok(board, 'save');
   const saved = config(board);
   assert.equal(saved.saved, 'yes');
-  assert.deepEqual(board.flash.ops.map((o) => o.routine), ['erase', 'program']);
+  assert.deepEqual(
+    board.flash.ops.map((o) => o.routine),
+    ['erase', 'program'],
+  );
 
   const warnings = powerCycle(board).filter((l) => l.startsWith('# warning'));
   assert.deepEqual(warnings, [], 'the last save loads without a word');
@@ -140,7 +146,10 @@ test('save keeps the settings across a power cycle; the pins start at the saved 
   // saved frame rate.
   runFrames(board, 5, 100);
   assertPins(board, [1520, 1500, 1500, 1480.64, 1500, 1500].map(quantisedUs));
-  assert.ok(board.servos().every((s) => Math.abs(s.periodUs - 10_000) < 1), 'saved frame rate');
+  assert.ok(
+    board.servos().every((s) => Math.abs(s.periodUs - 10_000) < 1),
+    'saved frame rate',
+  );
 
   // defaults, then save: the factory settings at the next power-up.
   ok(board, 'defaults');
@@ -208,7 +217,10 @@ for (const cut of CUTS) {
     const fresh = config(board).settings;
     board.cutPowerDuring({ routine: cut.routine, bytes: cut.bytes, mask: cut.mask ?? 0 });
     board.sendLine('save');
-    assert.ok(board.runUntil(() => board.powerCycles.length > 0, { timeoutMs: 1000 }), 'no cut');
+    assert.ok(
+      board.runUntil(() => board.powerCycles.length > 0, { timeoutMs: 1000 }),
+      'no cut',
+    );
     assert.ok(board.powerCycles[0].cut);
     const bootLines = boot(board);
     const after = config(board);
@@ -267,7 +279,10 @@ test('a flipped bit in the newest copy is found; the other copy loads, with the 
       ['program', offset + SECTOR_BYTES],
     ],
   );
-  assert.deepEqual(powerCycle(board).filter((l) => l.startsWith('# warning')), []);
+  assert.deepEqual(
+    powerCycle(board).filter((l) => l.startsWith('# warning')),
+    [],
+  );
 });
 
 test('1,000 saves in a row alternate between the two sectors, each erasing only the older', () => {
@@ -313,11 +328,15 @@ test('during a save at the maximum erase time the pins hold and the watchdog is 
   board.runMs(500);
   const widths = widthsNanos(board);
   let elapsedMs;
-  const pulses = capture(board, () => {
-    const start = board.millis;
-    ok(board, 'save');
-    elapsedMs = board.millis - start;
-  }, 3);
+  const pulses = capture(
+    board,
+    () => {
+      const start = board.millis;
+      ok(board, 'save');
+      elapsedMs = board.millis - start;
+    },
+    3,
+  );
   assert.ok(elapsedMs > 403, `the save took ${elapsedMs} ms`);
   // Every pulse during the save had the held width and came exactly one frame after the last.
   assertConstant(pulses, widths, 'during the save');
@@ -343,7 +362,10 @@ test('the watchdog has time for a flash slower than its datasheet, and 500 ms ag
   board.runMs(50);
   const stalledAt = board.millis;
   board.mcu.core.enabledInterrupts = 0;
-  assert.ok(board.runUntil(() => board.resets.length > 0, { timeoutMs: 600 }), 'no reset');
+  assert.ok(
+    board.runUntil(() => board.resets.length > 0, { timeoutMs: 600 }),
+    'no reset',
+  );
   const after = board.resets[0].nanos / 1e6 - stalledAt;
   assert.ok(after <= 500, `reset ${after} ms after the stall`);
 });
@@ -385,7 +407,10 @@ test('over USB, lines sent during a save wait in the host: none lost, every one 
   board.loop.reset();
   // 700 bytes of lines after the save: more than the bus carries before the write begins.
   board.sendBytes(`save\n${'status\n'.repeat(100)}`);
-  assert.ok(board.runUntil(() => board.flash.ops.length > 0, { timeoutMs: 100 }), 'no erase');
+  assert.ok(
+    board.runUntil(() => board.flash.ops.length > 0, { timeoutMs: 100 }),
+    'no erase',
+  );
   // The erase is done (45 ms): the firmware took nothing meanwhile, the host still holds bytes.
   assert.ok(board.usb.unsent > 0, 'the host had nothing left to send during the erase');
   const finals = () => board.lines.slice(from).filter((l) => /^(ok|error:)/.test(l));
@@ -394,8 +419,11 @@ test('over USB, lines sent during a save wait in the host: none lost, every one 
   board.runMs(20);
   assert.deepEqual(finals(), Array(101).fill('ok'));
   assert.ok(!board.lines.slice(from).some((l) => l.startsWith('# warning')), 'nothing lost');
-  assert.deepEqual(board.flash.ops.map((op) => op.routine), ['erase', 'program']);
-  assert.equal(board.loop.longPasses.length, 1, 'the save\'s pass, the only long one');
+  assert.deepEqual(
+    board.flash.ops.map((op) => op.routine),
+    ['erase', 'program'],
+  );
+  assert.equal(board.loop.longPasses.length, 1, "the save's pass, the only long one");
   board.lineCursor = board.lines.length; // the replies above were read
   // Saved, as UART0 sees it too.
   assert.equal(config(board).saved, 'yes');

@@ -5,7 +5,7 @@
 import assert from 'node:assert/strict';
 import { before, test } from 'node:test';
 
-import { EmulatedBoard } from '../src/board.js';
+import { EmulatedBoard } from '../src/chip/board.js';
 
 import {
   assertConstant,
@@ -26,8 +26,8 @@ import {
   runFrames,
   status,
   widthsNanos,
-} from '../src/e2e-support.js';
-import { HostReference } from '../src/host-reference.js';
+} from '../src/test-support/e2e-support.js';
+import { HostReference } from '../src/test-support/host-reference.js';
 
 let bootrom;
 let reference;
@@ -129,13 +129,46 @@ test('servo trim, direction, rate and limits change the pins as the host core pr
   assertPins(board, solve(settings, pose), 'defaults');
 
   // Each change applies at once to the pose being held.
+  /** @type {[string, (settings: any) => void][]} */
   const steps = [
-    ['servo2.trim_us 1520', (s) => { s.servos[1].trim_us = 1520; }],
-    ['servo3.dir normal', (s) => { s.servos[2].dir = 'normal'; }],
-    ['servo4.rate_us_rad 600', (s) => { s.servos[3].rate_us_rad = 600; }],
-    ['servos.trim_us 1490', (s) => { s.servos.forEach((servo) => { servo.trim_us = 1490; }); }],
-    ['servo1.dir normal', (s) => { s.servos[0].dir = 'normal'; }],
-    ['servo6.rate_us_rad 450.5', (s) => { s.servos[5].rate_us_rad = 450.5; }],
+    [
+      'servo2.trim_us 1520',
+      (s) => {
+        s.servos[1].trim_us = 1520;
+      },
+    ],
+    [
+      'servo3.dir normal',
+      (s) => {
+        s.servos[2].dir = 'normal';
+      },
+    ],
+    [
+      'servo4.rate_us_rad 600',
+      (s) => {
+        s.servos[3].rate_us_rad = 600;
+      },
+    ],
+    [
+      'servos.trim_us 1490',
+      (s) => {
+        s.servos.forEach((servo) => {
+          servo.trim_us = 1490;
+        });
+      },
+    ],
+    [
+      'servo1.dir normal',
+      (s) => {
+        s.servos[0].dir = 'normal';
+      },
+    ],
+    [
+      'servo6.rate_us_rad 450.5',
+      (s) => {
+        s.servos[5].rate_us_rad = 450.5;
+      },
+    ],
   ];
   for (const [args, change] of steps) {
     const before = widthsNanos(board);
@@ -160,7 +193,10 @@ test('servo trim, direction, rate and limits change the pins as the host core pr
   });
   moveTo(board, pose, deep, settings);
   assertPins(board, solve(settings, deep), 'beyond the old limits');
-  assert.ok(solve(settings, deep).some((us) => us > 1900 || us < 1100), 'the pose needs the wider limits');
+  assert.ok(
+    solve(settings, deep).some((us) => us > 1900 || us < 1100),
+    'the pose needs the wider limits',
+  );
   // Every measured pulse respects the new limits.
   for (const servo of board.servos()) {
     assert.ok(servo.widthUs >= 900 && servo.widthUs <= 2100);
@@ -178,16 +214,25 @@ test('geometry settings change the IK: geometry output and pins follow the host 
   const data = ok(board, 'geometry');
   assert.ok(data.includes(`home_height_mm (h0): ${core.h0_mm.toFixed(3)}`), JSON.stringify(data));
   assert.ok(data.includes('rod_mm (s): 125.000'));
-  data.filter((line) => line.startsWith('leg ')).forEach((line, i) => {
-    const alpha0 = Number(line.match(/alpha0_deg=(\S+)/)[1]);
-    assert.ok(Math.abs(alpha0 - core.legs[i].alpha0_deg) < 0.0011, line);
-  });
+  data
+    .filter((line) => line.startsWith('leg '))
+    .forEach((line, i) => {
+      const alpha0 = Number(line.match(/alpha0_deg=(\S+)/)[1]);
+      assert.ok(Math.abs(alpha0 - core.legs[i].alpha0_deg) < 0.0011, line);
+    });
   // At home every servo still gets its trim; elsewhere the new geometry's pulses.
-  assertPins(board, settings.servos.map((servo) => servo.trim_us), 'home');
+  assertPins(
+    board,
+    settings.servos.map((servo) => servo.trim_us),
+    'home',
+  );
   const pose = [-4, 5, 3, -2, 3, -6];
   moveTo(board, HOME, pose, settings);
   assertPins(board, solve(settings, pose), 'new geometry');
-  assert.notDeepEqual(solve(defaultSettings(), pose).map(Math.round), solve(settings, pose).map(Math.round));
+  assert.notDeepEqual(
+    solve(defaultSettings(), pose).map(Math.round),
+    solve(settings, pose).map(Math.round),
+  );
 });
 
 test('frame_hz: every pin changes period at a frame boundary, no pulse cut or stretched', () => {
@@ -195,7 +240,12 @@ test('frame_hz: every pin changes period at a frame boundary, no pulse cut or st
   ok(board, 'pose 2 1 3 1 2 3');
   runFrames(board, 10);
   const widths = widthsNanos(board);
-  for (const [from, to] of [[50, 200], [200, 333], [333, 50], [50, 123]]) {
+  for (const [from, to] of [
+    [50, 200],
+    [200, 333],
+    [333, 50],
+    [50, 123],
+  ]) {
     const pulses = capture(board, () => ok(board, `set frame_hz ${to}`), 6, Math.min(from, to));
     const oldPeriod = framePeriodNanos(from);
     const newPeriod = framePeriodNanos(to);
@@ -205,7 +255,11 @@ test('frame_hz: every pin changes period at a frame boundary, no pulse cut or st
       const switchAt = periods.indexOf(newPeriod);
       assert.ok(switchAt >= 0, `servo ${i + 1} never reached ${to} Hz: ${periods}`);
       periods.forEach((period, j) => {
-        assert.equal(period, j < switchAt ? oldPeriod : newPeriod, `servo ${i + 1} period ${j} (${from} -> ${to} Hz)`);
+        assert.equal(
+          period,
+          j < switchAt ? oldPeriod : newPeriod,
+          `servo ${i + 1} period ${j} (${from} -> ${to} Hz)`,
+        );
       });
       assert.ok(periods.length - switchAt >= 3);
     });
@@ -222,7 +276,10 @@ test('set baud: the board listens at the new rate once the ok has left; config s
     // The reply ("ok" CR LF) takes 4 byte times at the old rate; by then the board has switched
     // (a host may talk at the new rate as soon as it has read the ok).
     board.runMs((4 * 10 * 1000) / old);
-    assert.ok(Math.abs(board.baud - baud) / baud < 0.02, `UART0 at ${board.baud} baud, want ${baud}`);
+    assert.ok(
+      Math.abs(board.baud - baud) / baud < 0.02,
+      `UART0 at ${board.baud} baud, want ${baud}`,
+    );
     // A line is paced at the new rate: n bytes take n byte times, and so do the n bytes of
     // the reply on the way back (echo is off: the reply starts once the line is in). The
     // line's last bytes (107 is not a multiple of the firmware's FIFO level of 8) wait in the
@@ -272,7 +329,15 @@ test('defaults restores every setting except baud and echo, and the pins follow'
   const settings = defaultSettings();
   const board = bootQuiet(bootrom);
   const pristine = config(board);
-  for (const args of ['frame_hz 100', 'speed_mm_s 10', 'servos.trim_us 1510', 'servo2.dir reversed', 'rod_mm 122', 'link_timeout_s 60', 'baud 57600']) {
+  for (const args of [
+    'frame_hz 100',
+    'speed_mm_s 10',
+    'servos.trim_us 1510',
+    'servo2.dir reversed',
+    'rod_mm 122',
+    'link_timeout_s 60',
+    'baud 57600',
+  ]) {
     ok(board, `set ${args}`);
   }
   board.runMs(1);

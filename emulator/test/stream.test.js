@@ -24,9 +24,9 @@ import {
   refused,
   runFrames,
   status,
-} from '../src/e2e-support.js';
-import { binaryFrame } from '../src/firmware-bench.js';
-import { HostReference } from '../src/host-reference.js';
+} from '../src/test-support/e2e-support.js';
+import { binaryFrame } from '../src/bench/firmware-bench.js';
+import { HostReference } from '../src/test-support/host-reference.js';
 
 let bootrom;
 let reference;
@@ -77,7 +77,10 @@ test('a step: the pins follow within the speed and acceleration limits, settle o
   const started = zs.findIndex((z) => z > 0.05);
   const arrived = zs.findIndex((z) => Math.abs(z - 6) < 0.02);
   assert.ok(started >= 0 && arrived > started, `never arrived: ${zs.map((z) => z.toFixed(2))}`);
-  assert.ok(arrived - started >= 11, `arrived in ${arrived - started} frames: faster than the limits allow`);
+  assert.ok(
+    arrived - started >= 11,
+    `arrived in ${arrived - started} frames: faster than the limits allow`,
+  );
   // Settled exactly on the host core's pulses for the frame's pose.
   assertPins(board, solve(carried(target)));
   const s = status(board);
@@ -105,7 +108,13 @@ test('a 60 Hz staircase becomes smooth motion at the frame rate within the limit
     hz,
   );
   const zs = heaveTrace(pulses, read);
-  assertWithinLimits(zs, { hz, speed: 40, accel: 400, top: carried([0, 0, 6, 0, 0, 0])[2], label: 'staircase' });
+  assertWithinLimits(zs, {
+    hz,
+    speed: 40,
+    accel: 400,
+    top: carried([0, 0, 6, 0, 0, 0])[2],
+    label: 'staircase',
+  });
   // Smooth: at 200 Hz the pins change on most frames while the stairs come (not only every
   // 60 Hz step).
   const moving = zs.slice(0, 70);
@@ -140,7 +149,10 @@ test('garbage, truncated frames and random bytes mid-stream: resynchronised, cou
     [2, 1, 0, 1, 0, 0],
     [0, 2, 2, 0, 1, 2],
   ];
-  const allowed = [defaultSettings().servos.map((s) => s.trim_us), ...good.map((p) => solve(carried(p)))];
+  const allowed = [
+    defaultSettings().servos.map((s) => s.trim_us),
+    ...good.map((p) => solve(carried(p))),
+  ];
   const bytes = [];
   const truncated = frameFor([9, 9, 9, 9, 9, 9]).subarray(0, 9); // a frame cut short
   bytes.push(...frameFor(good[0]), ...truncated, ...frameFor(good[1]));
@@ -152,10 +164,9 @@ test('garbage, truncated frames and random bytes mid-stream: resynchronised, cou
   const pulses = capture(board, () => board.sendBytes(Buffer.from(bytes)), 3);
   // The noise held a CR: the bytes before it were a (spoiled) line, refused as such, once;
   // frames get no reply.
-  assert.deepEqual(
-    board.lines.slice(linesBefore),
-    ['error:bad-character byte 0xA5 is not printable ASCII; the line was discarded'],
-  );
+  assert.deepEqual(board.lines.slice(linesBefore), [
+    'error:bad-character byte 0xA5 is not printable ASCII; the line was discarded',
+  ]);
   board.lineCursor = board.lines.length;
   // Every width on the pins belongs to home or to one of the good frames, never to the bad.
   const periods = Math.min(...pulses.map((servo) => servo.length));
@@ -239,14 +250,20 @@ test('e-stop in the middle of a stream: frozen, power off, frames refused until 
   );
   pulses.forEach((servo, i) => {
     for (const p of servo) {
-      assert.ok(Math.abs(p.widthNanos / 1000 - frozen[i]) <= COUNT_US, `servo ${i + 1} moved after the e-stop`);
+      assert.ok(
+        Math.abs(p.widthNanos / 1000 - frozen[i]) <= COUNT_US,
+        `servo ${i + 1} moved after the e-stop`,
+      );
     }
   });
   assert.equal(board.pinOutput(16), false, 'servo power off on e-stop');
   const s = status(board);
   assert.equal(s['e-stop'], 'open');
   assert.equal(s.stream.refused, 5);
-  assert.ok(s.lines.some((l) => l.startsWith('emergency stop: input open')), 'the notice');
+  assert.ok(
+    s.lines.some((l) => l.startsWith('emergency stop: input open')),
+    'the notice',
+  );
   refused(board, 'reset', 'e-stop');
   board.drivePin(15, false);
   runFrames(board, 1);
@@ -292,7 +309,9 @@ test('a stream that is clamped on every frame keeps every main-loop pass under 1
   board.frames.reset();
   // 300 frames/s, their targets alternately far above and far below reach: each clamped.
   for (let k = 0; k < 90; k++) {
-    board.sendBytes(binaryFrame([32768 + (k % 7) * 200, 32768, k % 2 ? 0 : 65535, 32768, 32768, 32768]));
+    board.sendBytes(
+      binaryFrame([32768 + (k % 7) * 200, 32768, k % 2 ? 0 : 65535, 32768, 32768, 32768]),
+    );
     board.runMs(1000 / 300);
   }
   const { longestPassCycles } = board.loop;
@@ -345,7 +364,10 @@ test('a stream on USB beside commands on UART0: both served, frames keep the lin
     if (k % 10 === 5) {
       const { reply, lines } = uart.request('status');
       assert.equal(reply, 'ok');
-      assert.ok(lines.some((l) => l === '# state: streaming (pass-through)'), JSON.stringify(lines));
+      assert.ok(
+        lines.some((l) => l === '# state: streaming (pass-through)'),
+        JSON.stringify(lines),
+      );
       uartReplies += 1;
     }
     board.runMs(10);

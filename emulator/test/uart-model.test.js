@@ -1,4 +1,4 @@
-// The PL011 model of src/rp2040js-gaps.js (gap 2) on its own: a bare RP2040 with no firmware,
+// The PL011 model of src/gaps/uart.js (gap 2) on its own: a bare RP2040 with no firmware,
 // UART0 programmed and read through its registers as firmware would, bytes sent by the paced
 // host (gap 3), time advanced on the emulated clock. Expected figures come from the RP2040
 // datasheet (4.2, UART) and the PL011 TRM: 10 bit periods per 8N1 byte, FIFO levels of
@@ -9,7 +9,7 @@ import { test } from 'node:test';
 
 import { RP2040 } from 'rp2040js';
 
-import { PacedUartInput, patchEmulatorGaps } from '../src/rp2040js-gaps.js';
+import { PacedUartInput, patchEmulatorGaps } from '../src/gaps/index.js';
 
 const UARTDR = 0x00;
 const UARTRSR = 0x04;
@@ -53,7 +53,7 @@ function bitNanos(baud) {
 
 /** A bare chip with UART0 set up like firmware does: 8N1, FIFOs on, `baud`, levels `ifls`. */
 function bareUart({ baud = 115200, ifls = 0x12, imsc = 0 } = {}) {
-  const mcu = new RP2040();
+  const mcu = /** @type {import('../src/gaps/index.js').Mcu} */ (new RP2040());
   patchEmulatorGaps(mcu);
   const uart = mcu.uart[0];
   const chip = {
@@ -184,7 +184,13 @@ for (const baud of [115200, 921600]) {
 }
 
 test('RX levels 1/8, 1/4, 1/2, 3/4, 7/8 of 32 entries: 4, 8, 16, 24, 28', () => {
-  for (const [select, level] of [[0, 4], [1, 8], [2, 16], [3, 24], [4, 28]]) {
+  for (const [select, level] of [
+    [0, 4],
+    [1, 8],
+    [2, 16],
+    [3, 24],
+    [4, 28],
+  ]) {
     const chip = bareUart({ ifls: select << 3 });
     chip.host.send(Buffer.alloc(32, 0x55));
     chip.runTo((level - 1) * 86_800 + 1);

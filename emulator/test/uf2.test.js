@@ -12,9 +12,9 @@ import { dirname, join } from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { after, before, test } from 'node:test';
 
-import { DEFAULT_ELF, EmulatedBoard } from '../src/board.js';
-import { loadSegments } from '../src/elf.js';
-import { firmwareBootrom, ok, runFrames, status } from '../src/e2e-support.js';
+import { DEFAULT_ELF, EmulatedBoard } from '../src/chip/board.js';
+import { loadSegments } from '../src/chip/elf.js';
+import { firmwareBootrom, ok, runFrames, status } from '../src/test-support/e2e-support.js';
 
 const REPO = join(dirname(fileURLToPath(import.meta.url)), '..', '..');
 const UF2_MAGIC_START0 = 0x0a324655;
@@ -30,7 +30,7 @@ before(() => {
   bootrom = firmwareBootrom();
   dir = mkdtempSync(join(tmpdir(), 'hexapod-uf2-'));
   const file = join(dir, 'hexapod-fw.uf2');
-  execFileSync('cargo', ['run', '-q', '-p', 'cli', '--', 'uf2', DEFAULT_ELF, '-o', file], {
+  execFileSync('cargo', ['run', '-q', '-p', 'hexapod', '--', 'uf2', DEFAULT_ELF, '-o', file], {
     cwd: REPO,
     stdio: ['ignore', 'ignore', 'inherit'],
   });
@@ -84,7 +84,10 @@ test('the firmware UF2: 256-byte pages, RP2040 family, numbered, every ELF byte 
       image.delete(address + j);
     });
   }
-  assert.ok([...image.values()].every((b) => b === 0), 'the rest is zero padding');
+  assert.ok(
+    [...image.values()].every((b) => b === 0),
+    'the rest is zero padding',
+  );
 });
 
 test('the chip boots from the UF2 and works as from the ELF', () => {

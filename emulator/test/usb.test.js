@@ -1,5 +1,5 @@
 // The Pico's USB port as a serial port (README.md, "Serial links"), through the real firmware ELF
-// and a USB host on the emulated chip's USB controller (src/rp2040js-gaps.js, gaps 9-12): it
+// and a USB host on the emulated chip's USB controller (src/gaps/usb.js, gaps 9-12): it
 // enumerates as a CDC ACM device, speaks the protocol of UART0 beside UART0 (each link its own
 // line, echo and prompt; replies to the asking link, notices to every open link), never loses
 // input, greets each opening of the port, and neither a closed port, an unplugged cable nor a
@@ -10,7 +10,7 @@ import assert from 'node:assert/strict';
 import { readFileSync } from 'node:fs';
 import { before, test } from 'node:test';
 
-import { BANNER, EmulatedBoard, FINAL_REPLY } from '../src/board.js';
+import { BANNER, EmulatedBoard, FINAL_REPLY } from '../src/chip/board.js';
 import {
   assertPins,
   bootQuietUsb,
@@ -18,14 +18,14 @@ import {
   firmwareBootrom,
   FRAME_MS,
   ok,
-} from '../src/e2e-support.js';
-import { HostReference } from '../src/host-reference.js';
+} from '../src/test-support/e2e-support.js';
+import { HostReference } from '../src/test-support/host-reference.js';
 
 /** The documented bound on a main-loop pass: 1 ms at 125 MHz (main-loop.test.js). */
 const PASS_BOUND_CYCLES = 125_000;
 /** The firmware's USB receive queue holds fewer bytes than this (README.md, "Serial links"). */
 const RX_QUEUE_BYTES = 1024;
-/** A UART framing error on a received byte (PL011 UARTDR bit 8; rp2040js-gaps.js, gap 2). */
+/** A UART framing error on a received byte (PL011 UARTDR bit 8; src/gaps/uart.js, gap 2). */
 const UART_FRAMING_ERROR = 1 << 8;
 
 // USB 2.0 chapter 9 and the CDC 1.2 / PSTN 1.2 class codes.
@@ -115,15 +115,27 @@ test('the USB port enumerates as a CDC ACM serial port named as the firmware', (
   // bulk OUT endpoint of 64 bytes: what /dev/ttyACM0 and COMx drivers bind to.
   const list = descriptors(board.usb.configurationDescriptor);
   const interfaces = list.filter((d) => d.type === DESCRIPTOR_INTERFACE).map((d) => d.bytes);
-  assert.ok(interfaces.some((i) => i[5] === CLASS_CDC && i[6] === SUBCLASS_ACM), 'ACM');
+  assert.ok(
+    interfaces.some((i) => i[5] === CLASS_CDC && i[6] === SUBCLASS_ACM),
+    'ACM',
+  );
   const data = list.findIndex(
     (d) => d.type === DESCRIPTOR_INTERFACE && d.bytes[5] === CLASS_CDC_DATA,
   );
   assert.ok(data >= 0, 'a CDC data interface');
   const endpoints = list.slice(data + 1, data + 3).map((d) => d.bytes);
-  assert.deepEqual(endpoints.map((e) => e[1]), [DESCRIPTOR_ENDPOINT, DESCRIPTOR_ENDPOINT]);
-  assert.deepEqual(endpoints.map((e) => e[3] & 3), [ENDPOINT_BULK, ENDPOINT_BULK]);
-  assert.deepEqual(endpoints.map((e) => e[4] | (e[5] << 8)), [64, 64]);
+  assert.deepEqual(
+    endpoints.map((e) => e[1]),
+    [DESCRIPTOR_ENDPOINT, DESCRIPTOR_ENDPOINT],
+  );
+  assert.deepEqual(
+    endpoints.map((e) => e[3] & 3),
+    [ENDPOINT_BULK, ENDPOINT_BULK],
+  );
+  assert.deepEqual(
+    endpoints.map((e) => e[4] | (e[5] << 8)),
+    [64, 64],
+  );
   assert.deepEqual(endpoints.map((e) => e[2] & 0x80).sort(), [0, 0x80], 'one IN, one OUT');
 });
 
@@ -199,7 +211,7 @@ test('UART0 and USB at once: each its own lines; replies to the asker, notices t
   assert.deepEqual(
     finals(board.usb, usbFrom),
     ['ok', 'ok', 'ok'],
-    'USB: geometry, set echo off, set link_timeout_s; nothing of UART0\'s',
+    "USB: geometry, set echo off, set link_timeout_s; nothing of UART0's",
   );
 });
 
@@ -316,7 +328,10 @@ test('unplugging and plugging in again: UART0 and the frames go on, the port com
   assert.match(board.usb.lines[before], BANNER, JSON.stringify(board.usb.lines.slice(before - 2)));
   const { reply, lines } = board.usb.request('status');
   assert.equal(reply, 'ok');
-  assert.ok(lines.some((l) => /^# state: moving /.test(l)), JSON.stringify(lines));
+  assert.ok(
+    lines.some((l) => /^# state: moving /.test(l)),
+    JSON.stringify(lines),
+  );
   assert.equal(board.request('stop').reply, 'ok');
   assertNoStall(board, 'unplugged and back');
 });
@@ -351,7 +366,7 @@ test('a host that stops reading holds up neither UART0, nor the frames, nor its 
   assert.equal(board.request('status').reply, 'ok');
 });
 
-test('baud is UART0\'s: set on USB it switches UART0, and USB goes on as before', () => {
+test("baud is UART0's: set on USB it switches UART0, and USB goes on as before", () => {
   const board = bothLinks();
   const { reply, lines } = board.usb.request('set baud 230400');
   assert.equal(reply, 'ok');
@@ -362,7 +377,7 @@ test('baud is UART0\'s: set on USB it switches UART0, and USB goes on as before'
   assert.equal(board.request('status').reply, 'ok', 'UART0 talks at the new rate');
   const config = board.usb.request('config').lines;
   assert.ok(config.includes('# baud: 230400'), JSON.stringify(config));
-  assert.ok(config.includes('# echo: on'), 'the USB link\'s own echo');
+  assert.ok(config.includes('# echo: on'), "the USB link's own echo");
   assert.equal(board.usb.request('set echo off').reply, 'ok');
   assert.ok(board.request('config').lines.includes('# echo: on'), 'UART0 keeps its echo');
   // A terminal opening the USB port at some rate (SET_LINE_CODING) changes nothing: UART0

@@ -7,11 +7,11 @@ import assert from 'node:assert/strict';
 import { request } from 'node:http';
 import { before, test } from 'node:test';
 
-import { ListingReader, listingsChangedBy } from '../src/board-listings.js';
-import { EmulatedBoard } from '../src/board.js';
-import { bootedBoard, firmwareBootrom } from '../src/e2e-support.js';
-import { SharedInput } from '../src/shared-input.js';
-import { startViewServer } from '../src/view-server.js';
+import { ListingReader, listingsChangedBy } from '../src/view-server/board-listings.js';
+import { EmulatedBoard } from '../src/chip/board.js';
+import { bootedBoard, firmwareBootrom } from '../src/test-support/e2e-support.js';
+import { SharedInput } from '../src/view-server/shared-input.js';
+import { startViewServer } from '../src/view-server/view-server.js';
 
 let bootrom;
 before(() => {
@@ -23,7 +23,7 @@ function read(lines, reader = new ListingReader()) {
   return lines.map((line) => reader.line(line)).filter(Boolean);
 }
 
-test('the board\'s geometry and config listings are read as the README documents them', () => {
+test("the board's geometry and config listings are read as the README documents them", () => {
   const board = bootedBoard(bootrom);
   const { lines } = board.request('geometry', { timeoutMs: 2000 });
   const [geometry] = read(lines);
@@ -33,7 +33,10 @@ test('the board\'s geometry and config listings are read as the README documents
   assert.equal(g.armMm, 20);
   assert.equal(g.rodMm, 120);
   assert.equal(g.homeHeightMm, 118.458);
-  assert.deepEqual(g.legs.map((leg) => leg.leg), [1, 2, 3, 4, 5, 6]);
+  assert.deepEqual(
+    g.legs.map((leg) => leg.leg),
+    [1, 2, 3, 4, 5, 6],
+  );
   for (const leg of g.legs) {
     assert.equal(leg.alpha0Deg, -0.252);
     // Shafts on the 75 mm base circle, joints on the 60 mm platform circle.
@@ -91,7 +94,11 @@ test('which commands change which listing', () => {
 /** A link that records what is sent on it. */
 function recordingLink() {
   const sent = [];
-  return { sent, text: () => Buffer.concat(sent).toString('latin1'), sendBytes: (b) => sent.push(Buffer.from(b)) };
+  return {
+    sent,
+    text: () => Buffer.concat(sent).toString('latin1'),
+    sendBytes: (b) => sent.push(Buffer.from(b)),
+  };
 }
 
 test('a page line waits while the terminal has a half-typed line, then follows it whole', () => {
@@ -112,7 +119,7 @@ test('a page line waits while the terminal has a half-typed line, then follows i
   assert.match(link.text(), /home\nstatus\n$/);
 });
 
-test('the terminal\'s line editing is followed as the firmware does it', () => {
+test("the terminal's line editing is followed as the firmware does it", () => {
   const link = recordingLink();
   const input = new SharedInput(link);
   const lines = [];
@@ -131,7 +138,12 @@ test('the terminal\'s line editing is followed as the firmware does it', () => {
   assert.equal(input.heldLines, 0);
 });
 
-/** An HTTP request to the view server: resolves to `{ status, body }`. */
+/**
+ * An HTTP request to the view server: resolves to `{ status, body }`.
+ * @param {number} port
+ * @param {{ method?: string, path?: string, headers?: Record<string, string>, body?: string }}
+ *   [options]
+ */
 function http(port, { method = 'GET', path = '/', headers = {}, body } = {}) {
   return new Promise((resolve, reject) => {
     const req = request({ host: '127.0.0.1', port, method, path, headers }, (res) => {
@@ -168,6 +180,10 @@ function events(port) {
   });
   req.end();
   return {
+    /**
+     * @param {string} event
+     * @param {{ board?: EmulatedBoard }} [options]
+     */
     async next(event, { board } = {}) {
       for (;;) {
         const index = queue.findIndex((m) => m.event === event);
@@ -189,58 +205,111 @@ function events(port) {
 // after a generous minute, instead of hanging the run.)
 const STREAM_TEST = { timeout: 60_000 };
 
-test('the view server streams pins and listings, takes typed lines, and refuses strangers', STREAM_TEST, async (t) => {
-  const board = new EmulatedBoard({ bootrom });
-  const input = new SharedInput(board);
-  const view = await startViewServer({ board, input, port: 0 });
-  t.after(() => view.close('test over'));
-  board.boot(); // the banner: the view asks for the listings
-  board.runMs(200);
-  const stream = events(view.port);
-  t.after(() => stream.close());
+test(
+  'the view server streams pins and listings, takes typed lines, and refuses strangers',
+  STREAM_TEST,
+  async (t) => {
+    const board = new EmulatedBoard({ bootrom });
+    const input = new SharedInput(board);
+    const view = await startViewServer({ board, input, port: 0 });
+    t.after(() => view.close('test over'));
+    board.boot(); // the banner: the view asks for the listings
+    board.runMs(200);
+    const stream = events(view.port);
+    t.after(() => stream.close());
 
-  assert.equal((await stream.next('hello')).link, 'terminal');
-  assert.equal((await stream.next('geometry', { board })).armMm, 20);
-  assert.equal((await stream.next('config', { board })).servos.length, 6);
-  // The output comes in batches at most 60 a second of wall time: a loaded machine may cut it
-  // anywhere, so gather batches until the banner and the view's question have both come.
-  let uart = '';
-  while (!/hexapod control[^]*> geometry/.test(uart)) {
-    uart += (await stream.next('uart', { board })).text;
-    assert.ok(uart.length < 100_000, `no banner then '> geometry' in ${JSON.stringify(uart.slice(0, 300))}`);
-  }
-  const home = await stream.next('pins', { board });
-  assert.deepEqual(home.live, [true, true, true, true, true, true]);
+    assert.equal((await stream.next('hello')).link, 'terminal');
+    assert.equal((await stream.next('geometry', { board })).armMm, 20);
+    assert.equal((await stream.next('config', { board })).servos.length, 6);
+    // The output comes in batches at most 60 a second of wall time: a loaded machine may cut it
+    // anywhere, so gather batches until the banner and the view's question have both come.
+    let uart = '';
+    while (!/hexapod control[^]*> geometry/.test(uart)) {
+      uart += (await stream.next('uart', { board })).text;
+      assert.ok(
+        uart.length < 100_000,
+        `no banner then '> geometry' in ${JSON.stringify(uart.slice(0, 300))}`,
+      );
+    }
+    const home = await stream.next('pins', { board });
+    assert.deepEqual(home.live, [true, true, true, true, true, true]);
 
-  // A typed line reaches the board like typing; a geometry setting makes the view ask again.
-  const json = { 'Content-Type': 'application/json' };
-  const sent = await http(view.port, { method: 'POST', path: '/uart', headers: json, body: '{"line":"set rod_mm 125"}' });
-  assert.deepEqual([sent.status, JSON.parse(sent.body)], [200, { held: false }]);
-  assert.deepEqual((await stream.next('asking', { board })).listings, ['geometry']);
-  assert.equal((await stream.next('geometry', { board })).rodMm, 125);
+    // A typed line reaches the board like typing; a geometry setting makes the view ask again.
+    const json = { 'Content-Type': 'application/json' };
+    const sent = await http(view.port, {
+      method: 'POST',
+      path: '/uart',
+      headers: json,
+      body: '{"line":"set rod_mm 125"}',
+    });
+    assert.deepEqual([sent.status, JSON.parse(sent.body)], [200, { held: false }]);
+    assert.deepEqual((await stream.next('asking', { board })).listings, ['geometry']);
+    assert.equal((await stream.next('geometry', { board })).rodMm, 125);
 
-  // Pins follow a move (heave up: odd servos' pulses shrink, README golden table).
-  await http(view.port, { method: 'POST', path: '/uart', headers: json, body: '{"line":"pose 0 0 5 0 0 0"}' });
-  board.runMs(500);
-  let pins;
-  do {
-    pins = await stream.next('pins', { board });
-  } while (pins.widthNs[0] > 1450_000);
-  assert.ok(pins.widthNs[1] > 1550_000, `${pins.widthNs}`);
+    // Pins follow a move (heave up: odd servos' pulses shrink, README golden table).
+    await http(view.port, {
+      method: 'POST',
+      path: '/uart',
+      headers: json,
+      body: '{"line":"pose 0 0 5 0 0 0"}',
+    });
+    board.runMs(500);
+    let pins;
+    do {
+      pins = await stream.next('pins', { board });
+    } while (pins.widthNs[0] > 1450_000);
+    assert.ok(pins.widthNs[1] > 1550_000, `${pins.widthNs}`);
 
-  // Strangers: another origin, a form post, a foreign Host (DNS rebinding), files outside.
-  const origin = { ...json, Origin: 'http://evil.example' };
-  assert.equal((await http(view.port, { method: 'POST', path: '/uart', headers: origin, body: '{"line":"home"}' })).status, 403);
-  assert.equal((await http(view.port, { method: 'POST', path: '/uart', headers: { 'Content-Type': 'text/plain' }, body: 'home' })).status, 415);
-  assert.equal((await http(view.port, { method: 'POST', path: '/uart', headers: json, body: '{"line":"a\\nb"}' })).status, 400);
-  assert.equal((await http(view.port, { path: '/', headers: { Host: 'evil.example' } })).status, 403);
-  assert.equal((await http(view.port, { path: '/view/..%2F..%2Fpackage.json' })).status, 404);
-  assert.equal((await http(view.port, { path: '/vendor/three/package.json' })).status, 404);
-  assert.equal((await http(view.port, { path: '/view/main.js' })).status, 200);
-  assert.equal((await http(view.port, { path: '/vendor/three/build/three.module.js' })).status, 200);
+    // Strangers: another origin, a form post, a foreign Host (DNS rebinding), files outside.
+    const origin = { ...json, Origin: 'http://evil.example' };
+    assert.equal(
+      (
+        await http(view.port, {
+          method: 'POST',
+          path: '/uart',
+          headers: origin,
+          body: '{"line":"home"}',
+        })
+      ).status,
+      403,
+    );
+    assert.equal(
+      (
+        await http(view.port, {
+          method: 'POST',
+          path: '/uart',
+          headers: { 'Content-Type': 'text/plain' },
+          body: 'home',
+        })
+      ).status,
+      415,
+    );
+    assert.equal(
+      (
+        await http(view.port, {
+          method: 'POST',
+          path: '/uart',
+          headers: json,
+          body: '{"line":"a\\nb"}',
+        })
+      ).status,
+      400,
+    );
+    assert.equal(
+      (await http(view.port, { path: '/', headers: { Host: 'evil.example' } })).status,
+      403,
+    );
+    assert.equal((await http(view.port, { path: '/view/..%2F..%2Fpackage.json' })).status, 404);
+    assert.equal((await http(view.port, { path: '/vendor/three/package.json' })).status, 404);
+    assert.equal((await http(view.port, { path: '/view/main.js' })).status, 200);
+    assert.equal(
+      (await http(view.port, { path: '/vendor/three/build/three.module.js' })).status,
+      200,
+    );
 
-  // Stopping tells the page why.
-  const stopped = stream.next('stopped');
-  await view.close('the emulator stopped for a test');
-  assert.equal((await stopped).reason, 'the emulator stopped for a test');
-});
+    // Stopping tells the page why.
+    const stopped = stream.next('stopped');
+    await view.close('the emulator stopped for a test');
+    assert.equal((await stopped).reason, 'the emulator stopped for a test');
+  },
+);

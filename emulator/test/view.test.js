@@ -21,7 +21,7 @@ import {
   startRunner,
   typeLine,
   waitForPose,
-} from '../src/view-browser.js';
+} from '../src/test-support/view-browser.js';
 
 /** The plate's top colour (emulator/view/scene.js, PLATFORM_COLOUR). */
 const PLATE_RGB = [0xf2, 0x8c, 0x28];
@@ -101,17 +101,29 @@ test('the 3D view shows the pose the pins carry, tilts with a roll, and says whe
   assert.ok(level && level.columns > 100, `the plate is on screen: ${JSON.stringify(level)}`);
   assert.ok(Math.abs(level.left - level.right) <= 2, `level plate: ${JSON.stringify(level)}`);
 
-  await t.test('pose 0 0 10 0 0 0: the readout shows it within 0.05 mm and 0.05 degree', async () => {
-    await typeLine(page, 'pose 0 0 10 0 0 0');
-    await waitForPose(page, [0, 0, 10, 0, 0, 0], 0.05, SETTLE_TIMEOUT_MS);
-    // Still there once the move has ended (the platform holds the pose).
-    await page.waitForTimeout(500);
-    const pose = await readPose(page);
-    [0, 0, 10, 0, 0, 0].forEach((v, i) => assert.ok(Math.abs(pose[i] - v) <= 0.05, `pose ${pose}`));
-    // The page's line went over the one UART: the shell's terminal saw its echo and reply too.
-    await page.waitForFunction(() => /pose 0 0 10 0 0 0\s+ok/.test(document.querySelector('#terminal').innerText), null, { timeout: SETTLE_TIMEOUT_MS });
-    assert.match(runner.stdoutText, /pose 0 0 10 0 0 0\r?\nok/);
-  });
+  await t.test(
+    'pose 0 0 10 0 0 0: the readout shows it within 0.05 mm and 0.05 degree',
+    async () => {
+      await typeLine(page, 'pose 0 0 10 0 0 0');
+      await waitForPose(page, [0, 0, 10, 0, 0, 0], 0.05, SETTLE_TIMEOUT_MS);
+      // Still there once the move has ended (the platform holds the pose).
+      await page.waitForTimeout(500);
+      const pose = await readPose(page);
+      [0, 0, 10, 0, 0, 0].forEach((v, i) =>
+        assert.ok(Math.abs(pose[i] - v) <= 0.05, `pose ${pose}`),
+      );
+      // The page's line went over the one UART: the shell's terminal saw its echo and reply too.
+      await page.waitForFunction(
+        () =>
+          /pose 0 0 10 0 0 0\s+ok/.test(
+            /** @type {HTMLElement} */ (document.querySelector('#terminal')).innerText,
+          ),
+        null,
+        { timeout: SETTLE_TIMEOUT_MS },
+      );
+      assert.match(runner.stdoutText, /pose 0 0 10 0 0 0\r?\nok/);
+    },
+  );
 
   await t.test('a roll tilts the platform in the picture, +y side up', async () => {
     await typeLine(page, 'pose 0 0 0 8 0 0');
@@ -120,8 +132,13 @@ test('the 3D view shows the pose the pins carry, tilts with a roll, and says whe
     const rolled = await plateEdges(page, decoder);
     assert.ok(rolled && rolled.columns > 100, JSON.stringify(rolled));
     // Rows count downwards: the right (+y) edge is higher, i.e. at a smaller row.
-    assert.ok(rolled.left - rolled.right >= 10, `rolled plate: ${JSON.stringify({ level, rolled })}`);
-    t.diagnostic(`plate top edge left/right, px: level ${level.left}/${level.right}, rolled ${rolled.left}/${rolled.right}`);
+    assert.ok(
+      rolled.left - rolled.right >= 10,
+      `rolled plate: ${JSON.stringify({ level, rolled })}`,
+    );
+    t.diagnostic(
+      `plate top edge left/right, px: level ${level.left}/${level.right}, rolled ${rolled.left}/${rolled.right}`,
+    );
   });
 
   await t.test('when the emulator stops the page shows it, without a script error', async () => {
@@ -130,7 +147,8 @@ test('the 3D view shows the pose the pins carry, tilts with a roll, and says whe
     const { code } = await runner.exited;
     assert.equal(code, 0, runner.stderrText);
     await page.waitForFunction(
-      () => /stopped/.test(document.getElementById('link-state').textContent) &&
+      () =>
+        /stopped/.test(document.getElementById('link-state').textContent) &&
         !document.getElementById('overlay').hidden,
       null,
       { timeout: SETTLE_TIMEOUT_MS },

@@ -15,8 +15,8 @@
 import assert from 'node:assert/strict';
 import { before, test } from 'node:test';
 
-import { BANNER, EmulatedBoard, WDSEL_FULL_RESET } from '../src/board.js';
-import { firmwareBootrom, FRAME_MS, steadyPulses } from '../src/e2e-support.js';
+import { BANNER, EmulatedBoard, WDSEL_FULL_RESET } from '../src/chip/board.js';
+import { firmwareBootrom, FRAME_MS, steadyPulses } from '../src/test-support/e2e-support.js';
 
 const WATCHDOG_MS = 500; // the firmware's documented watchdog period
 const HANG_ADDRESS = 0x20041000; // SRAM bank 5: outside the firmware's 256 KiB RAM region
@@ -26,7 +26,6 @@ let bootrom;
 before(() => {
   bootrom = firmwareBootrom();
 });
-
 
 /** Boots with resets enabled, measures the power-on pulses, then moves away from home. */
 function movedBoard() {
@@ -65,13 +64,20 @@ for (const [name, stall] of Object.entries(stalls)) {
     assert.deepEqual(board.pulseWidthsUs(), moved);
 
     // The last feed was at most one main-loop pass (well under a frame) before the stall.
-    assert.ok(board.runUntil(() => board.resets.length > 0, { timeoutMs: 3 * FRAME_MS }), 'no reset');
+    assert.ok(
+      board.runUntil(() => board.resets.length > 0, { timeoutMs: 3 * FRAME_MS }),
+      'no reset',
+    );
     const resetAfterMs = board.resets[0].nanos / 1e6 - stalledAt;
     assert.ok(
       resetAfterMs > WATCHDOG_MS - FRAME_MS && resetAfterMs <= WATCHDOG_MS,
       `reset ${resetAfterMs} ms after the stall`,
     );
-    assert.equal(board.resets[0].wdsel & WDSEL_FULL_RESET, WDSEL_FULL_RESET, 'WDSEL: not a full reset');
+    assert.equal(
+      board.resets[0].wdsel & WDSEL_FULL_RESET,
+      WDSEL_FULL_RESET,
+      'WDSEL: not a full reset',
+    );
 
     // The firmware starts again: banner, then home pulses on every servo.
     board.waitForLine(BANNER, { timeoutMs: 100 });

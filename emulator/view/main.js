@@ -1,4 +1,4 @@
-// The live view's page: connects to the runner's event stream (emulator/src/view-server.js),
+// The live view's page: connects to the runner's event stream (emulator/src/view-server/view-server.js),
 // runs every pin update through the project's kinematics (kinematics.js, WebAssembly) and shows
 // the result: the 3D picture (scene.js), the readout (pulses in us, arm angles in deg, the pose
 // in mm and deg) and the board's serial output (terminal.js). When the emulator stops it says
@@ -32,7 +32,9 @@ const terminal = new PageTerminal({
   note: $('send-note'),
 });
 buildPinRows();
-for (const button of document.querySelectorAll('[data-camera]')) {
+for (const button of /** @type {NodeListOf<HTMLElement>} */ (
+  document.querySelectorAll('[data-camera]')
+)) {
   button.addEventListener('click', () => scene.setCamera(button.dataset.camera));
 }
 
@@ -85,8 +87,10 @@ function connect() {
 
 function showStopped() {
   linkState('stopped', 'emulator stopped');
-  overlay(`The emulator stopped: ${state.stopped}. The picture shows the last pins seen. ` +
-    'Start ./dev run again; this page reconnects by itself.');
+  overlay(
+    `The emulator stopped: ${state.stopped}. The picture shows the last pins seen. ` +
+      'Start ./dev run again; this page reconnects by itself.',
+  );
 }
 
 function linkState(kind, text) {
@@ -186,11 +190,15 @@ function describe(frame) {
   const note = waiting ? ` (asking the board for ${waiting})` : '';
   switch (frame.status) {
     case 'solved':
-      return `solved in ${frame.iterations} Newton iteration${frame.iterations === 1 ? '' : 's'}` +
-        `; rods close within ${frame.rodErrorMm.toFixed(4)} mm${note}`;
+      return (
+        `solved in ${frame.iterations} Newton iteration${frame.iterations === 1 ? '' : 's'}` +
+        `; rods close within ${frame.rodErrorMm.toFixed(4)} mm${note}`
+      );
     case 'no solution':
-      return `no solution: no pose closes all six rods at these arm angles ` +
-        `(drawn red at the last pose found)${note}`;
+      return (
+        `no solution: no pose closes all six rods at these arm angles ` +
+        `(drawn red at the last pose found)${note}`
+      );
     case 'no geometry':
       return state.geometryError
         ? `the board's geometry was refused by the core: ${state.geometryError}`

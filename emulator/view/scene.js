@@ -149,8 +149,16 @@ export class PlatformScene {
 
     const servoMaterial = new MeshStandardMaterial({ color: 0x29465c, roughness: 0.6 });
     const hubMaterial = new MeshStandardMaterial({ color: 0xdfe4ea, roughness: 0.4 });
-    const armMaterial = new MeshStandardMaterial({ color: 0xe9ecef, metalness: 0.3, roughness: 0.35 });
-    const rodMaterial = new MeshStandardMaterial({ color: ROD_COLOUR, metalness: 0.5, roughness: 0.3 });
+    const armMaterial = new MeshStandardMaterial({
+      color: 0xe9ecef,
+      metalness: 0.3,
+      roughness: 0.35,
+    });
+    const rodMaterial = new MeshStandardMaterial({
+      color: ROD_COLOUR,
+      metalness: 0.5,
+      roughness: 0.3,
+    });
     const jointMaterial = new MeshStandardMaterial({ color: 0x90a4ae, roughness: 0.4 });
     const arms = [];
     const rods = [];

@@ -1,7 +1,7 @@
 // The page's terminal: xterm.js shows everything the board sends on its serial link (the same
 // bytes the shell's terminal or pty gets: everyone on the link sees every reply), and an input
 // line sends whole lines (POST /uart); the runner injects them as UART receive bytes, after any
-// line half-typed in the shell's terminal (emulator/src/shared-input.js). Up/Down recall
+// line half-typed in the shell's terminal (emulator/src/view-server/shared-input.js). Up/Down recall
 // earlier lines.
 
 import { Terminal } from '@xterm/xterm';

@@ -138,6 +138,8 @@ pub struct Serial {
     tx_buffer: Deque<u8, TX_BUFFER_BYTES>,
     baud: u32,
     peripheral_clock: HertzU32,
+    /// Line errors counted when [`Serial::take_new_line_errors`] last saw a change.
+    rx_line_errors_seen: u32,
 }
 
 impl Serial {
@@ -194,6 +196,7 @@ impl Serial {
             tx_buffer: Deque::new(),
             baud,
             peripheral_clock,
+            rx_line_errors_seen: 0,
         })
     }
 
@@ -254,8 +257,19 @@ impl Serial {
         })
     }
 
+    /// If the receiver has seen framing, parity, break or hardware-FIFO overrun errors since
+    /// the last call: how many so far (for the log).
+    pub fn take_new_line_errors(&mut self) -> Option<u32> {
+        let errors = self.rx_line_errors();
+        if errors == self.rx_line_errors_seen {
+            return None;
+        }
+        self.rx_line_errors_seen = errors;
+        Some(errors)
+    }
+
     /// Framing, parity, break and hardware-FIFO overrun errors seen by the receiver.
-    pub fn rx_line_errors(&self) -> u32 {
+    fn rx_line_errors(&self) -> u32 {
         critical_section::with(|cs| {
             SHARED
                 .borrow_ref(cs)

@@ -12,16 +12,20 @@
 //! rate_deg_s = 4
 //! ```
 //!
-//! Every key and its range is in [`KEYS`], with what it does in `cue::words::key_meaning`;
+//! Every key and its range is in [`KEYS`], with what it does in [`key_meaning`];
 //! a key left out is the default ([`CueSettings::default`]). Units are those of the names.
+
+use std::path::Path;
 
 use toml::de::{DeTable, DeValue};
 
 use super::washout::Tuning;
-use super::words::CueProblem;
+use crate::build_file;
+use crate::error::{CueKeyError, Error, KeyError};
+use crate::files::read_text;
 
-/// The table's name.
-pub const TABLE: &str = "cue";
+/// The table's name (the build file leaves it to `hexapod cue`).
+pub const TABLE: &str = build_file::CUE_TABLE;
 
 /// The axes' sub-tables, in pose order.
 pub const AXES: [&str; 6] = ["x", "y", "z", "roll", "pitch", "yaw"];
@@ -92,6 +96,18 @@ const fn key(name: &'static str, min: f64, max: f64, kind: KeyKind) -> KeySpec {
 }
 
 use KeyKind::{Number, Sign, Whole};
+
+impl KeySpec {
+    /// The error for a value out of this key's range.
+    fn range_error(&self) -> CueKeyError {
+        let (min, max) = (self.min, self.max);
+        match self.kind {
+            Number => CueKeyError::Number { min, max },
+            Whole => CueKeyError::Whole { min, max },
+            Sign => CueKeyError::Sign,
+        }
+    }
+}
 
 /// Every key, in the order `init` would write them.
 pub const KEYS: [KeySpec; 46] = [
@@ -182,11 +198,11 @@ impl CueSettings {
     }
 
     /// Sets one key (its name under `cue.`): refuses unknown keys and values out of range.
-    pub fn set(&mut self, name: &str, value: Option<f64>) -> Result<(), CueProblem> {
+    pub fn set(&mut self, name: &str, value: Option<f64>) -> Result<(), CueKeyError> {
         let spec = KEYS
             .iter()
             .find(|k| k.name == name)
-            .ok_or(CueProblem::UnknownKey)?;
+            .ok_or(CueKeyError::Unknown)?;
         let ok = value.filter(|v| {
             (spec.min..=spec.max).contains(v)
                 && match spec.kind {
@@ -196,7 +212,7 @@ impl CueSettings {
                 }
         });
         let Some(v) = ok else {
-            return Err(CueProblem::KeyRange(*spec));
+            return Err(spec.range_error());
         };
         if let Some(prefix) = name.strip_suffix(".order") {
             // A whole number in 1..=3 (its range says).
@@ -207,15 +223,29 @@ impl CueSettings {
             }
             return Ok(());
         }
-        let slot = self.slot(name).ok_or(CueProblem::UnknownKey)?;
+        let slot = self.slot(name).ok_or(CueKeyError::Unknown)?;
         *slot = v;
         Ok(())
     }
 }
 
+/// The `[cue]` table of a build file (the rest of it checked as `apply` checks it), or the
+/// defaults without one.
+pub fn read(build: Option<&Path>) -> Result<CueSettings, Error> {
+    match build {
+        Some(path) => {
+            let text = read_text(path)?;
+            let file = path.display().to_string();
+            build_file::parse(&file, &text)?;
+            parse(&file, &text)
+        }
+        None => Ok(CueSettings::default()),
+    }
+}
+
 /// Reads the `[cue]` table of a build file's text (the rest is `build_file`'s); `file` names
 /// it in errors. No table: the defaults.
-pub fn parse(file: &str, text: &str) -> Result<CueSettings, CueProblem> {
+pub fn parse(file: &str, text: &str) -> Result<CueSettings, Error> {
     let line_of = |offset: usize| text[..offset.min(text.len())].matches('\n').count() + 1;
     let mut settings = CueSettings::default();
     // A file that is not TOML is build_file's to report; here it has no [cue] table.
@@ -242,11 +272,11 @@ pub fn parse(file: &str, text: &str) -> Result<CueSettings, CueProblem> {
             _ => None,
         };
         let name = name.to_ascii_lowercase();
-        settings.set(&name, number).map_err(|why| CueProblem::Key {
+        settings.set(&name, number).map_err(|why| Error::Key {
             file: file.to_string(),
             line,
             key: format!("{TABLE}.{name}"),
-            why: Box::new(why),
+            why: KeyError::Cue(why),
         })?;
     }
     Ok(settings)
@@ -276,6 +306,33 @@ fn flatten<'a>(
             found.push((prefix.to_string(), line, Some(value)))
         }
         _ => found.push((prefix.to_string(), line, None)),
+    }
+}
+
+/// What each `[cue]` key does (for the documentation's table and `init`'s comments).
+pub fn key_meaning(name: &str) -> &'static str {
+    let field = name.rsplit('.').next().unwrap_or(name);
+    match (name, field) {
+        ("margin", _) => "cues keep within this fraction of the reach from home and of the stream full scales",
+        ("knee", _) => "the soft limit bends from this fraction of an axis' limit, approaching the limit smoothly",
+        ("stall_s", _) => "no valid telemetry for this long is a stall: the platform eases home",
+        ("ease_s", _) => "how long easing home, or back into the cues, takes (s)",
+        ("pivot_x_mm" | "pivot_y_mm" | "pivot_z_mm", _) => {
+            "the centre of the rotations (the pilot's head) from the board's rotation centre (mm)"
+        }
+        ("tilt.scale", _) => "gain on the specific force that tilt coordination turns into a sustained tilt (0: none)",
+        ("tilt.order", _) => "the tilt's low-pass order, 1 or 2",
+        ("tilt.lp_hz", _) => "the tilt's low-pass break frequency (Hz)",
+        ("tilt.zeta", _) => "the tilt's low-pass damping ratio",
+        ("tilt.rate_deg_s", _) => "the most the tilt changes per second (deg/s), below what a pilot feels as a rotation",
+        ("tilt.max_deg", _) => "the largest tilt (deg)",
+        (_, "scale") => "gain on the aircraft's specific force (x y z) or rate (roll pitch yaw)",
+        (_, "order") => "high-pass order: 2 or 3 for x y z (3 washes a sustained force back to centre), 1 or 2 for roll pitch yaw",
+        (_, "hp_hz") => "the high-pass break frequency (Hz): higher washes out sooner and needs less travel",
+        (_, "zeta") => "the high-pass damping ratio",
+        (_, "hp3_hz") => "a 3rd-order high-pass' first-order break frequency (Hz)",
+        (_, "sign") => "1, or -1 to move the platform the other way on this axis",
+        _ => "",
     }
 }
 
@@ -338,11 +395,7 @@ mod tests {
     fn every_key_has_a_meaning_and_a_value() {
         let s = CueSettings::default();
         for k in KEYS {
-            assert!(
-                !super::super::words::key_meaning(k.name).is_empty(),
-                "{}",
-                k.name
-            );
+            assert!(!key_meaning(k.name).is_empty(), "{}", k.name);
             if !k.name.ends_with(".order") {
                 let v = s.get(k.name).unwrap_or_else(|| panic!("{}", k.name));
                 assert!((k.min..=k.max).contains(&v), "{} = {v}", k.name);

@@ -8,8 +8,10 @@
 //! - [`telemetry`]: the UDP line format JSBSim and FlightGear send, parsed robustly;
 //! - [`config`]: the build file's `[cue]` table;
 //! - [`run`]: the loop (newest cue first, easing home on a stall);
-//! - [`record`]: `--record`'s CSV and `cue-plot`;
-//! - [`words`]: every word of the above.
+//! - [`record`]: `--record`'s CSV and `cue-plot`'s picture, with its labels.
+//!
+//! The subcommands' options, runs and summaries are `crate::cmd::cue` and `cue_plot`'s; the
+//! errors are `crate::error::CueError`'s (and `KeyError::Cue`'s).
 
 pub mod config;
 pub mod reach;
@@ -17,21 +19,3 @@ pub mod record;
 pub mod run;
 pub mod telemetry;
 pub mod washout;
-pub mod words;
-
-use std::path::Path;
-
-use crate::messages::Problem;
-
-/// The `[cue]` table of a build file, or the defaults without one.
-pub fn settings(build: Option<&Path>) -> Result<config::CueSettings, Problem> {
-    match build {
-        Some(path) => {
-            let text = crate::configure::read_text(path)?;
-            // The rest of the file is the board's: checked as `apply` checks it.
-            crate::build_file::parse(&path.display().to_string(), &text)?;
-            config::parse(&path.display().to_string(), &text).map_err(Problem::from)
-        }
-        None => Ok(config::CueSettings::default()),
-    }
-}

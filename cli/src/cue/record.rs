@@ -1,5 +1,5 @@
 //! `cue --record FILE`: a CSV row per frame sent (what came in, what went out; columns in
-//! `words::RECORD_COLUMNS`), and `cue-plot`: per axis, the aircraft's specific force or rate
+//! [`RECORD_COLUMNS`]), and `cue-plot`: per axis, the aircraft's specific force or rate
 //! beside what the platform delivers, worked out from the poses sent alone: the translation's
 //! acceleration (second differences) plus gravity, both seen in the tilted platform's axes
 //! (`f = R^T (a + g z)`), and the angles' rates (first differences).
@@ -13,10 +13,62 @@ use std::path::Path;
 
 use super::reach::rotation;
 use super::washout::{Cue, Motion, G};
-use super::words::{self, CueProblem, PANELS, RECORD_COLUMNS, RECORD_COMMENT};
-use crate::messages::Problem;
-use crate::picture::{Anchor, Scene, Style};
+use crate::error::{CueError, Error, RecordError};
+use crate::picture::{write_scene, Anchor, Scene, Style};
 use crate::plot::{legend, nice_range, Axes, PALETTE};
+
+/// The record's columns (CSV header).
+pub const RECORD_COLUMNS: [&str; 17] = [
+    "time_s",
+    "sim_time_s",
+    "fx_ms2",
+    "fy_ms2",
+    "fz_ms2",
+    "p_deg_s",
+    "q_deg_s",
+    "r_deg_s",
+    "x_mm",
+    "y_mm",
+    "z_mm",
+    "roll_deg",
+    "pitch_deg",
+    "yaw_deg",
+    "limited",
+    "easing",
+    "latency_ms",
+];
+
+/// The record's comment line: what the columns are.
+pub const RECORD_COMMENT: &str = "# hexapod cue record: time_s since the first frame; \
+    sim_time_s and the aircraft's specific force (m/s^2) and rates (deg/s) of the newest \
+    sample, in the platform's axes (x forward, y left, z up); the pose sent (mm, deg); \
+    limited 1 when a limit changed it; easing 1 while easing home or back; latency_ms \
+    from the sample's arrival to its frame written (empty if the frame carried no new sample)";
+
+/// The plot's panels: title and y label, x y z then roll pitch yaw.
+pub const PANELS: [(&str, &str); 6] = [
+    ("x (surge): specific force", "m/s²"),
+    ("y (sway): specific force", "m/s²"),
+    ("z (heave): specific force", "m/s²"),
+    ("roll rate", "deg/s"),
+    ("pitch rate", "deg/s"),
+    ("yaw rate", "deg/s"),
+];
+/// The plot's legend.
+pub const LEGEND_AIRCRAFT: &str = "aircraft (at the pilot's head)";
+/// The plot's legend.
+pub const LEGEND_SCALED: &str = "aircraft × the axis' scale";
+/// The plot's legend.
+pub const LEGEND_PLATFORM: &str = "platform delivers (from the poses sent)";
+/// The plot's x axis.
+pub const TIME_LABEL: &str = "time (s)";
+/// The plot's title.
+pub fn plot_title(file: &str) -> String {
+    format!(
+        "Motion cues of {file}: what the aircraft felt, what the platform gave \
+         (platform axes: x forward, y left, z up)"
+    )
+}
 
 /// Writes the record.
 pub struct Recorder {
@@ -24,8 +76,8 @@ pub struct Recorder {
     out: BufWriter<File>,
 }
 
-fn file_problem(path: &str, error: std::io::Error) -> Problem {
-    Problem::File {
+fn file_problem(path: &str, error: std::io::Error) -> Error {
+    Error::File {
         path: path.to_string(),
         error,
     }
@@ -33,7 +85,7 @@ fn file_problem(path: &str, error: std::io::Error) -> Problem {
 
 impl Recorder {
     /// Creates (or replaces) the file and writes its header.
-    pub fn create(path: &Path) -> Result<Recorder, Problem> {
+    pub fn create(path: &Path) -> Result<Recorder, Error> {
         let name = path.display().to_string();
         let file = File::create(path).map_err(|e| file_problem(&name, e))?;
         let mut recorder = Recorder {
@@ -45,7 +97,7 @@ impl Recorder {
         Ok(recorder)
     }
 
-    fn write(&mut self, text: &str) -> Result<(), Problem> {
+    fn write(&mut self, text: &str) -> Result<(), Error> {
         self.out
             .write_all(text.as_bytes())
             .map_err(|e| file_problem(&self.path, e))
@@ -63,7 +115,7 @@ impl Recorder {
         limited: bool,
         easing: bool,
         latency_ms: Option<f64>,
-    ) -> Result<(), Problem> {
+    ) -> Result<(), Error> {
         let mut line = format!("{time_s:.5},");
         if let Some(t) = sim_time_s {
             let _ = write!(line, "{t:.5}");
@@ -86,7 +138,7 @@ impl Recorder {
     }
 
     /// Flushes the file.
-    pub fn finish(&mut self) -> Result<(), Problem> {
+    pub fn finish(&mut self) -> Result<(), Error> {
         self.out.flush().map_err(|e| file_problem(&self.path, e))
     }
 }
@@ -105,9 +157,9 @@ pub struct Row {
 }
 
 /// Reads a record's text; `file` names it in errors.
-pub fn parse(file: &str, text: &str) -> Result<Vec<Row>, Problem> {
-    let problem = |line: usize, why: String| {
-        Problem::from(CueProblem::Record {
+pub fn parse(file: &str, text: &str) -> Result<Vec<Row>, Error> {
+    let problem = |line: usize, why: RecordError| {
+        Error::from(CueError::Record {
             file: file.to_string(),
             line: line as u64,
             why,
@@ -125,19 +177,18 @@ pub fn parse(file: &str, text: &str) -> Result<Vec<Row>, Problem> {
             if fields != RECORD_COLUMNS {
                 return Err(problem(
                     line_no,
-                    format!(
-                        "not a cue record: the header must be {}",
-                        RECORD_COLUMNS.join(",")
-                    ),
+                    RecordError::Header {
+                        columns: &RECORD_COLUMNS,
+                    },
                 ));
             }
             header = true;
             continue;
         }
         if fields.len() != RECORD_COLUMNS.len() {
-            return Err(problem(line_no, format!("{} fields", fields.len())));
+            return Err(problem(line_no, RecordError::FieldCount(fields.len())));
         }
-        let number = |i: usize| -> Result<f64, Problem> {
+        let number = |i: usize| -> Result<f64, Error> {
             fields[i]
                 .parse::<f64>()
                 .ok()
@@ -145,10 +196,10 @@ pub fn parse(file: &str, text: &str) -> Result<Vec<Row>, Problem> {
                 .ok_or_else(|| {
                     problem(
                         line_no,
-                        format!(
-                            "{}: '{}' is not a finite number",
-                            RECORD_COLUMNS[i], fields[i]
-                        ),
+                        RecordError::NotFinite {
+                            column: RECORD_COLUMNS[i],
+                            text: fields[i].to_string(),
+                        },
                     )
                 })
         };
@@ -164,7 +215,7 @@ pub fn parse(file: &str, text: &str) -> Result<Vec<Row>, Problem> {
         });
     }
     if rows.is_empty() {
-        return Err(problem(1, "no rows: nothing to plot".to_string()));
+        return Err(problem(1, RecordError::Empty));
     }
     Ok(rows)
 }
@@ -254,7 +305,7 @@ pub fn scene(rows: &[Row], title: &str) -> Scene {
             y: nice_range(lo, hi),
             y_ticks: true,
         };
-        axes.draw(&mut scene, name, words::TIME_LABEL, unit);
+        axes.draw(&mut scene, name, TIME_LABEL, unit);
         axes.line(
             &mut scene,
             "aircraft",
@@ -272,24 +323,28 @@ pub fn scene(rows: &[Row], title: &str) -> Scene {
         &mut scene,
         [440.0, 46.0],
         &[
-            (PALETTE[0], words::LEGEND_AIRCRAFT.to_string(), false),
-            (PALETTE[5], words::LEGEND_PLATFORM.to_string(), false),
+            (PALETTE[0], LEGEND_AIRCRAFT.to_string(), false),
+            (PALETTE[5], LEGEND_PLATFORM.to_string(), false),
         ],
     );
     scene
 }
 
-/// `hexapod cue-plot RECORD -o STEM`.
-pub fn plot(record: &Path, stem: &Path, svg: bool, png: bool) -> Result<String, Problem> {
+/// `hexapod cue-plot RECORD -o STEM`: the files written, and the frames plotted.
+pub fn plot(
+    record: &Path,
+    stem: &Path,
+    svg: bool,
+    png: bool,
+) -> Result<(Vec<String>, usize), Error> {
     let file = record.display().to_string();
     let text = std::fs::read_to_string(record).map_err(|e| file_problem(&file, e))?;
     let rows = parse(&file, &text)?;
     let name = record
         .file_name()
         .map_or(file.clone(), |n| n.to_string_lossy().into_owned());
-    let written =
-        crate::draw::write_scene(&scene(&rows, &words::plot_title(&name)), stem, svg, png)?;
-    Ok(words::wrote_plot(&written, rows.len()))
+    let written = write_scene(&scene(&rows, &plot_title(&name)), stem, svg, png)?;
+    Ok((written, rows.len()))
 }
 
 #[cfg(test)]

@@ -8,11 +8,13 @@
 //!   home over `ease_s` (a smooth blend from where it is, frames at the rate); telemetry that
 //!   comes back eases into the cues the same way. The board's own `link_timeout_s` remains the
 //!   last line of defence if the tool itself stops.
+//! - Stopped by the user (Ctrl-C, [`Options::stop`]), it eases home the same way before it
+//!   returns, taking no more telemetry.
 //! - Times are `Instant`s (the host's) for the rate, stalls and latency; the washout runs on the
 //!   simulation's time (a time that goes back, or jumps by more than a second, restarts it).
 
-use std::io::IsTerminal;
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use control::settings::Settings;
@@ -20,12 +22,11 @@ use control::settings::Settings;
 use super::config::CueSettings;
 use super::reach::Reach;
 use super::record::Recorder;
-use super::telemetry::{Bad, Line, Listener, Sample};
+use super::telemetry::{Line, Listener, Sample, NAMES};
 use super::washout::{Cue, Motion, Washout};
-use super::words::{self, Counts, CueProblem, Summary};
 use crate::board;
+use crate::error::{CueError, Dropped, Error};
 use crate::link::Link;
-use crate::messages::Problem;
 use crate::streamer::min_median_max;
 use crate::trajectory;
 
@@ -33,7 +34,7 @@ use crate::trajectory;
 pub const MIN_STEP_S: f64 = 1e-4;
 /// A simulation time jump larger than this restarts the washout, s.
 pub const RESTART_STEP_S: f64 = 1.0;
-/// How often the live line is redrawn.
+/// How often the progress is reported.
 const LIVE_EVERY: Duration = Duration::from_millis(500);
 /// Most datagrams taken in one pass before a frame may go.
 const DRAIN: usize = 1000;
@@ -51,8 +52,76 @@ pub struct Options {
     pub wait_s: f64,
     /// Stop once home this long after the last valid sample, s (`None`: run until stopped).
     pub idle_exit_s: Option<f64>,
-    /// Redraw a live line on standard error (when it is a terminal).
-    pub live: bool,
+    /// Once set (by a Ctrl-C handler), ease home and stop.
+    pub stop: Option<&'static AtomicBool>,
+}
+
+/// What the loop reports as it goes (the caller words it).
+#[derive(Debug, Clone, Copy)]
+pub enum Progress<'a> {
+    /// Listening, with the board's settings read.
+    Started {
+        /// Where telemetry is awaited.
+        address: &'a str,
+        /// The board's port.
+        port: &'a str,
+        /// Frames per second at most.
+        rate_hz: f64,
+        /// Each axis' limit, mm and degrees.
+        limits: &'a [f64; 6],
+    },
+    /// The counts so far (every half second).
+    Live {
+        /// The counts.
+        counts: &'a Counts,
+        /// Since the first frame, s.
+        elapsed_s: f64,
+    },
+    /// Stopped by the user: easing home.
+    Stopping,
+}
+
+/// Telemetry and frames counted.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Counts {
+    /// Datagrams received.
+    pub datagrams: u64,
+    /// Samples taken.
+    pub samples: u64,
+    /// What was dropped, by why.
+    pub dropped: Dropped,
+    /// The simulation restarted (time went back, or jumped).
+    pub restarts: u64,
+    /// Frames sent.
+    pub frames: u64,
+    /// Frames sent whose cue a limit changed.
+    pub limited: u64,
+    /// Samples that arrived while the previous one's frame was not due yet (sent later, or
+    /// superseded).
+    pub late: u64,
+}
+
+/// What a `cue` run did.
+#[derive(Debug, Clone)]
+pub struct Summary {
+    /// Where telemetry came from.
+    pub address: String,
+    /// The port.
+    pub port: String,
+    /// Counts.
+    pub counts: Counts,
+    /// From the first frame to the end, s.
+    pub duration_s: f64,
+    /// Packet arrival to frame written, min, median, 99th percentile, max, ms.
+    pub latency_ms: Option<[f64; 4]>,
+    /// The board's counters over the run: frames, applied, damaged, clamped, refused.
+    pub board: Option<[u64; 5]>,
+    /// Each axis' limit, mm and degrees.
+    pub limits: [f64; 6],
+    /// The record written, if any.
+    pub record: Option<String>,
+    /// Stopped by the user (Ctrl-C), after easing home.
+    pub stopped: bool,
 }
 
 /// Whether the platform follows the cues or eases home.
@@ -99,8 +168,7 @@ impl Cueing {
                 return;
             }
             Line::Bad(kind, _) => {
-                let i = Bad::ALL.iter().position(|k| *k == kind).unwrap_or(0);
-                self.counts.bad[i] += 1;
+                self.counts.dropped.count(kind);
                 return;
             }
         };
@@ -113,7 +181,7 @@ impl Cueing {
                     self.counts.restarts += 1;
                     0.0
                 } else if dt < MIN_STEP_S {
-                    self.counts.stale += 1;
+                    self.counts.dropped.stale += 1;
                     return;
                 } else {
                     dt
@@ -156,10 +224,15 @@ impl Cueing {
 }
 
 /// `hexapod cue`: runs until the telemetry has ended and the platform is home
-/// (`idle_exit_s`), or until stopped.
-pub fn run(link: &mut Link, cue: &CueSettings, options: &Options) -> Result<String, Problem> {
+/// (`idle_exit_s`), or until stopped (`stop`, then home too); what it did.
+pub fn run(
+    link: &mut Link,
+    cue: &CueSettings,
+    options: &Options,
+    progress: &mut dyn FnMut(Progress<'_>),
+) -> Result<Summary, Error> {
     let listener = Listener::bind(&options.listen).map_err(|e| {
-        Problem::from(CueProblem::Listen {
+        Error::from(CueError::Listen {
             address: options.listen.clone(),
             why: e.to_string(),
         })
@@ -167,7 +240,7 @@ pub fn run(link: &mut Link, cue: &CueSettings, options: &Options) -> Result<Stri
     link.start()?;
     let settings = board::read_settings(link)?;
     let reach = Reach::new(&settings, cue.margin, cue.knee, cue.pivot_mm)
-        .ok_or(Problem::from(CueProblem::NotAPlatform))?;
+        .ok_or(Error::from(CueError::NotAPlatform))?;
     let board_hz = f64::from(settings.frame_hz);
     let rate = options.rate_hz.unwrap_or(board_hz).clamp(1.0, board_hz);
     let period = Duration::from_secs_f64(1.0 / rate);
@@ -177,12 +250,13 @@ pub fn run(link: &mut Link, cue: &CueSettings, options: &Options) -> Result<Stri
         Some(path) => Some(Recorder::create(path)?),
         None => None,
     };
-    let live = options.live && std::io::stderr().is_terminal();
     let limits = reach.limit;
-    eprintln!(
-        "{}",
-        words::started(&listener.address.to_string(), link.port(), rate, &limits)
-    );
+    progress(Progress::Started {
+        address: &listener.address.to_string(),
+        port: link.port(),
+        rate_hz: rate,
+        limits: &limits,
+    });
     let mut state = Cueing {
         washout: Washout::new(cue.tuning),
         reach,
@@ -203,7 +277,21 @@ pub fn run(link: &mut Link, cue: &CueSettings, options: &Options) -> Result<Stri
     let mut last_sent = start - period;
     let mut last_live = start;
     let mut latencies_ms: Vec<f64> = Vec::new();
+    let mut stopped = false;
     loop {
+        if !stopped && options.stop.is_some_and(|s| s.load(Ordering::Relaxed)) {
+            // The user stopped it: home from wherever the platform is, nothing more taken.
+            stopped = true;
+            progress(Progress::Stopping);
+            if state.mode == Mode::Live || state.blend.is_some() {
+                state.mode = Mode::Stalled;
+                state.blend = Some((state.last_out, Instant::now()));
+            }
+            state.pending = None;
+        }
+        if stopped && state.blend.is_none() {
+            break;
+        }
         let now = Instant::now();
         let sending = state.pending.is_some() || state.blend.is_some();
         let mut wake = now + Duration::from_millis(100);
@@ -213,7 +301,12 @@ pub fn run(link: &mut Link, cue: &CueSettings, options: &Options) -> Result<Stri
         if let (Mode::Live, Some(at)) = (state.mode, state.last_valid_at) {
             wake = wake.min(at + stall);
         }
-        if let Some(datagram) = listener.next(wake) {
+        let taking = if stopped { None } else { listener.next(wake) };
+        if stopped {
+            // Frames at the rate until home.
+            std::thread::sleep(wake.saturating_duration_since(Instant::now()));
+        }
+        if let Some(datagram) = taking {
             let mut next = Some(datagram);
             let mut taken = 0;
             while let Some(d) = next {
@@ -229,7 +322,7 @@ pub fn run(link: &mut Link, cue: &CueSettings, options: &Options) -> Result<Stri
                 };
             }
         }
-        state.counts.overflowed = listener.overflowed();
+        state.counts.dropped.overflowed = listener.overflowed();
         let now = Instant::now();
         if let (Mode::Live, Some(at)) = (state.mode, state.last_valid_at) {
             if now.saturating_duration_since(at) > stall {
@@ -277,17 +370,22 @@ pub fn run(link: &mut Link, cue: &CueSettings, options: &Options) -> Result<Stri
         }
         // Replies and notices the board sends meanwhile (none expected): let them go by.
         while link.try_line()?.is_some() {}
-        if live && now.duration_since(last_live) >= LIVE_EVERY {
+        if now.duration_since(last_live) >= LIVE_EVERY {
             last_live = now;
-            let elapsed = first_frame.map_or(0.0, |f| now.duration_since(f).as_secs_f64());
-            eprint!("\r{}", words::live(&state.counts, elapsed));
+            let elapsed_s = first_frame.map_or(0.0, |f| now.duration_since(f).as_secs_f64());
+            progress(Progress::Live {
+                counts: &state.counts,
+                elapsed_s,
+            });
         }
         match state.last_valid_at {
-            None if now.duration_since(start).as_secs_f64() > options.wait_s => {
-                return Err(Problem::from(CueProblem::NoTelemetry {
+            None if !stopped && now.duration_since(start).as_secs_f64() > options.wait_s => {
+                return Err(Error::from(CueError::NoTelemetry {
                     address: listener.address.to_string(),
                     waited_s: options.wait_s,
-                    counts: Box::new(state.counts.clone()),
+                    datagrams: state.counts.datagrams,
+                    dropped: state.counts.dropped.clone(),
+                    fields: &NAMES,
                     labels: state.labels.clone(),
                 }));
             }
@@ -302,9 +400,6 @@ pub fn run(link: &mut Link, cue: &CueSettings, options: &Options) -> Result<Stri
             }
             _ => {}
         }
-    }
-    if live {
-        eprintln!();
     }
     if let Some(recorder) = recorder.as_mut() {
         recorder.finish()?;
@@ -321,8 +416,9 @@ pub fn run(link: &mut Link, cue: &CueSettings, options: &Options) -> Result<Stri
         board: Some([c.frames, c.applied, c.damaged, c.clamped, c.refused]),
         limits,
         record: options.record.as_ref().map(|p| p.display().to_string()),
+        stopped,
     };
-    Ok(words::summary(&summary))
+    Ok(summary)
 }
 
 /// Min, median, 99th percentile and max.

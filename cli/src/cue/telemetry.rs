@@ -58,31 +58,8 @@ pub struct Sample {
     pub attitude: [f64; 3],
 }
 
-/// Why a line was dropped.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub enum Bad {
-    /// Not UTF-8 text.
-    NotText,
-    /// Not ten fields.
-    FieldCount,
-    /// A field that is not a number.
-    NotANumber,
-    /// NaN or infinite.
-    NotFinite,
-    /// Beyond what an aircraft does.
-    OutOfRange,
-}
-
-impl Bad {
-    /// Every kind, in the order summaries list them.
-    pub const ALL: [Bad; 5] = [
-        Bad::NotText,
-        Bad::FieldCount,
-        Bad::NotANumber,
-        Bad::NotFinite,
-        Bad::OutOfRange,
-    ];
-}
+/// Why a line was dropped (worded with the tool's errors).
+pub use crate::error::BadLine as Bad;
 
 /// What one line is.
 #[derive(Debug, Clone, PartialEq)]

@@ -61,6 +61,7 @@ use control::{Controller, Session, Settings};
 use defmt_rtt as _;
 use embedded_hal::digital::OutputPin;
 use firmware::rom_math::RomMath;
+use firmware::Board;
 use heapless::String;
 use kinematics_core::forward::{self, Closure};
 use kinematics_core::jacobian::Jacobian;
@@ -72,14 +73,8 @@ use rp2040_hal::{
     self as hal,
     clocks::Clock,
     fugit::RateExtU32,
-    pac,
     uart::{DataBits, StopBits, UartConfig, UartPeripheral},
-    Sio, Watchdog,
 };
-
-#[unsafe(link_section = ".boot2")]
-#[used]
-pub static BOOT2: [u8; 256] = rp2040_boot2::BOOT_LOADER_W25Q080;
 
 const BAUD: u32 = 921_600;
 const MAX_LINE: usize = 128;
@@ -92,26 +87,18 @@ const PAYLOAD: Payload = Payload {
 
 #[hal::entry]
 fn main() -> ! {
-    let mut p = pac::Peripherals::take().expect("peripherals are taken once, here");
-    let mut watchdog = Watchdog::new(p.WATCHDOG);
-    let clocks = firmware::init_clocks(
-        p.XOSC,
-        p.CLOCKS,
-        p.PLL_SYS,
-        p.PLL_USB,
-        &mut p.RESETS,
-        &mut watchdog,
+    let mut board = Board::take();
+    let uart_pins = (
+        board.pins.gpio0.into_function(),
+        board.pins.gpio1.into_function(),
     );
-    let sio = Sio::new(p.SIO);
-    let pins = hal::gpio::Pins::new(p.IO_BANK0, p.PADS_BANK0, sio.gpio_bank0, &mut p.RESETS);
-    let uart_pins = (pins.gpio0.into_function(), pins.gpio1.into_function());
-    let uart = UartPeripheral::new(p.UART0, uart_pins, &mut p.RESETS)
+    let uart = UartPeripheral::new(board.uart0, uart_pins, &mut board.resets)
         .enable(
             UartConfig::new(BAUD.Hz(), DataBits::Eight, None, StopBits::One),
-            clocks.peripheral_clock.freq(),
+            board.clocks.peripheral_clock.freq(),
         )
         .expect("921600 baud is in range");
-    let mut marker = pins.gpio16.into_push_pull_output();
+    let mut marker = board.pins.gpio16.into_push_pull_output();
     let _ = marker.set_low();
 
     let solver = ik::Solver::new_with::<RomMath>(Geometry::default()).expect("a valid geometry");

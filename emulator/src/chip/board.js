@@ -20,10 +20,10 @@ import {
   patchEmulatorGaps,
   UsbCdcHost,
   wakeIfInterruptPending,
-} from './rp2040js-gaps.js';
+} from '../gaps/index.js';
 import { ServoPulseMeter } from './servo-pulses.js';
 
-const REPO = join(dirname(fileURLToPath(import.meta.url)), '..', '..');
+const REPO = join(dirname(fileURLToPath(import.meta.url)), '..', '..', '..');
 /** The ELF `cargo fw` builds; FIRMWARE_ELF=path overrides. */
 export const DEFAULT_ELF =
   process.env.FIRMWARE_ELF ?? join(REPO, 'target', 'thumbv6m-none-eabi', 'release', 'firmware');
@@ -53,8 +53,8 @@ export class EmulatedBoard {
    * @param {'fail'|'reset'} [options.onWatchdog] what a watchdog expiry does: `'fail'`
    *   (default) stops the run with an error; `'reset'` restarts the chip as the watchdog
    *   reset would (see `watchdogReset`).
-   * @param {'typical'|'max'|object} [options.flashTiming] the flash chip's erase and program
-   *   times (rp2040js-gaps.js, gap 7, `W25Q080_TIMING`)
+   * @param {'typical'|'max'|{sectorEraseMs: number, pageProgramMs: number}} [options.flashTiming]
+   *   the flash chip's erase and program times (../gaps/flash.js, gap 7, `W25Q080_TIMING`)
    * @param {{address: number, bytes: Uint8Array}[]} [options.segments] what to program into
    *   the flash instead of the ELF's load segments (e.g. a UF2's blocks)
    * @param {boolean|{open?: boolean}} [options.usb] plug a USB host into the USB port at
@@ -92,6 +92,8 @@ export class EmulatedBoard {
     /** The USB host's serial port, or null when nothing is plugged into the USB port. */
     this.usb = usb ? new UsbLink(this, usb === true ? {} : usb) : null;
     this.servoChangeListener = null;
+    /** @type {Map<number, boolean | null> | undefined} GPIO -> level driven (`drivePin`). */
+    this.pinDrives = undefined;
 
     this.powerOn(0);
   }
@@ -102,7 +104,7 @@ export class EmulatedBoard {
    * flash; later ones find the flash as the last chip left it.
    */
   powerOn(startNanos) {
-    const mcu = new RP2040();
+    const mcu = /** @type {import('../gaps/index.js').Mcu} */ (new RP2040());
     this.mcu = mcu;
     patchEmulatorGaps(mcu);
     // loadBootrom resets the chip and wipes flash: the firmware goes in after it.
@@ -129,7 +131,9 @@ export class EmulatedBoard {
     });
 
     mcu.onBreak = (code) => {
-      this.fail(`firmware stopped: breakpoint/UDF #${code} at PC 0x${mcu.core.PC.toString(16)} (a panic?)`);
+      this.fail(
+        `firmware stopped: breakpoint/UDF #${code} at PC 0x${mcu.core.PC.toString(16)} (a panic?)`,
+      );
     };
     // Gap 7: the flash chip (the same array as before a reset), written through the ROM.
     attachFlashChip(mcu, this.flash, {
@@ -153,7 +157,9 @@ export class EmulatedBoard {
     this.uart0 = mcu.uart[0].pl011;
     this.uart0.onTxLost = (byte) => {
       // The PL011 drops a byte written while TXFF is set; firmware must check TXFF first.
-      this.fail(`firmware wrote 0x${byte.toString(16)} to UART0 while its TX FIFO was full: byte lost`);
+      this.fail(
+        `firmware wrote 0x${byte.toString(16)} to UART0 while its TX FIFO was full: byte lost`,
+      );
     };
     this.input = new PacedUartInput(mcu, mcu.uart[0]);
     this.usb?.host.attach(mcu);
@@ -187,7 +193,8 @@ export class EmulatedBoard {
    */
   watchdogReset() {
     this.resetPending = false;
-    const wdsel = this.mcu.peripherals[PSM_BASE].wdsel;
+    // rp2040js's PSM keeps WDSEL as a field its `Peripheral` type does not declare.
+    const wdsel = /** @type {any} */ (this.mcu.peripherals[PSM_BASE]).wdsel;
     const nanos = this.mcu.clock.nanos;
     this.resets.push({ nanos, wdsel });
     if ((wdsel & WDSEL_FULL_RESET) !== WDSEL_FULL_RESET) {
@@ -481,7 +488,10 @@ export class EmulatedBoard {
   }
 }
 
-/** What `EmulatedBoard.through` sends over the link instead of UART0. */
+/**
+ * What `EmulatedBoard.through` sends over the link instead of UART0.
+ * @type {Set<string | symbol>}
+ */
 const LINK_CALLS = new Set([
   'sendBytes',
   'sendLine',
@@ -592,7 +602,7 @@ export class SerialLink {
 }
 
 /**
- * The USB port's serial link (`board.usb`): a USB host (`UsbCdcHost`, rp2040js-gaps.js, gaps
+ * The USB port's serial link (`board.usb`): a USB host (`UsbCdcHost`, ../gaps/usb.js, gaps
  * 9-12) with the firmware's CDC ACM port. Besides the `SerialLink` calls: open and close the
  * port (DTR), stop and resume reading, unplug and plug in again.
  */

@@ -131,7 +131,10 @@ export class ListingReader {
  * `'geometry'` and `'config'` (`defaults`; `set` of a geometry or servo setting).
  */
 export function listingsChangedBy(line) {
-  const words = line.trim().toLowerCase().split(/[\s,]+/);
+  const words = line
+    .trim()
+    .toLowerCase()
+    .split(/[\s,]+/);
   if (words[0] === 'defaults') {
     return ['geometry', 'config'];
   }

@@ -1,14 +1,14 @@
 // Drives the live 3D view from outside, as a user would: starts `./dev run` (UART0 on a pipe,
 // the view on a free port) and opens its page in headless Chromium (Debian's `chromium`
 // package, through playwright-core, which downloads no browser of its own). Used by
-// test/view.test.js and src/view-screenshot.js.
+// test/view.test.js and src/view-server/view-screenshot.js.
 
 import { spawn } from 'node:child_process';
 import { existsSync } from 'node:fs';
 import { dirname, join } from 'node:path';
 import { fileURLToPath } from 'node:url';
 
-const REPO = join(dirname(fileURLToPath(import.meta.url)), '..', '..');
+const REPO = join(dirname(fileURLToPath(import.meta.url)), '..', '..', '..');
 /** The browser: Debian's chromium, or CHROMIUM=path. */
 export const CHROMIUM = process.env.CHROMIUM ?? '/usr/bin/chromium';
 /** `./dev run` may have to build the firmware and the view's WebAssembly first, ms. */
@@ -24,11 +24,19 @@ export function haveChromium() {
  * the view's address, from what it prints), `exited` (a promise of `{ code, signal }`),
  * `stdoutText` (UART0 as the shell terminal shows it) and `stderrText`.
  */
+/**
+ * @typedef {import('node:child_process').ChildProcessWithoutNullStreams & {
+ *   url: Promise<string>, exited: Promise<{ code: number | null, signal: string | null }>,
+ *   stdoutText: string, stderrText: string }} Runner
+ */
+/** @returns {Runner} */
 export function startRunner(args = []) {
-  const runner = spawn(join(REPO, 'dev'), ['run', '--view-port', '0', ...args], {
-    cwd: REPO,
-    stdio: ['pipe', 'pipe', 'pipe'],
-  });
+  const runner = /** @type {Runner} */ (
+    spawn(join(REPO, 'dev'), ['run', '--view-port', '0', ...args], {
+      cwd: REPO,
+      stdio: ['pipe', 'pipe', 'pipe'],
+    })
+  );
   runner.stdoutText = '';
   runner.stderrText = '';
   runner.stdout.on('data', (data) => {

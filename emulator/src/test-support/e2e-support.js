@@ -6,12 +6,15 @@ import assert from 'node:assert/strict';
 import { existsSync } from 'node:fs';
 import { test } from 'node:test';
 
-import { BANNER, DEFAULT_ELF, EmulatedBoard } from './board.js';
-import { loadBootrom } from './bootrom.js';
+import { BANNER, DEFAULT_ELF, EmulatedBoard } from '../chip/board.js';
+import { loadBootrom } from '../chip/bootrom.js';
 
 /** The boot ROM words for a test file, after checking that the firmware ELF has been built. */
 export function firmwareBootrom() {
-  assert.ok(existsSync(DEFAULT_ELF), `no firmware ELF at ${DEFAULT_ELF}: build it with \`cargo fw\``);
+  assert.ok(
+    existsSync(DEFAULT_ELF),
+    `no firmware ELF at ${DEFAULT_ELF}: build it with \`cargo fw\``,
+  );
   return loadBootrom();
 }
 
@@ -66,6 +69,7 @@ export function defaultSettings() {
       dir: n % 2 === 0 ? 'normal' : 'reversed',
       min_us: 1100,
       max_us: 1900,
+      /** @type {number | 'off'} */
       torque_kgcm: 'off',
     })),
     // No payload.
@@ -201,7 +205,11 @@ export function ok(board, line, { timeoutMs = 2000 } = {}) {
 /** Sends a line that must fail with `code`; returns the whole reply (checked for shape). */
 export function refused(board, line, code, { timeoutMs = 2000 } = {}) {
   const { reply, lines } = board.request(line, { timeoutMs });
-  assert.equal(lines.length, 1, `'${line}' -> ${JSON.stringify(lines)}: the error is the only line`);
+  assert.equal(
+    lines.length,
+    1,
+    `'${line}' -> ${JSON.stringify(lines)}: the error is the only line`,
+  );
   assert.match(reply, new RegExp(`^error:${code} \\S.*$`), `'${line}'`);
   return reply;
 }
@@ -232,7 +240,11 @@ export function status(board) {
   };
   const six = (key, decimals) => {
     const text = field(key);
-    assert.match(text, new RegExp(`^(-?\\d+\\.\\d{${decimals}} ){5}-?\\d+\\.\\d{${decimals}}$`), key);
+    assert.match(
+      text,
+      new RegExp(`^(-?\\d+\\.\\d{${decimals}} ){5}-?\\d+\\.\\d{${decimals}}$`),
+      key,
+    );
     return text.split(' ').map(Number);
   };
   return {
@@ -243,10 +255,14 @@ export function status(board) {
     arm_deg: six('arm_deg', 3),
     pulse_us: six('pulse_us', 2),
     /** `{ frames, applied, damaged, clamped, refused }`. */
-    stream: Object.fromEntries(field('stream').split(' ').map((kv) => {
-      const [key, value] = kv.split('=');
-      return [key, Number(value)];
-    })),
+    stream: Object.fromEntries(
+      field('stream')
+        .split(' ')
+        .map((kv) => {
+          const [key, value] = kv.split('=');
+          return [key, Number(value)];
+        }),
+    ),
     'e-stop': field('e-stop'),
     servo_power: field('servo_power'),
   };
@@ -331,10 +347,19 @@ export function periodsUs(board) {
  * repeated or cut short, the move takes exactly `framesUs.length` frames, and every pulse lies
  * within `[min_us, max_us]` of its servo. Returns the period index where the move began.
  */
-export function assertMoveOnPins(pulses, startNanos, framesUs, { periodNanos, servos, maxStretch = 0 }) {
+export function assertMoveOnPins(
+  pulses,
+  startNanos,
+  framesUs,
+  { periodNanos, servos, maxStretch = 0 },
+) {
   const n = framesUs.length;
   if (maxStretch > 0) {
-    return assertMoveOnPinsStretched(pulses, startNanos, framesUs, { periodNanos, servos, maxStretch });
+    return assertMoveOnPinsStretched(pulses, startNanos, framesUs, {
+      periodNanos,
+      servos,
+      maxStretch,
+    });
   }
   const first = Math.min(
     ...pulses.map((servo, i) => {
@@ -364,7 +389,11 @@ export function assertMoveOnPins(pulses, startNanos, framesUs, { periodNanos, se
           `${label} frame ${j - first + 1}/${n}: ${us} us, host core ${expected} us`,
         );
       } else {
-        assert.equal(pulse.widthNanos, servo[first + n - 1].widthNanos, `${label} moved after the last frame`);
+        assert.equal(
+          pulse.widthNanos,
+          servo[first + n - 1].widthNanos,
+          `${label} moved after the last frame`,
+        );
       }
     });
   });
@@ -383,7 +412,12 @@ export function assertMoveOnPins(pulses, startNanos, framesUs, { periodNanos, se
  * `maxStretch` extra periods per move (the move took longer: never faster than planned). No
  * frame may be skipped: each pin goes through every frame's width in order.
  */
-function assertMoveOnPinsStretched(pulses, startNanos, framesUs, { periodNanos, servos, maxStretch }) {
+function assertMoveOnPinsStretched(
+  pulses,
+  startNanos,
+  framesUs,
+  { periodNanos, servos, maxStretch },
+) {
   const n = framesUs.length;
   const near = (us, expected) => Math.abs(us - expected) <= COUNT_US + 1e-9;
   pulses.forEach((servo, i) => {
@@ -395,17 +429,24 @@ function assertMoveOnPinsStretched(pulses, startNanos, framesUs, { periodNanos, 
         assert.equal(pulse.periodNanos, periodNanos, `${label} period ${j}`);
       }
       const us = pulse.widthNanos / 1000;
-      assert.ok(us >= servos[i].min_us - COUNT_US / 2 && us <= servos[i].max_us + COUNT_US / 2, `${label} pulse ${j}: ${us} us outside its limits`);
+      assert.ok(
+        us >= servos[i].min_us - COUNT_US / 2 && us <= servos[i].max_us + COUNT_US / 2,
+        `${label} pulse ${j}: ${us} us outside its limits`,
+      );
       if (k === -1 && pulse.widthNanos === startNanos[i]) {
         return;
       }
       // The same width as the previous period and still frame k's: held (a stretch).
-      const held = k >= 0 && pulse.widthNanos === servo[j - 1].widthNanos && near(us, framesUs[k][i]);
+      const held =
+        k >= 0 && pulse.widthNanos === servo[j - 1].widthNanos && near(us, framesUs[k][i]);
       if (!held && k + 1 < n && near(us, framesUs[k + 1][i])) {
         k += 1;
         return;
       }
-      assert.ok(k >= 0 && near(us, framesUs[k][i]), `${label} pulse ${j}: ${us} us is neither ${k < 0 ? 'the start width' : `frame ${k + 1}`} nor frame ${k + 2} of ${n} (a skipped frame?)`);
+      assert.ok(
+        k >= 0 && near(us, framesUs[k][i]),
+        `${label} pulse ${j}: ${us} us is neither ${k < 0 ? 'the start width' : `frame ${k + 1}`} nor frame ${k + 2} of ${n} (a skipped frame?)`,
+      );
       if (k < n - 1) {
         extra += 1;
       }
@@ -427,7 +468,10 @@ export function heaveReader(reference, fromMm, toMm) {
   for (let z = fromMm; z <= toMm + 1e-9; z += 0.001) {
     grid.push(Number(z.toFixed(3)));
   }
-  const answers = reference.solve(defaultSettings(), grid.map((z) => [0, 0, z, 0, 0, 0]));
+  const answers = reference.solve(
+    defaultSettings(),
+    grid.map((z) => [0, 0, z, 0, 0, 0]),
+  );
   const table = answers.map((a, i) => {
     assert.ok(a.ok, `z ${grid[i]}`);
     return a.pulse_us;
@@ -457,7 +501,9 @@ export function heaveReader(reference, fromMm, toMm) {
 /** Per-frame z from captured pulses (one value per period, in order). */
 export function heaveTrace(pulses, read) {
   const periods = Math.min(...pulses.map((servo) => servo.length));
-  return Array.from({ length: periods }, (_, k) => read(pulses.map((servo) => servo[k].widthNanos / 1000)));
+  return Array.from({ length: periods }, (_, k) =>
+    read(pulses.map((servo) => servo[k].widthNanos / 1000)),
+  );
 }
 
 /** Checks a z trace against the limits: speed, acceleration (with the PWM count's noise), overshoot. */
@@ -468,12 +514,22 @@ export function assertWithinLimits(zs, { hz, speed, accel, top, label }) {
   const zNoise = 0.012;
   const v = zs.slice(1).map((z, k) => (z - zs[k]) / dt);
   v.forEach((s, k) => {
-    assert.ok(Math.abs(s) <= speed + (2 * zNoise) / dt, `${label}: ${s.toFixed(1)} mm/s at frame ${k + 1} (limit ${speed})`);
+    assert.ok(
+      Math.abs(s) <= speed + (2 * zNoise) / dt,
+      `${label}: ${s.toFixed(1)} mm/s at frame ${k + 1} (limit ${speed})`,
+    );
   });
   v.slice(1).forEach((s, k) => {
     const a = (s - v[k]) / dt;
-    assert.ok(Math.abs(a) <= accel + (4 * zNoise) / dt / dt, `${label}: ${a.toFixed(0)} mm/s2 at frame ${k + 2} (limit ${accel})`);
+    assert.ok(
+      Math.abs(a) <= accel + (4 * zNoise) / dt / dt,
+      `${label}: ${a.toFixed(0)} mm/s2 at frame ${k + 2} (limit ${accel})`,
+    );
   });
-  zs.forEach((z, k) => assert.ok(z <= top + zNoise, `${label}: overshoot to ${z.toFixed(3)} mm at frame ${k} (top ${top})`));
+  zs.forEach((z, k) =>
+    assert.ok(
+      z <= top + zNoise,
+      `${label}: overshoot to ${z.toFixed(3)} mm at frame ${k} (top ${top})`,
+    ),
+  );
 }
-

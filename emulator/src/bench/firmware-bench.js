@@ -1,7 +1,7 @@
 // Timing of the real firmware in the emulator (emulated time): command-to-output latency,
 // sustained pose lines per second, the worst-case command against the watchdog.
 
-import { BANNER, EmulatedBoard } from './board.js';
+import { BANNER, EmulatedBoard } from '../chip/board.js';
 
 const RAM_START = 0x20000000;
 
@@ -30,8 +30,17 @@ function recordCompareWrites(board) {
  * emulator's PWM compare-register writes and UART RX deliveries time-stamped. `link` is UART0
  * (`board.uart`).
  */
+/**
+ * @param {object} [options]
+ * @param {number} [options.baud]
+ * @param {string} [options.elf] firmware ELF (default: the board's)
+ * @param {'typical'|'max'} [options.flashTiming] (default: the board's)
+ */
 export function streamingBoard({ baud = 115200, elf, flashTiming } = {}) {
-  const board = new EmulatedBoard({ ...(elf ? { elf } : {}), ...(flashTiming ? { flashTiming } : {}) });
+  const board = new EmulatedBoard({
+    ...(elf ? { elf } : {}),
+    ...(flashTiming ? { flashTiming } : {}),
+  });
   const ccWrites = recordCompareWrites(board);
   const lineEnds = [];
   /** When each byte reached the UART (emulated ns), in order. */
@@ -59,8 +68,9 @@ export function streamingBoard({ baud = 115200, elf, flashTiming } = {}) {
 /**
  * The same over USB: a USB host plugged in at power-on has opened the port; echo off there,
  * speed limits off. `lineEnds` are the instants the OUT packets carrying a line end reached
- * the firmware's endpoint buffer (the end of their bus slot, rp2040js-gaps.js gap 11).
+ * the firmware's endpoint buffer (the end of their bus slot, gaps/usb.js, gap 11).
  */
+/** @param {{ elf?: string }} [options] */
 export function usbStreamingBoard({ elf } = {}) {
   const board = new EmulatedBoard({ ...(elf ? { elf } : {}), usb: true });
   const ccWrites = recordCompareWrites(board);
@@ -99,6 +109,10 @@ function ccState(board) {
  * USB packet carrying it reaching the firmware's endpoint buffer) to the moment the compare
  * registers all hold the new pose's values (they latch at the next PWM period). Starts at pose
  * `from` (mm, degrees as typed; default home). Returns microseconds per pose.
+ */
+/**
+ * @param {string[]} poses
+ * @param {{ baud?: number, from?: string, elf?: string, usb?: boolean }} [options]
  */
 export function measureLatency(poses, { baud = 115200, from, elf, usb = false } = {}) {
   const { board, link, ccWrites, lineEnds } = usb
@@ -357,16 +371,45 @@ export function measureKinematicsCommands() {
   const rated = (r) => [...PAYLOAD, `set servos.torque_kgcm ${r}`];
   // From z = -10 mm, 20.48 mm at 1 mm/s at 50 Hz: 1,024 frames, each checked (the budget).
   const longest = ['pose 0 0 -10 0 0 0', 'set speed_mm_s 1'];
+  /** @type {[string, string[], string, number][]} */
   const cases = [
-    ['`servo 3 1520` from home (2.2 degrees of arm: one continuation step)', [], 'servo 3 1520', 333],
+    [
+      '`servo 3 1520` from home (2.2 degrees of arm: one continuation step)',
+      [],
+      'servo 3 1520',
+      333,
+    ],
     ['`servo 1 1900` from home (45 degrees: nine steps of 5 degrees)', [], 'servo 1 1900', 333],
-    ['`status` after `servo 1 1900`, with a payload (the pose is known since `servo`; the holding torques take a pass of their own)', ['servo 1 1900', ...PAYLOAD], 'status', 333],
+    [
+      '`status` after `servo 1 1900`, with a payload (the pose is known since `servo`; the holding torques take a pass of their own)',
+      ['servo 1 1900', ...PAYLOAD],
+      'status',
+      333,
+    ],
     ['`limits` from home, within the servo limits', [], 'limits', 333],
-    ['`limits` from home with a payload and ratings of 1 kgf cm (each pose with its holding torques)', rated(1), 'limits', 333],
-    ['`check 0 0 10.48 0 0 0` from z = -10 at 1 mm/s, 50 Hz: 1,024 checkpoints by the IK', longest, 'check 0 0 10.48 0 0 0', 50],
-    ['the same with a payload and ratings of 2 kgf cm: each checkpoint with its holding torques (the longest command)', [...longest, ...rated(2)], 'check 0 0 10.48 0 0 0', 50],
+    [
+      '`limits` from home with a payload and ratings of 1 kgf cm (each pose with its holding torques)',
+      rated(1),
+      'limits',
+      333,
+    ],
+    [
+      '`check 0 0 10.48 0 0 0` from z = -10 at 1 mm/s, 50 Hz: 1,024 checkpoints by the IK',
+      longest,
+      'check 0 0 10.48 0 0 0',
+      50,
+    ],
+    [
+      'the same with a payload and ratings of 2 kgf cm: each checkpoint with its holding torques (the longest command)',
+      [...longest, ...rated(2)],
+      'check 0 0 10.48 0 0 0',
+      50,
+    ],
   ];
-  return cases.map(([what, setup, line, frameHz]) => ({ what, ...measureCommand(setup, line, { frameHz }) }));
+  return cases.map(([what, setup, line, frameHz]) => ({
+    what,
+    ...measureCommand(setup, line, { frameHz }),
+  }));
 }
 
 /**
@@ -385,7 +428,16 @@ export function measureClampedStream() {
   const sent = 100;
   for (let i = 0; i < sent; i++) {
     // x from 5 to 25 mm: beyond what a 1 kgf cm rating holds with 2 kg (about 3 mm).
-    board.sendBytes(binaryFrame([32768 + Math.round((0.2 + i * 0.008) * 32768), 32768, 32768, 32768, 32768, 32768]));
+    board.sendBytes(
+      binaryFrame([
+        32768 + Math.round((0.2 + i * 0.008) * 32768),
+        32768,
+        32768,
+        32768,
+        32768,
+        32768,
+      ]),
+    );
     board.runMs(2);
   }
   board.runMs(50);
@@ -476,12 +528,13 @@ export function measureLongestPass() {
 }
 
 /**
- * A `save` with the flash model's `timing` ('typical' or 'max', rp2040js-gaps.js gap 7): its
+ * A `save` with the flash model's `timing` ('typical' or 'max', gaps/flash.js, gap 7): its
  * one long main-loop pass (the sector erase and the page program in the boot ROM with
  * interrupts masked, and the firmware's own work in that pass), the time from its line end to
  * its `ok` at the host, and the frames the loop missed meanwhile (the PWM hardware held the
  * pulses). Returns { passCycles, flashCycles, replyMicros, frames, missed, longPasses, board }.
  */
+/** @param {{ timing?: 'typical'|'max' }} [options] */
 export function measureSave({ timing = 'typical' } = {}) {
   const { board, lineEnds } = streamingBoard({ flashTiming: timing });
   board.runMs(50);

@@ -35,7 +35,14 @@ export function streamCounters(board) {
 
 /** A small reachable pose's frame counts: x, z and yaw moving with `k`. */
 function frameCounts(k) {
-  return [32768 + (k % 40) * 100, 32768, 32768 + (k % 17) * 150, 32768, 32768, 32768 + (k % 23) * 80];
+  return [
+    32768 + (k % 40) * 100,
+    32768,
+    32768 + (k % 17) * 150,
+    32768,
+    32768,
+    32768 + (k % 23) * 80,
+  ];
 }
 
 /**
@@ -138,7 +145,7 @@ export function measureStreamCpu({
     framesPerSecond,
     seconds,
     cpuShare: busyCycles / elapsedCycles,
-    cyclesPerServoFrame: busyCycles / ((board.nanos - startNanos) / 1e9 * 333),
+    cyclesPerServoFrame: busyCycles / (((board.nanos - startNanos) / 1e9) * 333),
     frames: after.frames - before.frames,
     applied: after.applied - before.applied,
     clamped: after.clamped - before.clamped,

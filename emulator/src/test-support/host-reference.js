@@ -11,7 +11,7 @@ import { execFileSync, spawnSync } from 'node:child_process';
 import { dirname, join } from 'node:path';
 import { fileURLToPath } from 'node:url';
 
-const REPO = join(dirname(fileURLToPath(import.meta.url)), '..', '..');
+const REPO = join(dirname(fileURLToPath(import.meta.url)), '..', '..', '..');
 const EXAMPLE = 'pulse_reference';
 
 let cachedBinary = null;
@@ -24,14 +24,23 @@ export function buildHostReference() {
   const output = execFileSync(
     'cargo',
     ['build', '--quiet', '-p', 'host-tests', '--example', EXAMPLE, '--message-format=json'],
-    { cwd: REPO, encoding: 'utf8', maxBuffer: 64 * 1024 * 1024, stdio: ['ignore', 'pipe', 'inherit'] },
+    {
+      cwd: REPO,
+      encoding: 'utf8',
+      maxBuffer: 64 * 1024 * 1024,
+      stdio: ['ignore', 'pipe', 'inherit'],
+    },
   );
   for (const line of output.split('\n')) {
     if (!line.startsWith('{')) {
       continue;
     }
     const message = JSON.parse(line);
-    if (message.reason === 'compiler-artifact' && message.target?.name === EXAMPLE && message.executable) {
+    if (
+      message.reason === 'compiler-artifact' &&
+      message.target?.name === EXAMPLE &&
+      message.executable
+    ) {
       cachedBinary = message.executable;
     }
   }
@@ -53,12 +62,18 @@ function orZero(value) {
  * `{ trim_us, rate_us_rad, dir, min_us, max_us, torque_kgcm }`; `payload` (optional) is
  * `{ payload_g, payload_com_x_mm, payload_com_y_mm, payload_com_z_mm }`.
  */
+/**
+ * @param {{ layout: Record<string, number>, servos: Record<string, number | string>[],
+ *   payload?: Record<string, number> }} settings
+ */
 export function configLines({ layout, servos, payload = {} }) {
   const l = layout;
   const p = payload;
   return [
     `layout ${l.base_radius_mm} ${l.base_half_angle_deg} ${l.platform_radius_mm} ${l.platform_half_angle_deg} ${l.arm_mm} ${l.rod_mm}`,
-    ...servos.map((s, i) => `servo ${i + 1} ${s.trim_us} ${s.rate_us_rad} ${s.dir} ${s.min_us} ${s.max_us}`),
+    ...servos.map(
+      (s, i) => `servo ${i + 1} ${s.trim_us} ${s.rate_us_rad} ${s.dir} ${s.min_us} ${s.max_us}`,
+    ),
     `payload ${orZero(p.payload_g)} ${orZero(p.payload_com_x_mm)} ${orZero(p.payload_com_y_mm)} ${orZero(p.payload_com_z_mm)}`,
     `ratings ${servos.map((s) => orZero(s.torque_kgcm)).join(' ')}`,
   ];
@@ -79,7 +94,10 @@ export class HostReference {
     if (result.status !== 0) {
       throw new Error(`${this.binary} failed (${result.status}): ${result.stderr}`);
     }
-    const answers = result.stdout.trim().split('\n').map((line) => JSON.parse(line));
+    const answers = result.stdout
+      .trim()
+      .split('\n')
+      .map((line) => JSON.parse(line));
     if (answers.length !== requests.length) {
       throw new Error(`${requests.length} requests, ${answers.length} answers`);
     }

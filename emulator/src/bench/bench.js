@@ -1,6 +1,6 @@
 // `./dev bench`: the IK and firmware benchmarks in the emulator; writes BENCHMARKS.md.
 //
-//   node src/bench.js [--poses N] [--seed S] [--lines N] [--out PATH]
+//   node src/bench/bench.js [--poses N] [--seed S] [--lines N] [--out PATH]
 //
 // Expects `cargo fw` to have built the firmware and the benchmark firmware (./dev bench does).
 
@@ -9,8 +9,8 @@ import { dirname, join, relative } from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { parseArgs } from 'node:util';
 
-import { DEFAULT_ELF } from './board.js';
-import { sectionSizes, sizedSymbols, symbolSizes, symbolValues } from './elf.js';
+import { DEFAULT_ELF } from '../chip/board.js';
+import { sectionSizes, sizedSymbols, symbolSizes, symbolValues } from '../chip/elf.js';
 import {
   measureClampedStream,
   measureKinematicsCommands,
@@ -24,11 +24,17 @@ import {
   measureWorstCommand,
   stackHighWaterBytes,
 } from './firmware-bench.js';
-import { BULK_PACKETS_PER_FRAME } from './rp2040js-gaps.js';
-import { benchPoses, profileIk, runIkBench, runKinematicsBench, runStreamBench } from './ik-bench.js';
+import { BULK_PACKETS_PER_FRAME } from '../gaps/index.js';
+import {
+  benchPoses,
+  profileIk,
+  runIkBench,
+  runKinematicsBench,
+  runStreamBench,
+} from './ik-bench.js';
 import { highestFrameRate, measureFrameLatency, measureStreamCpu } from './stream-bench.js';
 
-const REPO = join(dirname(fileURLToPath(import.meta.url)), '..', '..');
+const REPO = join(dirname(fileURLToPath(import.meta.url)), '..', '..', '..');
 const CLOCK_HZ = 125e6;
 const WATCHDOG_MS = 500;
 const STREAM_BAUD = 921600;
@@ -50,7 +56,8 @@ const BEFORE_ROM = {
   min: 17968,
   max: 18228,
   worstUs: 2.85e-4,
-  profile: 'firmware code 8,253, `fatan2` 4,075 (6 calls), `fadd` 2,185 (32), `fsin` 1,729 (3), `fmul` 1,502 (27), `fsqrt` 374 (6)',
+  profile:
+    'firmware code 8,253, `fatan2` 4,075 (6 calls), `fadd` 2,185 (32), `fsin` 1,729 (3), `fmul` 1,502 (27), `fsqrt` 374 (6)',
 };
 /** The largest pulse error the IK may have against the f64 reference, us. */
 const TARGET_US = 0.01;
@@ -58,12 +65,12 @@ const TARGET_US = 0.01;
 const FRAME_333_CYCLES = 125e6 / 333;
 /** What each variant of the IK benchmark is, for its row. */
 const VARIANT_ROWS = {
-  rom: 'the boot ROM\'s `f32` `fsin`, `fsqrt`, `fatan2` in place of the integer routines',
-  libm: '`libm`\'s `f32` routines in their place (straightforward port)',
-  micromath: '`micromath`\'s (2.1) sin/cos, sqrt and atan2 in their place',
-  'micromath-sin-cos': '`micromath`\'s sin/cos alone',
-  'micromath-sqrt': '`micromath`\'s sqrt alone',
-  'micromath-atan2': '`micromath`\'s atan2 alone',
+  rom: "the boot ROM's `f32` `fsin`, `fsqrt`, `fatan2` in place of the integer routines",
+  libm: "`libm`'s `f32` routines in their place (straightforward port)",
+  micromath: "`micromath`'s (2.1) sin/cos, sqrt and atan2 in their place",
+  'micromath-sin-cos': "`micromath`'s sin/cos alone",
+  'micromath-sqrt': "`micromath`'s sqrt alone",
+  'micromath-atan2': "`micromath`'s atan2 alone",
 };
 /** The variant with `micromath`'s routine alone, by routine. */
 const MICROMATH_ALONE = {
@@ -107,7 +114,8 @@ const { values: args } = parseArgs({
 
 const log = (text) => process.stderr.write(`${text}\n`);
 const us = (cycles) => (cycles / CLOCK_HZ) * 1e6;
-const fmt = (x, digits = 0) => x.toLocaleString('en-US', { maximumFractionDigits: digits, minimumFractionDigits: digits });
+const fmt = (x, digits = 0) =>
+  x.toLocaleString('en-US', { maximumFractionDigits: digits, minimumFractionDigits: digits });
 
 /** A smooth streaming path: small steps in all six coordinates (mm, degrees). */
 function streamLines(count) {
@@ -130,16 +138,22 @@ log(`IK: ${args.poses} random reachable poses (seed ${args.seed}) ...`);
 const poses = benchPoses(Number(args.poses), Number(args.seed));
 const ik = runIkBench(poses);
 if (ik.failures.length > 0) {
-  throw new Error(`the chip refused ${ik.failures.length} poses the host solved: ${JSON.stringify(ik.failures[0])}`);
+  throw new Error(
+    `the chip refused ${ik.failures.length} poses the host solved: ${JSON.stringify(ik.failures[0])}`,
+  );
 }
 
 const PROFILE_POSES = 5;
 const profile = profileIk(poses.slice(0, PROFILE_POSES));
 const variant = (name) => ik.variants.find((v) => v.name === name);
 const [firmware] = ik.variants;
-const romProfile = profileIk(poses.slice(0, PROFILE_POSES), { variant: ik.variants.indexOf(variant('rom')) });
+const romProfile = profileIk(poses.slice(0, PROFILE_POSES), {
+  variant: ik.variants.indexOf(variant('rom')),
+});
 if (!variant('micromath')) {
-  throw new Error('the benchmark firmware was built without `micromath`: cargo fw --features micromath');
+  throw new Error(
+    'the benchmark firmware was built without `micromath`: cargo fw --features micromath',
+  );
 }
 if (firmware.worstVsRef > TARGET_US) {
   throw new Error(`the firmware's IK is off by ${firmware.worstVsRef} us, beyond ${TARGET_US} us`);
@@ -150,7 +164,10 @@ log('stream: clamps and tracker frames ...');
 const STREAM_POSES = 40;
 const TRACK_FRAMES = 3;
 const CLAMP_DZ_MM = 60;
-const stream = runStreamBench(poses.slice(0, STREAM_POSES), { frames: TRACK_FRAMES, dzMm: CLAMP_DZ_MM });
+const stream = runStreamBench(poses.slice(0, STREAM_POSES), {
+  frames: TRACK_FRAMES,
+  dzMm: CLAMP_DZ_MM,
+});
 
 // ---- the rest of the kinematics ----
 const LIMITS_POSES = 20;
@@ -177,7 +194,14 @@ const latencyJumpUsb = measureLatency(['5 0 0 0 0 0', '0 0 0 0 0 0', '0 0 5 0 0 
 
 // ---- stream frames ----
 log('stream frames ...');
-const frameCountsFor = (i) => [32768 + (i % 5) * 300 + 7, 32768 + i, 32768 + (i % 3) * 500, 32768, 32768 + (i % 2) * 200, 32768 + (i % 4) * 200];
+const frameCountsFor = (i) => [
+  32768 + (i % 5) * 300 + 7,
+  32768 + i,
+  32768 + (i % 3) * 500,
+  32768,
+  32768 + (i % 2) * 200,
+  32768 + (i % 4) * 200,
+];
 const frameSet = Array.from({ length: 40 }, (_, i) => frameCountsFor(i));
 const frameFastUs = measureFrameLatency(frameSet, { baud: STREAM_BAUD });
 const frameSlowUs = measureFrameLatency(frameSet, { baud: 115200 });
@@ -201,7 +225,9 @@ const rates = [];
 for (const linesPerSecond of [1000, 1200, 1400, 1600, 1800, Infinity]) {
   const result = measureStream(lines, { baud: STREAM_BAUD, linesPerSecond });
   rates.push({ offered: linesPerSecond, ...result });
-  log(`  offered ${linesPerSecond}/s: ${result.ok}/${result.lines} ok, ${fmt(result.linesPerSecond)} lines/s`);
+  log(
+    `  offered ${linesPerSecond}/s: ${result.ok}/${result.lines} ok, ${fmt(result.linesPerSecond)} lines/s`,
+  );
   if (result.ok !== result.lines) {
     break;
   }
@@ -226,12 +252,20 @@ const passesBoth = measureLongestPassBothLinks();
 log('servo, limits, torque-checked paths ...');
 const kinCommands = measureKinematicsCommands();
 for (const c of kinCommands) {
-  log(`  ${c.line}: ${fmt(c.micros / 1000, 2)} ms, longest pass ${fmt(c.longestPassCycles)} cycles`);
+  log(
+    `  ${c.line}: ${fmt(c.micros / 1000, 2)} ms, longest pass ${fmt(c.longestPassCycles)} cycles`,
+  );
 }
 const clampedStream = measureClampedStream();
-const kinLongest = Math.max(...kinCommands.map((c) => c.longestPassCycles), clampedStream.longestPassCycles);
+const kinLongest = Math.max(
+  ...kinCommands.map((c) => c.longestPassCycles),
+  clampedStream.longestPassCycles,
+);
 log('save ...');
-const saves = ['typical', 'max'].map((timing) => ({ timing, ...measureSave({ timing }) }));
+const saves = /** @type {('typical' | 'max')[]} */ (['typical', 'max']).map((timing) => ({
+  timing,
+  ...measureSave({ timing }),
+}));
 
 // ---- sizes ----
 const sizes = (elf) => {
@@ -266,9 +300,15 @@ const passing = rates.filter((r) => r.ok === r.lines);
 const best = passing[passing.length - 1];
 const rateRows = rates
   .map((r) => {
-    const offered = Number.isFinite(r.offered) ? `${fmt(r.offered)}/s` : `back to back (wire limit ${fmt(r.wireLinesPerSecond)}/s)`;
-    const outcome = r.ok === r.lines ? 'all `ok`' : `refused lines; ${r.droppedBytes} bytes lost in the UART FIFO; first error: \`${r.errors[0] ?? ''}\``;
-    const accepted = r.ok === r.lines ? `${fmt(r.linesPerSecond)}/s` : `${r.ok} of ${r.lines} lines`;
+    const offered = Number.isFinite(r.offered)
+      ? `${fmt(r.offered)}/s`
+      : `back to back (wire limit ${fmt(r.wireLinesPerSecond)}/s)`;
+    const outcome =
+      r.ok === r.lines
+        ? 'all `ok`'
+        : `refused lines; ${r.droppedBytes} bytes lost in the UART FIFO; first error: \`${r.errors[0] ?? ''}\``;
+    const accepted =
+      r.ok === r.lines ? `${fmt(r.linesPerSecond)}/s` : `${r.ok} of ${r.lines} lines`;
     return `| ${offered} | ${accepted} | ${outcome} |`;
   })
   .join('\n');
@@ -334,7 +374,10 @@ solver (home angles from its own routines), so the choice of routines is a measu
 | before that: ROM through rp2040-hal's wrappers (commit ${BEFORE.commit}, measured once) | ${fmt(BEFORE.mean)} | ${fmt(BEFORE.min)} | ${fmt(BEFORE.max)} | ${fmt(us(BEFORE.mean), 1)} | |
 ${ik.variants
   .slice(1)
-  .map((v) => `| ${VARIANT_ROWS[v.name] ?? v.name} | ${fmt(v.mean)} | ${fmt(v.min)} | ${fmt(v.max)} | ${fmt(us(v.mean), 1)} | ${v.worstVsRef.toExponential(2)} us${v.worstVsRef > TARGET_US ? ' (beyond the target)' : ''}${v.refused ? `, ${v.refused} poses refused` : ''} |`)
+  .map(
+    (v) =>
+      `| ${VARIANT_ROWS[v.name] ?? v.name} | ${fmt(v.mean)} | ${fmt(v.min)} | ${fmt(v.max)} | ${fmt(us(v.mean), 1)} | ${v.worstVsRef.toExponential(2)} us${v.worstVsRef > TARGET_US ? ' (beyond the target)' : ''}${v.refused ? `, ${v.refused} poses refused` : ''} |`,
+  )
   .join('\n')}
 
 Speed-up: ${fmt(BEFORE_ROM.mean / firmware.mean, 2)}x over the ROM routines (commit ${BEFORE_ROM.commit}), ${fmt(BEFORE.mean / firmware.mean, 2)}x over the firmware before them. Target: at most 12,000 cycles, at no loss of accuracy (at most ${TARGET_US} us against the f64 reference; it was ${BEFORE_ROM.worstUs.toExponential(2)} us).
@@ -505,7 +548,7 @@ sending the next line gets ${fmt(lockStep.linesPerSecond)} lines/s (${lockStep.o
 
 ## USB serial
 
-The same firmware with a USB host on its USB port (\`emulator/src/rp2040js-gaps.js\`, gaps
+The same firmware with a USB host on its USB port (\`emulator/src/gaps/usb.js\`, gaps
 9-12): the host has enumerated the firmware and opened the port, echo off there, speed limits
 off. The host's packets share a full-speed bus of at most ${BULK_PACKETS_PER_FRAME} bulk packets of 64 bytes
 per 1 ms frame, each transaction holding the bus for 1/${BULK_PACKETS_PER_FRAME} ms whatever its length (a short
@@ -565,7 +608,7 @@ both links (the USB interrupt among them): ${fmt(passesBoth.longestHandlerCycles
 measured from one watchdog feed to the next (the loop feeds it at its top), in CPU cycles, which
 the emulator does not count while the core sleeps; interrupt handlers inside a pass count in it.
 A missed frame is a frame period in which the firmware wrote no new compare values
-(\`emulator/src/loop-meter.js\`); \`emulator/test/main-loop.test.js\` asserts the bound and no
+(\`emulator/src/chip/loop-meter.js\`); \`emulator/test/main-loop.test.js\` asserts the bound and no
 missed frame for these cases and others.
 
 ### \`servo\`, \`limits\` and torque-checked paths
@@ -597,7 +640,7 @@ A \`save\` erases one 4 KiB flash sector and programs one 256-byte page through 
 from RAM with interrupts masked (flash cannot be read meanwhile), alone in its main-loop pass:
 that pass is over the 1 ms bound by design, the watchdog is given 2 s around it, and the PWM
 hardware holds the pulses (a save is refused while the platform moves). The emulator times the
-flash as the W25Q80DV datasheet gives it (rp2040js-gaps.js, gap 7), the core busy in the ROM
+flash as the W25Q80DV datasheet gives it (gaps/flash.js, gap 7), the core busy in the ROM
 meanwhile: sector erase ${saves[0].times.sectorEraseMs} ms typical, ${saves[1].times.sectorEraseMs} ms maximum; page program ${saves[0].times.pageProgramMs} ms typical, ${saves[1].times.pageProgramMs} ms maximum
 (the other ROM calls and the SPI transfers are taken as instant). Echo off, 115,200 baud, 50 Hz.
 
@@ -648,13 +691,13 @@ ${Object.entries(storageSymbols)
 
 \`\`\`sh
 ./dev bench                  # builds, runs everything above, rewrites BENCHMARKS.md (a few minutes)
-node emulator/src/bench.js --poses 1000 --seed 7   # more poses, another seed
+node emulator/src/bench/bench.js --poses 1000 --seed 7   # more poses, another seed
 \`\`\`
 
 Files: \`firmware/src/bin/bench.rs\` (IK, kinematics and stream benchmark firmware; \`./dev bench\`
 builds it with \`--features micromath\`),
-\`host-tests/examples/bench_poses.rs\` (poses, f64 reference pulses, Jacobians and torques), \`emulator/src/ik-bench.js\`, \`emulator/src/firmware-bench.js\`,
-\`emulator/src/bench.js\` (this report). \`emulator/test/rom-math.test.js\` runs a small IK
+\`host-tests/examples/bench_poses.rs\` (poses, f64 reference pulses, Jacobians and torques), \`emulator/src/bench/ik-bench.js\`, \`emulator/src/bench/firmware-bench.js\`,
+\`emulator/src/bench/bench.js\` (this report). \`emulator/test/rom-math.test.js\` runs a small IK
 comparison in \`./dev test\` (no timing assertions).
 `;
 writeFileSync(args.out, report);
@@ -664,4 +707,6 @@ log(
     `Jacobian ${fmt(kin.jacobian.mean)}, torque ${fmt(kin.torque.mean)}, limits ${fmt(kin.limits.mean)}`,
 );
 log(`servo/limits/torque: longest pass ${fmt(kinLongest)} cycles`);
-log(`IK ${fmt(firmware.mean)} cycles (max ${fmt(firmware.max)}; micromath ${fmt(variant('micromath').mean)}), max error ${firmware.worstVsRef.toExponential(2)} us; clamp ${fmt(stream.clamp.mean)}, tracker frame ${fmt(stream.track.mean)} cycles; latency ${fmt(small.mean)} us (USB ${fmt(smallUsb.mean)} us); sustained ${best ? fmt(best.linesPerSecond) : 'none'} lines/s (USB ${usbBest ? fmt(usbBest.linesPerSecond) : 'none'}); worst command ${fmt(worst.micros / 1000, 1)} ms`);
+log(
+  `IK ${fmt(firmware.mean)} cycles (max ${fmt(firmware.max)}; micromath ${fmt(variant('micromath').mean)}), max error ${firmware.worstVsRef.toExponential(2)} us; clamp ${fmt(stream.clamp.mean)}, tracker frame ${fmt(stream.track.mean)} cycles; latency ${fmt(small.mean)} us (USB ${fmt(smallUsb.mean)} us); sustained ${best ? fmt(best.linesPerSecond) : 'none'} lines/s (USB ${usbBest ? fmt(usbBest.linesPerSecond) : 'none'}); worst command ${fmt(worst.micros / 1000, 1)} ms`,
+);

@@ -5,10 +5,10 @@ import { execFileSync } from 'node:child_process';
 import { dirname, join } from 'node:path';
 import { fileURLToPath } from 'node:url';
 
-import { EmulatedBoard } from './board.js';
-import { symbolRanges } from './elf.js';
+import { EmulatedBoard } from '../chip/board.js';
+import { symbolRanges } from '../chip/elf.js';
 
-const REPO = join(dirname(fileURLToPath(import.meta.url)), '..', '..');
+const REPO = join(dirname(fileURLToPath(import.meta.url)), '..', '..', '..');
 /** The benchmark ELF `cargo fw` builds next to the firmware; BENCH_ELF=path overrides. */
 export const BENCH_ELF =
   process.env.BENCH_ELF ?? join(REPO, 'target', 'thumbv6m-none-eabi', 'release', 'bench');
@@ -96,7 +96,9 @@ export function runIkBench(poses, { elf = BENCH_ELF } = {}) {
       highs.push(edges[i + 1].cycles - edges[i].cycles);
     }
     if (highs.length !== names.length + 1) {
-      throw new Error(`pose ${index}: expected ${names.length + 1} marker pulses, saw ${highs.length}`);
+      throw new Error(
+        `pose ${index}: expected ${names.length + 1} marker pulses, saw ${highs.length}`,
+      );
     }
     for (const [v, variant] of variants.entries()) {
       const parsed = parsePulses(words);
@@ -107,7 +109,10 @@ export function runIkBench(poses, { elf = BENCH_ELF } = {}) {
         continue;
       }
       for (let i = 0; i < 6; i++) {
-        variant.worstVsRef = Math.max(variant.worstVsRef, Math.abs(parsed.pulses[i] - pose.ref_us[i]));
+        variant.worstVsRef = Math.max(
+          variant.worstVsRef,
+          Math.abs(parsed.pulses[i] - pose.ref_us[i]),
+        );
       }
       if (v === 0) {
         const bits = parsed.pulses.map(f32Bits);
@@ -115,7 +120,10 @@ export function runIkBench(poses, { elf = BENCH_ELF } = {}) {
           firmwareVsHost.differing++;
         }
         for (let i = 0; i < 6; i++) {
-          firmwareVsHost.worst = Math.max(firmwareVsHost.worst, Math.abs(parsed.pulses[i] - pose.host_us[i]));
+          firmwareVsHost.worst = Math.max(
+            firmwareVsHost.worst,
+            Math.abs(parsed.pulses[i] - pose.host_us[i]),
+          );
         }
       }
     }
@@ -206,7 +214,9 @@ export function profileIk(poses, { elf = BENCH_ELF, variant = 0 } = {}) {
       if (pc < ROM_END) {
         const call = previousPc >= ROM_END;
         if (call) {
-          entered = names.get(pc) ?? 'other ROM routines (int/float conversions; a first call\'s table look-up)';
+          entered =
+            names.get(pc) ??
+            "other ROM routines (int/float conversions; a first call's table look-up)";
         }
         count(entered, cycles, call);
       } else if (routine) {
@@ -223,7 +233,11 @@ export function profileIk(poses, { elf = BENCH_ELF, variant = 0 } = {}) {
     board.request(`p ${pose.pose_bits.join(' ')}`, { final: /^(r |error)/, timeoutMs: 1000 });
   }
   return [...rows]
-    .map(([name, { cycles, calls }]) => ({ name, cycles: cycles / poses.length, calls: calls / poses.length }))
+    .map(([name, { cycles, calls }]) => ({
+      name,
+      cycles: cycles / poses.length,
+      calls: calls / poses.length,
+    }))
     .sort((a, b) => b.cycles - a.cycles);
 }
 
@@ -348,7 +362,10 @@ export function runKinematicsBench(poses, { elf = BENCH_ELF, limitsPoses = 20 } 
       const values = floats(j.reply);
       // Per row and per half (per mm, per rad): the error relative to the half's largest entry.
       for (let row = 0; row < 6; row++) {
-        for (const [from, to] of [[0, 3], [3, 6]]) {
+        for (const [from, to] of [
+          [0, 3],
+          [3, 6],
+        ]) {
           let scale = 0;
           let error = 0;
           for (let k = from; k < to; k++) {

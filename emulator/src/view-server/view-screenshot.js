@@ -2,7 +2,7 @@
 // Takes the README's picture of the live 3D view: starts `./dev run`, opens the page in headless
 // Chromium (1280 x 800 px), types a pose from the README's golden table into the page's
 // terminal line, waits for the readout to show it and saves a PNG of the whole page.
-// Usage: node emulator/src/view-screenshot.js [out.png]  (default emulator/view/screenshot.png)
+// Usage: node emulator/src/view-server/view-screenshot.js [out.png]  (default emulator/view/screenshot.png)
 
 import { dirname, join } from 'node:path';
 import { fileURLToPath } from 'node:url';
@@ -14,9 +14,11 @@ import {
   startRunner,
   typeLine,
   waitForPose,
-} from './view-browser.js';
+} from '../test-support/view-browser.js';
 
-const out = process.argv[2] ?? join(dirname(fileURLToPath(import.meta.url)), '..', 'view', 'screenshot.png');
+const out =
+  process.argv[2] ??
+  join(dirname(fileURLToPath(import.meta.url)), '..', '..', 'view', 'screenshot.png');
 /** "combined" in the README's golden table: x y z (mm), roll pitch yaw (deg). */
 const POSE = [4, -6, 5, 3, -4, 6];
 

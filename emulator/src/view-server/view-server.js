@@ -17,10 +17,10 @@ import { createServer } from 'node:http';
 import { dirname, extname, join, resolve, sep } from 'node:path';
 import { fileURLToPath } from 'node:url';
 
-import { BANNER } from './board.js';
+import { BANNER } from '../chip/board.js';
 import { ListingReader, listingsChangedBy } from './board-listings.js';
 
-const EMULATOR = join(dirname(fileURLToPath(import.meta.url)), '..');
+const EMULATOR = join(dirname(fileURLToPath(import.meta.url)), '..', '..');
 const REPO = join(EMULATOR, '..');
 /** The view's kinematics as `cargo build -p view-kinematics --release --target
  * wasm32-unknown-unknown` leaves it (`./dev run` builds it). */
@@ -46,8 +46,16 @@ const MAX_PAGE_LINE = 1024;
 /** URL prefix -> directory, and the sub-folders of it that may be served. */
 const STATIC = [
   { prefix: '/view/', dir: join(EMULATOR, 'view'), allow: [''] },
-  { prefix: '/vendor/three/', dir: join(EMULATOR, 'node_modules', 'three'), allow: ['build', 'examples/jsm'] },
-  { prefix: '/vendor/xterm/', dir: join(EMULATOR, 'node_modules', '@xterm', 'xterm'), allow: ['lib', 'css'] },
+  {
+    prefix: '/vendor/three/',
+    dir: join(EMULATOR, 'node_modules', 'three'),
+    allow: ['build', 'examples/jsm'],
+  },
+  {
+    prefix: '/vendor/xterm/',
+    dir: join(EMULATOR, 'node_modules', '@xterm', 'xterm'),
+    allow: ['lib', 'css'],
+  },
 ];
 
 const CONTENT_TYPES = {
@@ -65,11 +73,14 @@ const CONTENT_TYPES = {
  * Starts the server; resolves to a ViewServer once it listens. `port` 0 takes any free port;
  * another port that is taken falls back to any free one when `fallback` is set.
  * @param {object} options
- * @param {import('./board.js').EmulatedBoard} options.board
+ * @param {import('../chip/board.js').EmulatedBoard} options.board
  * @param {object} [options.serial] the serial link the page and the terminal share (one with
  *   `onOutput(listener)`: `board.usb`, `board.uart`; default the board, UART0)
  * @param {import('./shared-input.js').SharedInput} options.input
  * @param {string} [options.link] what the terminal side is, for the page ('terminal', 'pty')
+ * @param {number} [options.port] the port to listen on (default `DEFAULT_VIEW_PORT`)
+ * @param {boolean} [options.fallback] take any free port if `port` is taken (default true)
+ * @param {string} [options.wasm] the view's WebAssembly module (default: the release build)
  */
 export async function startViewServer({
   board,
@@ -107,6 +118,7 @@ export class ViewServer {
     input.onLine((text, source) => this.lineSent(text, source));
   }
 
+  /** @returns {Promise<void>} */
   listen(port, fallback) {
     this.server = createServer((req, res) => this.handle(req, res));
     return new Promise((resolvePromise, reject) => {
@@ -120,7 +132,7 @@ export class ViewServer {
       this.server.on('error', onError);
       this.server.once('listening', () => {
         this.server.off('error', onError);
-        this.port = this.server.address().port;
+        this.port = /** @type {import('node:net').AddressInfo} */ (this.server.address()).port;
         resolvePromise();
       });
       this.server.listen(port, '127.0.0.1');

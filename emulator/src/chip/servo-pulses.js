@@ -41,7 +41,11 @@ export class ServoPulseMeter {
       pin.widthNanos = width;
       pin.pulses++;
       if (this.pulseListeners.size > 0) {
-        const pulse = { riseNanos: pin.lastRiseNanos, widthNanos: width, periodNanos: pin.periodNanos };
+        const pulse = {
+          riseNanos: pin.lastRiseNanos,
+          widthNanos: width,
+          periodNanos: pin.periodNanos,
+        };
         const index = this.pins.indexOf(pin);
         for (const listener of this.pulseListeners) {
           listener(index, pulse);

@@ -1,0 +1,315 @@
+// The flash, gap 7 of rp2040js 1.4.1 (numbered as in index.js).
+//
+// The chip: the Pico's 2 MiB W25Q080-class QSPI flash, written only through the SSI in
+// command mode (the boot ROM's routines, run with XIP off); a store into the flash window
+// never reaches it. rp2040js and the model:
+//
+// 7. Flash writes. rp2040js has no flash interface: its SSI is a stub, so the boot ROM's flash
+//    routines run to their end and change nothing; and a plain CPU store into the flash window
+//    (0x10000000..0x13ffffff) changes its flash array, which on a real chip never reaches the
+//    flash. `FlashChip` is the Pico's flash as firmware sees it through the boot ROM: the ROM
+//    function table's entries for connect_internal_flash (IF), flash_exit_xip (EX),
+//    flash_range_erase (RE), flash_range_program (RP), flash_flush_cache (FC) and
+//    flash_enter_cmd_xip (CX) lead to `BKPT #n; BX LR`, and the breakpoint does the routine's
+//    work on the flash array: an erase sets 4096-aligned sectors to 0xFF, a program ANDs
+//    256-aligned pages in (NOR: bits only go from 1 to 0). Each takes the flash chip's time
+//    in emulated time, the core busy in the ROM meanwhile (its cycles count): the Winbond
+//    W25Q80DV datasheet's 4 KiB sector erase (tSE) and page program (tPP) times,
+//    `W25Q080_TIMING`, typical (45 ms, 0.7 ms) by default, maximum (400 ms, 3 ms) on request;
+//    the other four routines and the SPI transfer take no time here. The chip's rules are
+//    enforced and a breach fails the run: every routine is called from SRAM (LR) with PRIMASK
+//    set; EX comes after IF, RE and RP after EX; from EX until CX nothing in the flash window
+//    is fetched, read or written (the chip is in command mode); the data to program is in
+//    SRAM; erase and program are aligned and within the Pico's 2 MiB. A CPU store into the
+//    flash window fails the run at any time. The array survives power cycles (board.js keeps
+//    it), a power cut can be armed at a chosen byte of an erase or a program
+//    (`cutPowerDuring`), and bits can be worn out (`wearOut`: a program cannot clear them).
+
+/** The Pico's flash: 2 MiB (rp2040js maps 16 MiB). */
+export const PICO_FLASH_BYTES = 2 * 1024 * 1024;
+export const FLASH_SECTOR_BYTES = 4096;
+export const FLASH_PAGE_BYTES = 256;
+const FLASH_WINDOW_START = 0x10000000;
+const FLASH_WINDOW_END = 0x14000000;
+const SRAM_START = 0x20000000;
+const SRAM_END = 0x20042000;
+const ROM_BYTES = 0x4000;
+/** Where the boot ROM keeps the 16-bit pointer to its function table. */
+const ROM_FUNCTION_TABLE_POINTER = 0x14;
+const THUMB_BX_LR = 0x4770;
+const THUMB_BKPT = 0xbe00;
+/**
+ * The Pico's flash chip's erase and program times: Winbond W25Q80DV datasheet, AC electrical
+ * characteristics, sector erase (4 KiB) tSE and page program tPP, typical and maximum.
+ */
+export const W25Q080_TIMING = {
+  typical: { sectorEraseMs: 45, pageProgramMs: 0.7 },
+  max: { sectorEraseMs: 400, pageProgramMs: 3 },
+};
+/** The routines modelled: ROM table code, name, breakpoint number. */
+const FLASH_ROUTINES = [
+  ['IF', 'connect_internal_flash'],
+  ['EX', 'flash_exit_xip'],
+  ['RE', 'flash_range_erase'],
+  ['RP', 'flash_range_program'],
+  ['FC', 'flash_flush_cache'],
+  ['CX', 'flash_enter_cmd_xip'],
+].map(([code, name], i) => ({ code, name, bkpt: 0xf0 + i }));
+
+const hex = (value) => `0x${(value >>> 0).toString(16)}`;
+const inFlashWindow = (address) =>
+  address >>> 0 >= FLASH_WINDOW_START && address >>> 0 < FLASH_WINDOW_END;
+
+/**
+ * The flash chip: its contents (which survive power cycles), its timing, the erases and
+ * programs done (`ops`), an armed power cut, worn bits.
+ */
+export class FlashChip {
+  /**
+   * @param {Uint8Array} image the flash array (rp2040js's, of the first chip powered on)
+   * @param {object} [options]
+   * @param {'typical'|'max'|{sectorEraseMs: number, pageProgramMs: number}} [options.timing]
+   */
+  constructor(image, { timing = 'typical' } = {}) {
+    this.image = image;
+    this.timing = timing;
+    /** Every erase and program: `{ routine: 'erase'|'program', offset, bytes, nanos }`. */
+    this.ops = [];
+    this.cut = null;
+    /** Offset -> bits a program cannot clear. */
+    this.worn = new Map();
+  }
+
+  /** The erase and program times in use, ms. */
+  get times() {
+    return typeof this.timing === 'string' ? W25Q080_TIMING[this.timing] : this.timing;
+  }
+
+  /**
+   * Arms a power cut: during the `call`-th `routine` ('erase' or 'program') from now, after
+   * `bytes` bytes of its work (in address order; 0 = before any), with the bits in `mask` of
+   * the next byte's change done (0 = none). The chip then stops at once (board.js powers it
+   * off); nothing more is written.
+   */
+  cutPowerDuring({ routine, call = 1, bytes, mask = 0 }) {
+    if (routine !== 'erase' && routine !== 'program') {
+      throw new Error(`cutPowerDuring: routine must be 'erase' or 'program', not ${routine}`);
+    }
+    this.cut = { routine, call, bytes, mask, calls: 0 };
+  }
+
+  /** Bits of the byte at `offset` that no program can clear any more (a worn-out cell). */
+  wearOut(offset, mask) {
+    this.worn.set(offset, (this.worn.get(offset) ?? 0) | mask);
+  }
+
+  /** A copy of `length` bytes from `offset`. */
+  read(offset, length) {
+    return Uint8Array.from(this.image.subarray(offset, offset + length));
+  }
+
+  /** The armed cut if it falls in this call of `routine` (counting the call). */
+  cutIn(routine) {
+    if (!this.cut || this.cut.routine !== routine) {
+      return null;
+    }
+    this.cut.calls++;
+    if (this.cut.calls !== this.cut.call) {
+      return null;
+    }
+    const cut = this.cut;
+    this.cut = null;
+    return cut;
+  }
+}
+
+/** A view of the flash array whose stores fail the run (rp2040js writes flash through it). */
+/** @extends {DataView<ArrayBufferLike>} */
+class StoreGuardedView extends DataView {
+  constructor(buffer, onStore) {
+    super(buffer);
+    this.onStore = onStore;
+  }
+
+  setUint32(offset, value) {
+    this.onStore(offset, value);
+  }
+}
+
+/**
+ * Gap 7: connects a fresh `RP2040` (after `loadBootrom`) to `chip`: the chip's array becomes
+ * its flash, the six ROM routines trap into the model, stores into the flash window fail.
+ * `onFault(message)` fails the run; `onPowerCut()` powers the chip off after this instruction.
+ * Call after the board has set `mcu.onBreak` (breakpoints the model does not own go there).
+ */
+export function attachFlashChip(mcu, chip, { onFault, onPowerCut }) {
+  const { core } = mcu;
+  const buffer = chip.image.buffer;
+  mcu.flash = chip.image;
+  mcu.flash16 = new Uint16Array(buffer);
+  mcu.flashView = new StoreGuardedView(buffer, (offset, value) => {
+    const at = hex(FLASH_WINDOW_START + offset);
+    onFault(
+      `CPU store of ${hex(value)} into the flash window at ${at} (PC ${hex(core.PC)}): ` +
+        'a real chip never writes flash that way',
+    );
+  });
+
+  // The ROM function table: (code, 16-bit pointer) pairs, ending with code 0.
+  const rom = new DataView(mcu.bootrom.buffer);
+  const routines = new Map();
+  for (let entry = rom.getUint16(ROM_FUNCTION_TABLE_POINTER, true); ; entry += 4) {
+    const code = rom.getUint16(entry, true);
+    if (code === 0) {
+      break;
+    }
+    const name = String.fromCharCode(code & 0xff, code >> 8);
+    const routine = FLASH_ROUTINES.find((r) => r.code === name);
+    if (routine) {
+      const address = rom.getUint16(entry + 2, true) & ~1;
+      rom.setUint16(address, THUMB_BKPT | routine.bkpt, true);
+      rom.setUint16(address + 2, THUMB_BX_LR, true);
+      routines.set(routine.bkpt, routine);
+    }
+  }
+  if (routines.size !== FLASH_ROUTINES.length) {
+    const found = `${routines.size} of the ${FLASH_ROUTINES.length}`;
+    throw new Error(`boot ROM function table: found ${found} flash routines`);
+  }
+
+  let connected = false;
+  let xipOff = false;
+  let saved = null;
+  const guardReads = () => {
+    saved = { readUint32: mcu.readUint32, readUint16: mcu.readUint16, readUint8: mcu.readUint8 };
+    for (const [method, read] of Object.entries(saved)) {
+      mcu[method] = (address) => {
+        if (inFlashWindow(address)) {
+          onFault(
+            `flash read at ${hex(address)} while XIP is off (PC ${hex(core.PC)}): ` +
+              'the chip is in command mode',
+          );
+        }
+        return read.call(mcu, address);
+      };
+    }
+  };
+  const unguardReads = () => {
+    for (const method of Object.keys(saved)) {
+      delete mcu[method]; // back to rp2040js's own (prototype) methods
+    }
+    saved = null;
+  };
+  const busy = (ms) => {
+    const nanos = ms * 1e6;
+    core.cycles += Math.round((nanos * mcu.clkSys) / 1e9);
+    mcu.clock.tick(nanos);
+  };
+
+  const erase = (offset, count) => {
+    if (offset % FLASH_SECTOR_BYTES !== 0 || count % FLASH_SECTOR_BYTES !== 0 || count === 0) {
+      return onFault(`flash_range_erase(${hex(offset)}, ${count}): not whole 4096-byte sectors`);
+    }
+    if (offset + count > PICO_FLASH_BYTES) {
+      return onFault(`flash_range_erase(${hex(offset)}, ${count}): beyond the Pico's 2 MiB flash`);
+    }
+    chip.ops.push({ routine: 'erase', offset, bytes: count, nanos: mcu.clock.nanos });
+    const cut = chip.cutIn('erase');
+    for (let i = 0; i < count; i++) {
+      if (cut && i === cut.bytes) {
+        const old = chip.image[offset + i];
+        chip.image[offset + i] = old | (~old & cut.mask & 0xff);
+        return onPowerCut();
+      }
+      chip.image[offset + i] = 0xff;
+    }
+    busy((count / FLASH_SECTOR_BYTES) * chip.times.sectorEraseMs);
+    if (cut) {
+      onPowerCut(); // after the whole erase
+    }
+  };
+
+  const program = (offset, data, count) => {
+    if (offset % FLASH_PAGE_BYTES !== 0 || count % FLASH_PAGE_BYTES !== 0 || count === 0) {
+      return onFault(`flash_range_program(${hex(offset)}, ${count}): not whole 256-byte pages`);
+    }
+    if (offset + count > PICO_FLASH_BYTES) {
+      return onFault(`flash_range_program(${hex(offset)}, ${count}): beyond the 2 MiB flash`);
+    }
+    if (data < SRAM_START || data + count > SRAM_END) {
+      return onFault(
+        `flash_range_program: data at ${hex(data)} is not in SRAM ` +
+          '(flash cannot be read while XIP is off)',
+      );
+    }
+    chip.ops.push({ routine: 'program', offset, bytes: count, nanos: mcu.clock.nanos });
+    const cut = chip.cutIn('program');
+    for (let i = 0; i < count; i++) {
+      const at = offset + i;
+      const value = mcu.sram[data - SRAM_START + i] | (chip.worn.get(at) ?? 0);
+      if (cut && i === cut.bytes) {
+        chip.image[at] &= value | (~cut.mask & 0xff);
+        return onPowerCut();
+      }
+      chip.image[at] &= value;
+    }
+    busy((count / FLASH_PAGE_BYTES) * chip.times.pageProgramMs);
+    if (cut) {
+      onPowerCut(); // after the whole program
+    }
+  };
+
+  const otherBreak = mcu.onBreak;
+  mcu.onBreak = (code) => {
+    const routine = routines.get(code);
+    if (!routine || core.PC >>> 0 >= ROM_BYTES) {
+      return otherBreak(code); // not one of the patched entries
+    }
+    const lr = core.LR >>> 0;
+    if (lr < SRAM_START || lr >= SRAM_END) {
+      return onFault(
+        `${routine.name} called from ${hex(lr)}, not from SRAM: ` +
+          "the caller's code would be fetched from flash while XIP is off",
+      );
+    }
+    if (!core.PM) {
+      return onFault(
+        `${routine.name} called with interrupts enabled (PRIMASK clear): ` +
+          'a handler in flash could run while XIP is off',
+      );
+    }
+    const [r0, r1, r2] = core.registers;
+    switch (routine.code) {
+      case 'IF':
+        connected = true;
+        break;
+      case 'EX':
+        if (!connected) {
+          return onFault('flash_exit_xip before connect_internal_flash');
+        }
+        if (!xipOff) {
+          xipOff = true;
+          guardReads();
+        }
+        break;
+      case 'RE':
+      case 'RP':
+        if (!xipOff) {
+          return onFault(`${routine.name} while XIP is on (flash_exit_xip first)`);
+        }
+        if (routine.code === 'RE') {
+          return erase(r0 >>> 0, r1 >>> 0);
+        }
+        return program(r0 >>> 0, r1 >>> 0, r2 >>> 0);
+      case 'FC':
+        break;
+      case 'CX':
+        connected = false;
+        if (xipOff) {
+          xipOff = false;
+          unguardReads();
+        }
+        break;
+    }
+  };
+}
