@@ -63,7 +63,7 @@ export class EmulatedBoard {
    *   power-on (default: nothing plugged in). It enumerates the firmware and opens its serial
    *   port (DTR) unless `{ open: false }`; `board.usb` is that link.
    * @param {boolean} [options.xipCache] model the XIP flash cache (../gaps/xip-cache.js, gap
-   *   13; default: on, unless HEXAPOD_XIP_CACHE=off or `setXipCacheByDefault(false)`)
+   *   13; default: off, unless HEXAPOD_XIP_CACHE=on or `setXipCacheByDefault(true)`)
    */
   constructor({
     elf = DEFAULT_ELF,

@@ -48,8 +48,14 @@
 //    - Boot2: on the chip the boot ROM copies it into SRAM and runs it there; here it runs at
 //      0x10000000 (gap 6), so the model starts at the first fetch past boot2's 256 bytes.
 //
-//    Board option `xipCache: false` (or HEXAPOD_XIP_CACHE=off in the environment) leaves the
-//    model out: flash costs nothing, as rp2040js alone (the registers still answer).
+//    Board option `xipCache: true` (or HEXAPOD_XIP_CACHE=on in the environment, or
+//    `setXipCacheByDefault(true)`) puts the model in; without it flash costs nothing, as in
+//    rp2040js alone (the registers still answer, the counters stay 0). Off by default for now:
+//    with it, today's firmware misses the end-to-end tests' timing bounds (main-loop passes
+//    over 1 ms, receive-queue overflows at the line rate; issue 23 items 2-6 move the hot code
+//    to RAM). `./dev bench` measures with it (and without, for comparison), and `./dev test`
+//    guards the figures with it (test/bench-guard.test.js). Once the firmware meets its bounds
+//    with it, turn it on by default here.
 
 const FLASH_WINDOW_SHIFT = 26; // 0x10000000..0x13ffffff >>> 26 === 4
 const FLASH_WINDOW_TOP = 4;
@@ -75,7 +81,7 @@ const STAT_FIFO_EMPTY = 2;
 /** rp2040js's SSI (XIP_SSI_BASE 0x18000000) keeps what the firmware wrote to these. */
 const SSI_PAGE = 0x18000;
 
-let modelByDefault = process.env.HEXAPOD_XIP_CACHE !== 'off';
+let modelByDefault = process.env.HEXAPOD_XIP_CACHE === 'on';
 
 /** Whether boards made from now on get the cache model unless told (the bench's switch). */
 export function setXipCacheByDefault(on) {
