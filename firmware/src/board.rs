@@ -31,6 +31,8 @@ pub struct Board {
     pub timer: pac::TIMER,
     pub usbctrl_regs: pac::USBCTRL_REGS,
     pub usbctrl_dpram: pac::USBCTRL_DPRAM,
+    /// The XIP controller (its cache's hit and access counters, for the benchmark).
+    pub xip_ctrl: pac::XIP_CTRL,
 }
 
 impl Board {
@@ -63,6 +65,7 @@ impl Board {
             timer: p.TIMER,
             usbctrl_regs: p.USBCTRL_REGS,
             usbctrl_dpram: p.USBCTRL_DPRAM,
+            xip_ctrl: p.XIP_CTRL,
         }
     }
 }

@@ -140,6 +140,7 @@ impl Drivers {
             timer,
             usbctrl_regs,
             usbctrl_dpram,
+            xip_ctrl: _,
         } = board;
         let mut timer = Timer::new(timer, &mut resets, &clocks);
         let rx_poll = timer.alarm_0().expect("alarm 0 is taken once, here");

@@ -280,6 +280,7 @@ export function measureUsbStream(lines, { linesPerSecond = Infinity } = {}) {
 export function measureLockStep(lines, { baud = 921600, usb = false } = {}) {
   const { board, link } = usb ? usbStreamingBoard() : streamingBoard({ baud });
   const startNanos = board.nanos;
+  const startCycles = board.cycles;
   let ok = 0;
   for (const line of lines) {
     if (link.request(line).reply === 'ok') {
@@ -287,7 +288,10 @@ export function measureLockStep(lines, { baud = 921600, usb = false } = {}) {
     }
   }
   const seconds = (board.nanos - startNanos) / 1e9;
-  return { lines: lines.length, ok, seconds, linesPerSecond: ok / seconds };
+  // The CPU's cycles per line (asleep in WFI costs none): the line's whole cost on the chip,
+  // its bytes' interrupts, parse, checks, IK, reply.
+  const cyclesPerLine = (board.cycles - startCycles) / lines.length;
+  return { lines: lines.length, ok, seconds, linesPerSecond: ok / seconds, cyclesPerLine };
 }
 
 /**

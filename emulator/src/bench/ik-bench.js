@@ -72,10 +72,25 @@ const f32Bits = (x) => {
  * differ, largest difference); and the routines' errors on the chip (`mathErrors`: for
  * `rom`, `fixed` and, if built with it, `micromath`: [sin, cos, sqrt (relative), atan2]).
  */
-export function runIkBench(poses, { elf = BENCH_ELF } = {}) {
-  const board = new EmulatedBoard({ elf });
+/**
+ * @param {any[]} poses from `benchPoses`
+ * @param {{ elf?: string, cold?: boolean, errors?: boolean, xipCache?: boolean }} [options]
+ *   `cold`: the XIP cache (gaps/xip-cache.js) emptied at every marker edge, so each IK starts
+ *   with nothing cached; `errors: false` skips the routines' error grid (`m`, slow);
+ *   `xipCache`: the board's cache model (default: the process's default)
+ */
+export function runIkBench(poses, { elf = BENCH_ELF, cold = false, errors = true, xipCache } = {}) {
+  const board = new EmulatedBoard({ elf, ...(xipCache === undefined ? {} : { xipCache }) });
   const edges = [];
-  board.mcu.gpio[MARKER_GPIO].addListener((state) => edges.push({ state, cycles: board.cycles }));
+  board.mcu.gpio[MARKER_GPIO].addListener((state) => {
+    if (cold) {
+      board.xip?.flush();
+    }
+    const xip = board.xip?.stats;
+    edges.push({ state, cycles: board.cycles, accesses: xip?.accesses, hits: xip?.hits });
+  });
+  /** The firmware IK's flash accesses and hits (the XIP model's), per pose. */
+  const flash = { accesses: [], hits: [] };
   const names = readyVariants(board);
   const variants = names.map((name) => ({ name, cycles: [], worstVsRef: 0, refused: [] }));
   const firmwareVsHost = { differing: 0, worst: 0 };
@@ -99,6 +114,10 @@ export function runIkBench(poses, { elf = BENCH_ELF } = {}) {
       throw new Error(
         `pose ${index}: expected ${names.length + 1} marker pulses, saw ${highs.length}`,
       );
+    }
+    if (board.xip) {
+      flash.accesses.push(edges[3].accesses - edges[2].accesses);
+      flash.hits.push(edges[3].hits - edges[2].hits);
     }
     for (const [v, variant] of variants.entries()) {
       const parsed = parsePulses(words);
@@ -131,15 +150,29 @@ export function runIkBench(poses, { elf = BENCH_ELF } = {}) {
       failures.push({ index, pose: pose.pose, line });
     }
   }
-  const math = board.request('m', { final: /^m /, timeoutMs: 60000 }).reply;
-  const mathErrors = Object.fromEntries(
-    math
-      .split(' ')
-      .slice(1)
-      .map((kv) => kv.split('='))
-      .map(([k, v]) => [k, v.split(',').map(Number)]),
-  );
+  // The chip's own XIP counters around one pose line (`x`, `p`, `x`): what a real Pico
+  // running the benchmark firmware reports the same way.
+  board.request('x', { final: /^x /, timeoutMs: 1000 });
+  board.request(`p ${poses[0].pose_bits.join(' ')}`, { final: /^(r |error)/, timeoutMs: 1000 });
+  const counters = board.request('x', { final: /^x /, timeoutMs: 1000 }).reply;
+  const [, hit, acc] = counters.match(/^x hit=(\d+) acc=(\d+)$/) ?? [];
+  const xipCounters = hit === undefined ? null : { hits: Number(hit), accesses: Number(acc) };
+  let mathErrors = null;
+  if (errors) {
+    const math = board.request('m', { final: /^m /, timeoutMs: 60000 }).reply;
+    mathErrors = Object.fromEntries(
+      math
+        .split(' ')
+        .slice(1)
+        .map((kv) => kv.split('='))
+        .map(([k, v]) => [k, v.split(',').map(Number)]),
+    );
+  }
+  const perIk = (values) => values.reduce((a, b) => a + b, 0) / Math.max(values.length, 1);
   return {
+    xip: board.xip
+      ? { accessesPerIk: perIk(flash.accesses), hitsPerIk: perIk(flash.hits), xipCounters }
+      : null,
     poses: poses.length,
     failures,
     variants: variants.map(({ name, cycles, worstVsRef, refused }) => ({
@@ -151,6 +184,36 @@ export function runIkBench(poses, { elf = BENCH_ELF } = {}) {
     firmwareVsHost,
     mathErrors,
   };
+}
+
+/**
+ * The firmware's IK alone, twice per pose (the benchmark firmware's `i`): `{ first, warm }`,
+ * each a summary of cycles (marker brackets less the empty one). The second finds in the XIP
+ * cache what the first brought in.
+ * @param {any[]} poses from `benchPoses`
+ * @param {{ elf?: string, xipCache?: boolean }} [options]
+ */
+export function runWarmIk(poses, { elf = BENCH_ELF, xipCache } = {}) {
+  const board = new EmulatedBoard({ elf, ...(xipCache === undefined ? {} : { xipCache }) });
+  const edges = [];
+  board.mcu.gpio[MARKER_GPIO].addListener((state) => edges.push({ state, cycles: board.cycles }));
+  readyVariants(board);
+  const first = [];
+  const warm = [];
+  for (const pose of poses) {
+    edges.length = 0;
+    const reply = board.request(`i ${pose.pose_bits.join(' ')}`, {
+      final: /^(i|error)/,
+      timeoutMs: 1000,
+    }).reply;
+    if (!reply.startsWith('i')) {
+      throw new Error(`warm IK: ${reply}`);
+    }
+    const [a, b] = measuredBrackets(edges, 2, 'warm IK');
+    first.push(a);
+    warm.push(b);
+  }
+  return { first: summary(first), warm: summary(warm) };
 }
 
 const ROM_END = 0x4000;
@@ -249,8 +312,12 @@ export function profileIk(poses, { elf = BENCH_ELF, variant = 0 } = {}) {
  * cycle statistics of the clamps and how many clamped, of the tracker frames that moved
  * (`track`) and of those whose step left the workspace and was clamped (`trackClamped`).
  */
-export function runStreamBench(poses, { elf = BENCH_ELF, dzMm = 60, frames = 3 } = {}) {
-  const board = new EmulatedBoard({ elf });
+/**
+ * @param {any[]} poses from `benchPoses`
+ * @param {{ elf?: string, dzMm?: number, frames?: number, xipCache?: boolean }} [options]
+ */
+export function runStreamBench(poses, { elf = BENCH_ELF, dzMm = 60, frames = 3, xipCache } = {}) {
+  const board = new EmulatedBoard({ elf, ...(xipCache === undefined ? {} : { xipCache }) });
   const edges = [];
   board.mcu.gpio[MARKER_GPIO].addListener((state) => edges.push({ state, cycles: board.cycles }));
   readyVariants(board);

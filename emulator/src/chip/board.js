@@ -13,6 +13,7 @@ import { loadSegments, symbolValues } from './elf.js';
 import { attachFrameMeter, attachLoopMeter } from './loop-meter.js';
 import {
   attachFlashChip,
+  attachXipCache,
   FlashChip,
   onWatchdogExpiry,
   PadPulls,
@@ -20,6 +21,7 @@ import {
   patchEmulatorGaps,
   UsbCdcHost,
   wakeIfInterruptPending,
+  xipCacheByDefault,
 } from '../gaps/index.js';
 import { ServoPulseMeter } from './servo-pulses.js';
 
@@ -60,6 +62,8 @@ export class EmulatedBoard {
    * @param {boolean|{open?: boolean}} [options.usb] plug a USB host into the USB port at
    *   power-on (default: nothing plugged in). It enumerates the firmware and opens its serial
    *   port (DTR) unless `{ open: false }`; `board.usb` is that link.
+   * @param {boolean} [options.xipCache] model the XIP flash cache (../gaps/xip-cache.js, gap
+   *   13; default: off, unless HEXAPOD_XIP_CACHE=on or `setXipCacheByDefault(true)`)
    */
   constructor({
     elf = DEFAULT_ELF,
@@ -68,8 +72,10 @@ export class EmulatedBoard {
     flashTiming = 'typical',
     segments,
     usb = false,
+    xipCache = xipCacheByDefault(),
   } = {}) {
     this.elf = elf;
+    this.xipCacheModelled = xipCache;
     this.segments = segments ?? loadSegments(elf);
     this.bootrom = bootrom;
     this.onWatchdog = onWatchdog;
@@ -135,8 +141,17 @@ export class EmulatedBoard {
         `firmware stopped: breakpoint/UDF #${code} at PC 0x${mcu.core.PC.toString(16)} (a panic?)`,
       );
     };
+    // Gap 13: the XIP cache in front of the flash (a fresh chip's is empty), its registers.
+    /** The XIP cache model (gap 13), or null when the board was made without it. */
+    this.xip = attachXipCache(mcu, { model: this.xipCacheModelled });
     // Gap 7: the flash chip (the same array as before a reset), written through the ROM.
     attachFlashChip(mcu, this.flash, {
+      onFlushCache: () => {
+        const cycles = this.xip?.flush() ?? 0;
+        if (cycles) {
+          this.xip.stall(cycles);
+        }
+      },
       onFault: (message) => this.fail(message),
       onPowerCut: () => {
         this.powerCutPending = true;

@@ -16,7 +16,8 @@
 //    in emulated time, the core busy in the ROM meanwhile (its cycles count): the Winbond
 //    W25Q80DV datasheet's 4 KiB sector erase (tSE) and page program (tPP) times,
 //    `W25Q080_TIMING`, typical (45 ms, 0.7 ms) by default, maximum (400 ms, 3 ms) on request;
-//    the other four routines and the SPI transfer take no time here. The chip's rules are
+//    the other four routines and the SPI transfer take no time here (flash_flush_cache empties
+//    the XIP cache model, gap 13, which costs its flush). The chip's rules are
 //    enforced and a breach fails the run: every routine is called from SRAM (LR) with PRIMASK
 //    set; EX comes after IF, RE and RP after EX; from EX until CX nothing in the flash window
 //    is fetched, read or written (the chip is in command mode); the data to program is in
@@ -139,10 +140,11 @@ class StoreGuardedView extends DataView {
 /**
  * Gap 7: connects a fresh `RP2040` (after `loadBootrom`) to `chip`: the chip's array becomes
  * its flash, the six ROM routines trap into the model, stores into the flash window fail.
- * `onFault(message)` fails the run; `onPowerCut()` powers the chip off after this instruction.
+ * `onFault(message)` fails the run; `onPowerCut()` powers the chip off after this instruction;
+ * `onFlushCache()` is flash_flush_cache's work on the XIP cache (gap 13).
  * Call after the board has set `mcu.onBreak` (breakpoints the model does not own go there).
  */
-export function attachFlashChip(mcu, chip, { onFault, onPowerCut }) {
+export function attachFlashChip(mcu, chip, { onFault, onPowerCut, onFlushCache = () => {} }) {
   const { core } = mcu;
   const buffer = chip.image.buffer;
   mcu.flash = chip.image;
@@ -195,8 +197,13 @@ export function attachFlashChip(mcu, chip, { onFault, onPowerCut }) {
     }
   };
   const unguardReads = () => {
-    for (const method of Object.keys(saved)) {
-      delete mcu[method]; // back to rp2040js's own (prototype) methods
+    // Back to what was there (rp2040js's own methods, or the cache model's, gap 13).
+    for (const [method, read] of Object.entries(saved)) {
+      if (Object.getPrototypeOf(mcu)[method] === read) {
+        delete mcu[method];
+      } else {
+        mcu[method] = read;
+      }
     }
     saved = null;
   };
@@ -302,6 +309,7 @@ export function attachFlashChip(mcu, chip, { onFault, onPowerCut }) {
         }
         return program(r0 >>> 0, r1 >>> 0, r2 >>> 0);
       case 'FC':
+        onFlushCache(); // the XIP cache (gap 13)
         break;
       case 'CX':
         connected = false;

@@ -13,6 +13,7 @@
 // 8. Pad pulls (`pads.js`, `PadPulls`).
 // 9-12. USB: OUT arms before enumeration, the line state, IN timing, suspend and unplugging
 //    (`usb.js`, `UsbCdcHost`).
+// 13. The XIP flash cache and its registers (`xip-cache.js`, `XipCache`, `attachXipCache`).
 //
 // `patchEmulatorGaps` installs gaps 1 and 2 on a fresh `RP2040`; the board (../chip/board.js)
 // installs the others where it wires the chip up (they need its callbacks).
@@ -34,6 +35,14 @@ export { PacedUartInput, Pl011 } from './uart.js';
 export { BULK_PACKET_BYTES, BULK_PACKET_NANOS, BULK_PACKETS_PER_FRAME, UsbCdcHost } from './usb.js';
 export { onWatchdogExpiry } from './watchdog.js';
 export { wakeIfInterruptPending } from './wfi.js';
+export {
+  attachXipCache,
+  missCost,
+  setXipCacheByDefault,
+  XipCache,
+  xipCacheByDefault,
+  XIP_CACHE_SETS,
+} from './xip-cache.js';
 
 /**
  * rp2040js's `RP2040` as this harness uses it, with what its declared types leave out: its

@@ -15,7 +15,14 @@
 //! nothing is lost in decimal conversion). At start: `bench ready rom=vN variants=A,B,...`.
 //! - `p X Y Z ROLL PITCH YAW` (mm, rad) -> `r W1..W6 W1..W6 ...`: the six pulse widths (us)
 //!   of each variant in the order of `variants`; an IK error gives `x` in place of six widths.
+//! - `i X Y Z ROLL PITCH YAW` -> `i W1..W6`: the firmware's IK alone, twice on the same pose
+//!   (an empty bracket, then two measured ones): the second finds in the XIP cache what the
+//!   first brought in (warm), the first what the line's handling left there.
 //! - `t` -> `t fadd=ADDR ...`: the ROM addresses of the soft-float routines the IK uses.
+//! - `x` -> `x hit=H acc=A`: the XIP cache's counters (XIP_CTRL CTR_HIT, CTR_ACC: hits and
+//!   accesses to flash since the last `x`), then clears them; so `x`, a command, `x` gives the
+//!   command's flash accesses (with the line's own handling), to compare a real Pico with the
+//!   emulator's cache model (emulator/src/gaps/xip-cache.js).
 //! - `m` -> `m rom=S,C,Q,A fixed=S,C,Q,A [micromath=S,C,Q,A]`: the largest errors on the chip
 //!   against `libm`'s `f64` over a grid of arguments (sin, cos absolute; sqrt relative, but
 //!   the fixed-point one's absolute, in units; atan2 rad): of the boot ROM's `f32` routines, of
@@ -98,6 +105,7 @@ fn main() -> ! {
             board.clocks.peripheral_clock.freq(),
         )
         .expect("921600 baud is in range");
+    let xip = board.xip_ctrl;
     let mut marker = board.pins.gpio16.into_push_pull_output();
     let _ = marker.set_low();
 
@@ -278,6 +286,18 @@ fn main() -> ! {
                     let _ = out.push_str("error: bad pose");
                 }
             },
+            ("i", args) => match parse_pose(args) {
+                Some(pose) => {
+                    bracket_empty(&mut marker, &pose);
+                    let _ = timed::<RomMath>(&mut marker, &solver, &servos, &pose);
+                    let _ = out.push('i');
+                    let again = timed::<RomMath>(&mut marker, &solver, &servos, &pose);
+                    write_pulses(&mut out, again);
+                }
+                None => {
+                    let _ = out.push_str("error: bad pose");
+                }
+            },
             ("t", _) => {
                 // Where the soft-float routines are, so the harness can name ROM addresses.
                 let table = hal::rom_data::soft_float_table();
@@ -287,6 +307,13 @@ fn main() -> ! {
                     let address = unsafe { table.add(offset / 4).read() } & !1;
                     let _ = write!(out, " {name}={address:x}");
                 }
+            }
+            ("x", _) => {
+                let (hits, accesses) = (xip.ctr_hit().read().bits(), xip.ctr_acc().read().bits());
+                // Any value written clears a counter (RP2040 datasheet, XIP_CTRL registers).
+                xip.ctr_hit().reset();
+                xip.ctr_acc().reset();
+                let _ = write!(out, "x hit={hits} acc={accesses}");
             }
             ("m", _) => {
                 let _ = out.push('m');
