@@ -276,8 +276,8 @@ impl<M: Math> Controller<M> {
     }
 
     /// The controller at power-up, from what the flash holds ([`Store::load`]): the newest
-    /// good saved settings and UART0's baud rate, or the defaults; a warning notice says why when it is not simply
-    /// the last save (nothing saved, a copy that cannot be used). Saved settings these maths
+    /// good saved settings and UART0's baud rate, or the defaults; a warning notice says why
+    /// when it is not simply the last save (nothing saved, a copy that cannot be used). Saved settings these maths
     /// cannot drive are replaced by the defaults too (see [`Controller::with_math`]).
     pub fn power_up(loaded: Loaded) -> Self {
         let Loaded { store, found } = loaded;
