@@ -33,6 +33,13 @@
 //! The `[sizing]` table holds what the board has no setting for (`crate::sizing`); the `[cue]`
 //! table is `hexapod cue`'s (`crate::cue::config`), skipped here.
 //!
+//! `baud` (UART0's rate, a link setting that `save` keeps) may be given: `apply` sends it after
+//! every other `set` and before `save`, and moves its own port to the new rate as soon as the
+//! board's `ok` comes (the board switches once that `ok` has left), so `save` goes at the new
+//! rate and its `ok` shows the link works there. Over USB the rate changes nothing on the link.
+//! Left out, the board's rate stays as it is (`defaults` keeps it). `echo` is the typing
+//! link's own and is refused.
+//!
 //! A file is written commented ([`write`]: `init`, `pull`): each key with what it is and its
 //! range, taken from the firmware's own [`Kind`] (the free GPIOs from
 //! `control::safety::FREE_GPIOS`).
@@ -46,7 +53,9 @@ use std::path::Path;
 use control::command::ParseError;
 use control::report::ValueText;
 use control::safety::FREE_GPIOS;
-use control::settings::{Kind, ServoParam, ServoSel, SettingId, SettingValue, Settings};
+use control::settings::{
+    Kind, ServoParam, ServoSel, SettingId, SettingValue, Settings, BAUD_RATES, DEFAULT_BAUD,
+};
 use control::word::word;
 use kinematics_core::{Libm, Pose, LEGS};
 use toml::de::{DeTable, DeValue};
@@ -83,6 +92,8 @@ pub struct BuildFile {
     pub steps: Vec<Step>,
     /// The settings they make.
     pub settings: Settings,
+    /// UART0's baud rate (`baud`), if the file gives it: sent last, after [`BuildFile::steps`].
+    pub baud: Option<u32>,
     /// The `[sizing]` table: the servos' stiffness, for the host's sizing tools (not a setting
     /// of the board, never sent to it).
     pub sizing: Sizing,
@@ -127,6 +138,7 @@ pub fn parse(file: &str, text: &str) -> Result<BuildFile, Error> {
         why,
     };
     let mut pending = Vec::new();
+    let mut baud = None;
     let mut sizing = Sizing::default();
     for (name, line, value) in found {
         let name = name.to_ascii_lowercase();
@@ -148,14 +160,17 @@ pub fn parse(file: &str, text: &str) -> Result<BuildFile, Error> {
                 word: word(&name),
             }))
         })?;
-        if id.is_link() {
+        if id.is_link() && id != SettingId::Baud {
             return Err(problem(&name, line, KeyError::LinkSetting));
         }
         let value = value_text(value).ok_or_else(|| problem(&name, line, KeyError::NotAValue))?;
         let parsed = id
             .parse_value(&value)
             .map_err(|e| refused(control::Error::from(e)))?;
-        pending.push((Step { id, value, line }, parsed));
+        match parsed {
+            SettingValue::Whole(rate) if id == SettingId::Baud => baud = Some(rate),
+            _ => pending.push((Step { id, value, line }, parsed)),
+        }
     }
     // Apply in an order the board accepts (see the module documentation).
     let mut settings = Settings::default();
@@ -187,6 +202,7 @@ pub fn parse(file: &str, text: &str) -> Result<BuildFile, Error> {
     Ok(BuildFile {
         steps,
         settings,
+        baud,
         sizing,
     })
 }
@@ -361,6 +377,16 @@ pub fn write(settings: &Settings, sizing: &Sizing, source: &str) -> String {
     };
     let mut stream = Vec::new();
     for id in SettingId::GLOBAL {
+        if id == SettingId::Baud {
+            // Left out, `apply` leaves the board's rate alone: shown commented.
+            let rates: Vec<String> = BAUD_RATES.iter().map(u32::to_string).collect();
+            let what = format!(
+                "{}: {}; `save` keeps it; left out, apply leaves the board's rate as it is",
+                id.meaning(),
+                rates.join(" ")
+            );
+            out.push_str(&commented(&format!("# baud = {DEFAULT_BAUD}"), &what));
+        }
         if id.is_link() {
             continue;
         }
@@ -408,6 +434,24 @@ mod tests {
     }
 
     #[test]
+    fn baud_is_kept_apart_to_be_sent_last_and_left_out_leaves_the_rate_alone() {
+        let file = ok("baud = 921_600\nframe_hz = 100\n");
+        assert_eq!(file.baud, Some(921_600));
+        let commands: Vec<String> = file.steps.iter().map(Step::command).collect();
+        assert_eq!(
+            commands,
+            ["set frame_hz 100"],
+            "baud is not among the steps"
+        );
+        assert_eq!(ok("frame_hz = 100\n").baud, None);
+        // A written file shows it commented out, so that it reads back without it.
+        let written = write(&Settings::default(), &Sizing::default(), "t");
+        assert!(written.contains("\n# baud = 115200 "), "{written}");
+        assert!(written.contains("9600 19200 38400 57600 115200 230400 460800 921600"));
+        assert_eq!(ok(&written).baud, None);
+    }
+
+    #[test]
     fn keys_are_the_set_names_in_every_toml_form() {
         let file = ok(
             "frame_hz = 100\nservos.rate_us_rad = 600\n[servo3]\ntrim_us = 1512\n\
@@ -444,7 +488,8 @@ mod tests {
         assert!(err("[servo7]\ndir = \"normal\"")
             .starts_with("b.toml:2: servo7.dir: error:unknown-setting"));
         assert!(err("speed_mm_s = \"fast\"").contains("error:bad-number"));
-        assert!(err("baud = 9600").contains("belongs to the serial link"));
+        assert!(err("echo = \"off\"").contains("belongs to the serial link"));
+        assert!(err("baud = 100000").starts_with("b.toml:1: baud: error:bad-value baud"));
         assert!(err("rod_mm = [1, 2]").contains("not a setting value"));
         assert!(err("frame_hz = \n").starts_with("b.toml:1: not a TOML file"));
         assert!(

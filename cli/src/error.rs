@@ -126,7 +126,7 @@ pub enum KeyError {
     /// Refused by the firmware's own checks (an unknown name, a bad or out-of-range value, a
     /// servo set or geometry that does not hold together): the board's words.
     Refused(Box<control::Error>),
-    /// `baud` or `echo`: the link's, not the platform's.
+    /// `echo`: the typing link's own, not the platform's.
     LinkSetting,
     /// A value that is not a number or a word (an array, a date, a table too deep).
     NotAValue,

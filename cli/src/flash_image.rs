@@ -68,10 +68,10 @@ pub fn storage_start(elf_file: &[u8]) -> Result<Result<u32, StorageError>, elf::
     })
 }
 
-/// The pages that put `settings` in the storage at `start` as the first save: the record's page
-/// in sector 0, an erased page in each other sector.
-pub fn settings_segments(start: u32, settings: &Settings) -> Vec<Segment> {
-    let write = Store::empty().prepare(settings);
+/// The pages that put `settings` and UART0's `baud` in the storage at `start` as the first
+/// save: the record's page in sector 0, an erased page in each other sector.
+pub fn settings_segments(start: u32, settings: &Settings, baud: u32) -> Vec<Segment> {
+    let write = Store::empty().prepare(settings, baud);
     (0..SECTORS)
         .map(|sector| {
             let offset = sector as u32 * SECTOR_BYTES;
@@ -95,9 +95,12 @@ mod tests {
 
     #[test]
     fn the_pages_load_as_the_saved_settings_whatever_the_sectors_held() {
-        let file =
-            crate::build_file::parse("t", "rod_mm = 130\n[servo2]\ntrim_us = 1510\n").unwrap();
-        let pages = settings_segments(0x101F_E000, &file.settings);
+        let file = crate::build_file::parse(
+            "t",
+            "rod_mm = 130\nbaud = 460800\n[servo2]\ntrim_us = 1510\n",
+        )
+        .unwrap();
+        let pages = settings_segments(0x101F_E000, &file.settings, 460_800);
         assert_eq!(pages.len(), 2);
         assert_eq!(pages[1].address, 0x101F_F000);
         // A board that had saved many times before: its sectors as they were, then the
@@ -105,7 +108,9 @@ mod tests {
         let mut flash = RamFlash::new();
         let mut store = Store::empty();
         for _ in 0..5 {
-            store.save(&mut flash, &Settings::default()).unwrap();
+            store
+                .save(&mut flash, &Settings::default(), 115_200)
+                .unwrap();
         }
         for page in &pages {
             let offset = page.address - 0x101F_E000;
@@ -116,5 +121,6 @@ mod tests {
         let loaded = Store::load(&mut flash);
         assert_eq!(loaded.found, Found::Saved { sequence: 1 });
         assert_eq!(loaded.settings(), Some(&file.settings));
+        assert_eq!(loaded.store.saved_baud(), Some(460_800));
     }
 }

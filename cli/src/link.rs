@@ -157,6 +157,14 @@ impl Link {
         Ok(())
     }
 
+    /// Moves the port to `baud` (after the board's `ok` to `set baud`: the board switches once
+    /// that `ok` has left). On a USB port it changes nothing the board sees.
+    pub fn set_baud(&mut self, baud: u32) -> Result<(), Error> {
+        self.writer
+            .set_baud_rate(baud)
+            .map_err(|e| self.problem(PortError::Io(e.to_string())))
+    }
+
     /// Writes bytes as they are. (The port has no buffer of ours to flush; a serial port's
     /// `flush` would wait until the bytes have left, which is not this call's business.)
     pub fn write(&mut self, bytes: &[u8]) -> Result<(), Error> {

@@ -73,6 +73,33 @@ fn init_then_apply_leaves_the_board_with_the_file_s_settings_saved() {
 }
 
 #[test]
+fn apply_sends_baud_after_every_other_setting_and_saves_it_at_the_new_rate() {
+    let dir = scratch("apply-baud");
+    std::fs::write(
+        dir.join("build.toml"),
+        "baud = 921600\nspeed_mm_s = \"off\"\n[stream]\nz_mm = 12\n",
+    )
+    .unwrap();
+    let board = SimBoard::start();
+    let apply = hexapod(&dir, &["apply", "build.toml", "--port", &board.path]);
+    assert!(apply.status.success(), "{:?}", text(&apply));
+    let finished = board.finish();
+    let sent = String::from_utf8_lossy(&finished.received);
+    let lines: Vec<&str> = sent
+        .lines()
+        .filter(|l| !l.trim_matches('\u{3}').is_empty())
+        .collect();
+    // `set baud` after every other set, then `save` (at the new rate).
+    let n = lines.len();
+    assert_eq!(lines[n - 2..], ["set baud 921600", "save"], "{lines:?}");
+    assert!(lines[..n - 2].contains(&"set stream.z_mm 12"), "{lines:?}");
+    let mut flash = finished.flash;
+    let loaded = Store::load(&mut flash);
+    assert_eq!(loaded.store.saved_baud(), Some(921_600));
+    assert_eq!(loaded.settings().map(|s| s.speed_mm_s), Some(0.0));
+}
+
+#[test]
 fn a_payload_the_servos_cannot_hold_at_home_is_refused_before_anything_is_sent() {
     let dir = scratch("overloaded");
     std::fs::write(

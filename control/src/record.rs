@@ -1,5 +1,5 @@
-//! The settings record: [`Settings`] and the number of the save as a fixed-size, versioned,
-//! checksummed block of bytes for flash, and back. Which flash sector it goes to is
+//! The settings record: [`Settings`], UART0's baud rate and the number of the save as a
+//! fixed-size, versioned, checksummed block of bytes for flash, and back. Which flash sector it goes to is
 //! [`crate::store`]'s business; writing it is the board's.
 //!
 //! [`ENCODED_LEN`] bytes, little-endian (format version [`FORMAT_VERSION`]):
@@ -24,20 +24,26 @@
 //! | 210 | 2 | reserved, 0 |
 //! | 212 | 4 | `payload_g` (f32) |
 //! | 216 | 12 | `payload_com_x_mm`, `payload_com_y_mm`, `payload_com_z_mm` (f32) |
-//! | 228 | 4 | sequence number of the save (u32; the newer of two records has the higher one) |
-//! | 232 | 4 | CRC-32 (IEEE 802.3) of bytes 0..232 |
+//! | 228 | 4 | `baud`: UART0's baud rate (u32, one of [`BAUD_RATES`]) |
+//! | 232 | 4 | sequence number of the save (u32; the newer of two records has the higher one) |
+//! | 236 | 4 | CRC-32 (IEEE 802.3) of bytes 0..236 |
 //!
-//! The whole record fits one 256-byte flash page. The payload and the torque ratings joined
-//! format 3 before any board had a format-3 record in its flash (no release wrote one), so the
-//! version stayed 3: every format-3 record ever written has them.
+//! The whole record fits one 256-byte flash page.
+//!
+//! Format 3, which boards in the field hold, is read too: the same bytes up to 228, without
+//! `baud` (payload length 220, the sequence number at 228, the CRC-32 of bytes 0..232 at 232).
+//! Its baud rate is [`DEFAULT_BAUD`], the rate every board of format 3 came up at. (The
+//! payload and the torque ratings joined format 3 before any board had a format-3 record in
+//! its flash, so every format-3 record ever written has them.)
 //!
 //! The sequence number and the checksum come last, so a write that stops anywhere before its
 //! end leaves a record whose checksum does not match (a flash page is programmed from its first
 //! byte to its last).
 //!
-//! The link settings (`baud`, `echo`) are not in it: they belong to the links, not the platform
-//! (a board that came up at a saved 921,600 baud without echo would look dead to a terminal).
-//! Decoding checks magic, version, length, checksum, every enumerated byte and finally
+//! Of the link settings only `baud` is in it (a sim rig streams to UART0 at its saved rate from
+//! power-up on, with no command first). `echo` is not: it belongs to the link a person types on,
+//! and the USB port always answers, with echo on, whatever UART0's rate, so a forgotten rate
+//! locks no one out. Decoding checks magic, version, length, checksum, every enumerated byte and finally
 //! [`Settings::validate`], so decoded settings are always usable.
 
 use kinematics_core::pose::Axis;
@@ -45,14 +51,19 @@ use kinematics_core::{Direction, Libm, Math, ServoSet};
 
 use crate::payload::hundredths;
 use crate::safety::EstopAction;
-use crate::settings::{LayoutParam, SettingError, Settings};
+use crate::settings::{LayoutParam, SettingError, Settings, BAUD_RATES, DEFAULT_BAUD};
 
-/// Binary format version (1 also held the link settings, 2 had no sequence number and none of
-/// the acceleration, stream and safety settings; neither was ever written to a board's flash;
-/// 3 gained the payload and the torque ratings before any board had it: see the module docs).
-pub const FORMAT_VERSION: u16 = 3;
+/// Binary format version written (1 also held the link settings, 2 had no sequence number and
+/// none of the acceleration, stream and safety settings; neither was ever written to a board's
+/// flash; 3 gained the payload and the torque ratings before any board had it, and is still
+/// read; 4 added `baud`: see the module docs).
+pub const FORMAT_VERSION: u16 = 4;
+/// The older format still read (boards in the field hold it): no `baud`.
+pub const FORMAT_VERSION_NO_BAUD: u16 = 3;
 /// Bytes of settings between the header and the sequence number.
-pub const PAYLOAD_LEN: usize = 220;
+pub const PAYLOAD_LEN: usize = 224;
+/// [`PAYLOAD_LEN`] of format 3 (no `baud`).
+const PAYLOAD_LEN_NO_BAUD: usize = PAYLOAD_LEN - 4;
 /// A pin byte meaning "off".
 const PIN_OFF: u8 = 0xFF;
 /// A `stream.axisN` byte meaning `none`.
@@ -76,6 +87,8 @@ pub struct Record {
     pub sequence: u32,
     /// The settings saved.
     pub settings: Settings,
+    /// UART0's baud rate saved (one of [`BAUD_RATES`]).
+    pub baud: u32,
 }
 
 /// Whether sequence number `a` is newer than `b`: `a` follows `b` by less than half the
@@ -87,7 +100,7 @@ pub fn is_newer(a: u32, b: u32) -> bool {
 /// Why stored bytes are not a usable [`Record`].
 #[derive(Debug, Clone, PartialEq)]
 pub enum DecodeError {
-    /// Fewer than [`ENCODED_LEN`] bytes.
+    /// Fewer bytes than a record of its format has.
     TooShort,
     /// Not settings at all (erased flash reads as `0xFF`).
     BadMagic,
@@ -97,7 +110,8 @@ pub enum DecodeError {
     BadLength(u16),
     /// The checksum does not match: the data is damaged.
     BadChecksum,
-    /// A byte that must be 0/1 (direction) or reserved 0 is not.
+    /// A byte that must be 0/1 (direction) or reserved 0 is not, or a baud rate that is not
+    /// one of [`BAUD_RATES`] (at the offset of its first byte).
     BadField {
         /// Offset of the byte.
         offset: usize,
@@ -155,6 +169,9 @@ impl Reader<'_> {
     }
     fn u16(&mut self) -> u16 {
         u16::from_le_bytes(self.take())
+    }
+    fn u32(&mut self) -> u32 {
+        u32::from_le_bytes(self.take())
     }
     /// A byte that must be 0 or 1.
     fn bit(&mut self) -> Result<bool, DecodeError> {
@@ -233,6 +250,7 @@ pub fn encode(record: &Record) -> [u8; ENCODED_LEN] {
     for v in settings.payload.com_mm {
         w.f32(v);
     }
+    w.bytes(&record.baud.to_le_bytes());
     debug_assert_eq!(w.at, SEQUENCE_OFFSET);
     w.bytes(&record.sequence.to_le_bytes());
     let crc = crc32(&buf[..CRC_OFFSET]);
@@ -249,24 +267,31 @@ pub fn decode(bytes: &[u8]) -> Result<Record, DecodeError> {
 /// [`decode`], the settings' geometry validated with `M`'s maths (the board's own, so that it
 /// need not carry `libm` for this alone).
 pub fn decode_with<M: Math>(bytes: &[u8]) -> Result<Record, DecodeError> {
-    if bytes.len() < ENCODED_LEN {
+    // The shorter of the two formats read.
+    if bytes.len() < HEADER_LEN + PAYLOAD_LEN_NO_BAUD + 8 {
         return Err(DecodeError::TooShort);
     }
-    let bytes = &bytes[..ENCODED_LEN];
     if bytes[..4] != MAGIC {
         return Err(DecodeError::BadMagic);
     }
     let version = u16::from_le_bytes([bytes[4], bytes[5]]);
-    if version != FORMAT_VERSION {
-        return Err(DecodeError::UnsupportedVersion(version));
-    }
+    let payload_len = match version {
+        FORMAT_VERSION => PAYLOAD_LEN,
+        FORMAT_VERSION_NO_BAUD => PAYLOAD_LEN_NO_BAUD,
+        _ => return Err(DecodeError::UnsupportedVersion(version)),
+    };
     let len = u16::from_le_bytes([bytes[6], bytes[7]]);
-    if usize::from(len) != PAYLOAD_LEN {
+    if usize::from(len) != payload_len {
         return Err(DecodeError::BadLength(len));
+    }
+    let sequence_offset = HEADER_LEN + payload_len;
+    let crc_offset = sequence_offset + 4;
+    if bytes.len() < crc_offset + 4 {
+        return Err(DecodeError::TooShort);
     }
     let le32 =
         |at: usize| u32::from_le_bytes([bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]]);
-    if crc32(&bytes[..CRC_OFFSET]) != le32(CRC_OFFSET) {
+    if crc32(&bytes[..crc_offset]) != le32(crc_offset) {
         return Err(DecodeError::BadChecksum);
     }
     let mut r = Reader {
@@ -339,12 +364,24 @@ pub fn decode_with<M: Math>(bytes: &[u8]) -> Result<Record, DecodeError> {
     for v in settings.payload.com_mm.iter_mut() {
         *v = r.f32();
     }
+    let baud = if version == FORMAT_VERSION_NO_BAUD {
+        DEFAULT_BAUD
+    } else {
+        let offset = r.at;
+        let baud = r.u32();
+        if !BAUD_RATES.contains(&baud) {
+            return Err(DecodeError::BadField { offset });
+        }
+        baud
+    };
+    debug_assert_eq!(r.at, sequence_offset);
     settings
         .validate_with::<M>()
         .map_err(DecodeError::Invalid)?;
     Ok(Record {
-        sequence: le32(SEQUENCE_OFFSET),
+        sequence: le32(sequence_offset),
         settings,
+        baud,
     })
 }
 
@@ -353,7 +390,11 @@ mod tests {
     use super::*;
 
     fn record(sequence: u32, settings: Settings) -> Record {
-        Record { sequence, settings }
+        Record {
+            sequence,
+            settings,
+            baud: DEFAULT_BAUD,
+        }
     }
 
     fn default_bytes() -> [u8; ENCODED_LEN] {
@@ -392,16 +433,22 @@ mod tests {
         s.payload.com_mm = [-3.0, 4.25, 60.0];
         s.payload.torque_kgcm = [0.0, 2.51, 600.0, 0.01, 12.0, 0.0];
         s.validate().unwrap();
-        let bytes = encode(&record(0xDEAD_BEEF, s));
-        assert_eq!(bytes.len(), 236);
+        let saved = Record {
+            baud: 921_600,
+            ..record(0xDEAD_BEEF, s)
+        };
+        let bytes = encode(&saved);
+        assert_eq!(bytes.len(), 240);
         assert!(bytes.len() <= crate::store::PAGE_BYTES, "one flash page");
         assert_eq!(&bytes[..4], b"HXPS");
-        // The sequence number at its documented place, little-endian.
-        assert_eq!(&bytes[228..232], &[0xEF, 0xBE, 0xAD, 0xDE]);
+        assert_eq!(&bytes[4..8], &[4, 0, 224, 0], "format 4, payload 224 bytes");
+        // The baud rate and the sequence number at their documented places, little-endian.
+        assert_eq!(&bytes[228..232], &[0x00, 0x10, 0x0E, 0x00]);
+        assert_eq!(&bytes[232..236], &[0xEF, 0xBE, 0xAD, 0xDE]);
         // Servo 2's rating, 2.51 kgf cm, in hundredths at offset 48 + 20 + 18.
         assert_eq!(&bytes[86..88], &251u16.to_le_bytes());
         assert_eq!(&bytes[212..216], &1234.5f32.to_le_bytes());
-        assert_eq!(decode(&bytes), Ok(record(0xDEAD_BEEF, s)));
+        assert_eq!(decode(&bytes), Ok(saved));
         assert_eq!(
             decode(&encode(&record(0, Settings::default()))),
             Ok(record(0, Settings::default()))
@@ -409,7 +456,81 @@ mod tests {
         // Trailing bytes (a flash page) are ignored.
         let mut page = [0xFFu8; 256];
         page[..ENCODED_LEN].copy_from_slice(&bytes);
-        assert_eq!(decode(&page), Ok(record(0xDEAD_BEEF, s)));
+        assert_eq!(decode(&page), Ok(saved));
+    }
+
+    /// A format-3 record, as boards in the field hold: `record`'s bytes without the baud
+    /// rate's four, the version and payload length of format 3, checksummed again.
+    fn format_3(record: &Record) -> Vec<u8> {
+        let new = encode(record);
+        let mut old = Vec::new();
+        old.extend_from_slice(&new[..228]);
+        old.extend_from_slice(&new[232..236]); // the sequence number
+        old[4..8].copy_from_slice(&[3, 0, 220, 0]);
+        let crc = crc32(&old);
+        old.extend_from_slice(&crc.to_le_bytes());
+        old
+    }
+
+    #[test]
+    fn a_format_3_record_is_read_with_the_default_baud_rate() {
+        let mut s = Settings {
+            speed_mm_s: 0.0,
+            ..Settings::default()
+        };
+        s.stream.text_bits = 10;
+        s.servos.0[3].home_us = 1512.5;
+        s.payload.com_mm = [1.0, 2.0, 3.0];
+        let old = format_3(&Record {
+            baud: 921_600, // not in a format-3 record: dropped by `format_3`
+            ..record(41, s)
+        });
+        assert_eq!(old.len(), 236);
+        let expected = Record {
+            sequence: 41,
+            settings: s,
+            baud: 115_200,
+        };
+        assert_eq!(decode(&old), Ok(expected));
+        // In a flash page, after erased bytes' worth of trailing data.
+        let mut page = [0xFFu8; 256];
+        page[..old.len()].copy_from_slice(&old);
+        assert_eq!(decode(&page), Ok(expected));
+        // Damage, cut short, are refused as in format 4.
+        for cut in 0..old.len() {
+            let mut partial = [0xFFu8; 256];
+            partial[..cut].copy_from_slice(&old[..cut]);
+            assert!(decode(&partial).is_err(), "cut at byte {cut}");
+        }
+        let mut flipped = old.clone();
+        flipped[100] ^= 4;
+        assert_eq!(decode(&flipped), Err(DecodeError::BadChecksum));
+        // A format-3 header on format-4 bytes is not taken for either.
+        let mut mixed = default_bytes();
+        mixed[4] = 3;
+        assert_eq!(decode(&mixed), Err(DecodeError::BadLength(224)));
+    }
+
+    #[test]
+    fn a_baud_rate_that_uart0_does_not_take_is_refused() {
+        for &baud in &BAUD_RATES {
+            let r = Record {
+                baud,
+                ..record(3, Settings::default())
+            };
+            assert_eq!(decode(&encode(&r)), Ok(r));
+        }
+        for baud in [0, 9_599, 100_000, 1_000_000, u32::MAX] {
+            let bytes = encode(&Record {
+                baud,
+                ..record(3, Settings::default())
+            });
+            assert_eq!(
+                decode(&bytes),
+                Err(DecodeError::BadField { offset: 228 }),
+                "{baud}"
+            );
+        }
     }
 
     #[test]
@@ -459,6 +580,12 @@ mod tests {
         let mut bytes = default_bytes();
         bytes[4] = 2;
         assert_eq!(decode(&bytes), Err(DecodeError::UnsupportedVersion(2)));
+        let mut bytes = default_bytes();
+        bytes[4] = 5;
+        assert_eq!(decode(&bytes), Err(DecodeError::UnsupportedVersion(5)));
+        // A format-3 record needs its 236 bytes, a format-4 one its 240.
+        assert_eq!(decode(&default_bytes()[..239]), Err(DecodeError::TooShort));
+        assert_eq!(decode(&default_bytes()[..235]), Err(DecodeError::TooShort));
         let mut bytes = default_bytes();
         bytes[6] = 1;
         assert!(matches!(decode(&bytes), Err(DecodeError::BadLength(_))));

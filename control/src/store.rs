@@ -183,9 +183,14 @@ impl Store {
         self.newest.as_ref().map(|(i, r)| (*i, r))
     }
 
-    /// The write that saves `settings`: the next sequence number, into the sector that does
-    /// not hold the newest good record.
-    pub fn prepare(&self, settings: &Settings) -> Write {
+    /// UART0's baud rate in the newest good record, if any.
+    pub fn saved_baud(&self) -> Option<u32> {
+        self.newest.as_ref().map(|(_, r)| r.baud)
+    }
+
+    /// The write that saves `settings` and UART0's `baud`: the next sequence number, into the
+    /// sector that does not hold the newest good record.
+    pub fn prepare(&self, settings: &Settings, baud: u32) -> Write {
         let (sector, sequence) = match &self.newest {
             Some((i, r)) => (1 - *i, r.sequence.wrapping_add(1)),
             None => (0, 1),
@@ -195,6 +200,7 @@ impl Store {
             record: Record {
                 sequence,
                 settings: *settings,
+                baud,
             },
         }
     }
@@ -204,13 +210,15 @@ impl Store {
         self.newest = Some((write.sector, write.record));
     }
 
-    /// Saves `settings` at once: [`Store::prepare`], [`Write::perform`], [`Store::commit`].
+    /// Saves `settings` and `baud` at once: [`Store::prepare`], [`Write::perform`],
+    /// [`Store::commit`].
     pub fn save<F: NorFlash>(
         &mut self,
         flash: &mut F,
         settings: &Settings,
+        baud: u32,
     ) -> Result<(), SaveError> {
-        let write = self.prepare(settings);
+        let write = self.prepare(settings, baud);
         write.perform(flash)?;
         self.commit(&write);
         Ok(())
@@ -363,6 +371,7 @@ impl NorFlash for RamFlash {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::settings::DEFAULT_BAUD;
 
     fn with_trim(trim_us: f32) -> Settings {
         let mut s = Settings::default();
@@ -376,7 +385,7 @@ mod tests {
         let loaded = Store::load(&mut flash);
         assert_eq!(loaded.found, Found::Nothing);
         assert_eq!(loaded.settings(), None);
-        let write = loaded.store.prepare(&with_trim(1510.0));
+        let write = loaded.store.prepare(&with_trim(1510.0), DEFAULT_BAUD);
         assert_eq!(
             (write.sector(), write.offset(), write.record().sequence),
             (0, 0, 1)
@@ -393,9 +402,11 @@ mod tests {
         let mut store = Store::empty();
         for n in 1..=5u32 {
             let s = with_trim(1500.0 + n as f32);
-            store.save(&mut flash, &s).unwrap();
+            let baud = crate::settings::BAUD_RATES[n as usize];
+            store.save(&mut flash, &s, baud).unwrap();
             let loaded = Store::load(&mut flash);
             assert_eq!(loaded.settings(), Some(&s), "after save {n}");
+            assert_eq!(loaded.store.saved_baud(), Some(baud), "after save {n}");
             assert_eq!(loaded.found, Found::Saved { sequence: n });
             // Save n went to sector (n - 1) % 2; the store picks up where it left off.
             assert_eq!(

@@ -678,6 +678,32 @@ fn save_keeps_the_settings_for_the_next_power_up() {
 }
 
 #[test]
+fn save_keeps_uart0_s_rate_for_the_next_power_up_and_defaults_keeps_it() {
+    let mut flash = RamFlash::new();
+    let (mut s, _) = power_up(&mut flash);
+    assert_eq!(s.ctl.baud(), 115_200, "nothing saved: the default rate");
+    s.ok("set baud 921600");
+    s.ok("save");
+    assert!(saved_line(&mut s).starts_with("# saved: yes"));
+    // A rate changed since the save is a change `config` reports.
+    s.ok("set baud 460800");
+    assert!(saved_line(&mut s).starts_with("# saved: no"));
+    // Power off: UART0 comes back at the saved rate, which `defaults` leaves alone.
+    let mut flash = s.flash.clone();
+    let (mut s, banner) = power_up(&mut flash);
+    assert_eq!(s.ctl.baud(), 921_600);
+    assert!(!banner.contains("warning"), "{banner}");
+    assert!(s.ok("config").contains(&"# baud: 921600".to_string()));
+    s.ok("defaults");
+    assert_eq!(s.ctl.baud(), 921_600);
+    s.ok("set baud 115200");
+    s.ok("save");
+    let mut flash = s.flash.clone();
+    let (s, _) = power_up(&mut flash);
+    assert_eq!(s.ctl.baud(), 115_200);
+}
+
+#[test]
 fn save_is_refused_while_moving_and_writes_nothing() {
     let mut s = Host::quiet();
     s.ok("set speed_mm_s 5");

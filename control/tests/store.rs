@@ -8,6 +8,7 @@
 //! sector holding the newest good record, a record cut short does not decode.
 
 use control::record::{self, DecodeError, Record, ENCODED_LEN};
+use control::settings::DEFAULT_BAUD;
 use control::store::{
     Found, NorFlash, RamFlash, SaveError, Store, PAGE_BYTES, SECTOR_BYTES, STORAGE_BYTES,
 };
@@ -122,7 +123,9 @@ fn after_saves(n: u32) -> (CutFlash, Store) {
     let mut flash = CutFlash::new();
     let mut store = Store::empty();
     for k in 1..=n {
-        store.save(&mut flash, &settings(k)).expect("no cut");
+        store
+            .save(&mut flash, &settings(k), DEFAULT_BAUD)
+            .expect("no cut");
     }
     (flash, store)
 }
@@ -140,7 +143,7 @@ fn a_power_cut_at_every_byte_of_a_save_boots_the_old_or_the_new_settings() {
                 let mut flash = before.clone();
                 flash.cut_after(cut, partial);
                 let mut s = store.clone();
-                let result = s.save(&mut flash, &new);
+                let result = s.save(&mut flash, &new, DEFAULT_BAUD);
                 assert_eq!(
                     result.is_ok(),
                     cut == WRITES_PER_SAVE,
@@ -171,7 +174,7 @@ fn a_power_cut_at_every_byte_of_a_save_boots_the_old_or_the_new_settings() {
                 }
                 // And saving goes on: the next save lands and is loaded.
                 let mut next = loaded.store.clone();
-                next.save(&mut flash, &settings(100 + n))
+                next.save(&mut flash, &settings(100 + n), DEFAULT_BAUD)
                     .expect("no cut now");
                 assert_eq!(Store::load(&mut flash).settings(), Some(&settings(100 + n)));
             }
@@ -187,7 +190,7 @@ fn a_page_programmed_only_in_part_never_loads_as_anything_but_old_or_new() {
     let (mut flash, store) = after_saves(2);
     let old = settings(2);
     let new = settings(3);
-    let write = store.prepare(&new);
+    let write = store.prepare(&new, DEFAULT_BAUD);
     flash.erase_sector(write.offset()).unwrap();
     let erased = flash.clone();
     let page = write.page();
@@ -231,7 +234,7 @@ fn a_thousand_saves_alternate_sectors_and_each_is_loaded() {
     let mut flash = RamFlash::new();
     let mut store = Store::empty();
     for n in 1..=1000u32 {
-        let write = store.prepare(&settings(n));
+        let write = store.prepare(&settings(n), DEFAULT_BAUD);
         // Save 1 into sector 0, save 2 into sector 1, and so on.
         assert_eq!(write.sector(), ((n - 1) % 2) as usize, "save {n}");
         assert_eq!(write.record().sequence, n);
@@ -250,7 +253,8 @@ fn a_thousand_saves_alternate_sectors_and_each_is_loaded() {
                 previous,
                 Record {
                     sequence: n - 1,
-                    settings: settings(n - 1)
+                    settings: settings(n - 1),
+                    baud: DEFAULT_BAUD,
                 }
             );
         }
@@ -264,13 +268,14 @@ fn sequence_numbers_run_on_across_the_wrap() {
     let late = Record {
         sequence: u32::MAX - 1,
         settings: settings(1),
+        baud: DEFAULT_BAUD,
     };
     let mut page = [0xFF; PAGE_BYTES];
     page[..ENCODED_LEN].copy_from_slice(&record::encode(&late));
     flash.program_page(SECTOR_BYTES, &page).unwrap();
     let mut store = Store::load(&mut flash).store;
     for (n, sequence) in [(2, u32::MAX), (3, 0), (4, 1)] {
-        store.save(&mut flash, &settings(n)).unwrap();
+        store.save(&mut flash, &settings(n), DEFAULT_BAUD).unwrap();
         let loaded = Store::load(&mut flash);
         assert_eq!(loaded.settings(), Some(&settings(n)));
         assert_eq!(loaded.found, Found::Saved { sequence });
@@ -300,7 +305,7 @@ fn a_flipped_bit_in_either_copy_is_found_and_the_other_copy_loaded() {
                 assert!(other_unusable, "{:?}", loaded.found);
                 // The next save overwrites the damaged copy, never the good one.
                 let mut store = loaded.store.clone();
-                let write = store.prepare(&settings(9));
+                let write = store.prepare(&settings(9), DEFAULT_BAUD);
                 assert_eq!(write.sector() as u32, sector);
                 write.perform(&mut damaged).unwrap();
                 store.commit(&write);
@@ -321,6 +326,7 @@ fn nothing_saved_damaged_and_other_versions_are_told_apart() {
     let mut bytes = record::encode(&Record {
         sequence: 1,
         settings: Settings::default(),
+        baud: DEFAULT_BAUD,
     });
     bytes[4] = 2;
     let crc = record::crc32(&bytes[..record::CRC_OFFSET]);
@@ -344,7 +350,7 @@ fn nothing_saved_damaged_and_other_versions_are_told_apart() {
     );
     let mut flash = CutFlash::new();
     let mut store = Store::empty();
-    store.save(&mut flash, &settings(1)).unwrap();
+    store.save(&mut flash, &settings(1), DEFAULT_BAUD).unwrap();
     flash.bytes[100] ^= 0x40;
     assert_eq!(
         Store::load(&mut flash).found,
@@ -382,10 +388,12 @@ fn a_write_that_does_not_read_back_fails_and_is_never_loaded() {
         stuck: SECTOR_BYTES,
     };
     let mut store = Store::empty();
-    store.save(&mut flash, &settings(1)).unwrap();
+    store.save(&mut flash, &settings(1), DEFAULT_BAUD).unwrap();
     let before = store.clone();
     // Save 2 goes to sector 1, whose byte 5 (the format version's high byte, 0) sticks at 1.
-    let err = store.save(&mut flash, &settings(2)).unwrap_err();
+    let err = store
+        .save(&mut flash, &settings(2), DEFAULT_BAUD)
+        .unwrap_err();
     assert_eq!(
         err,
         SaveError::Verify {
@@ -406,7 +414,7 @@ fn a_write_that_does_not_read_back_fails_and_is_never_loaded() {
         Found::SavedOtherUnusable { sequence: 1, .. }
     ));
     // The next try goes to the same sector again (the good copy stays untouched).
-    assert_eq!(store.prepare(&settings(2)).sector(), 1);
+    assert_eq!(store.prepare(&settings(2), DEFAULT_BAUD).sector(), 1);
 }
 
 fn any_byte() -> proptest::num::u8::Any {
@@ -434,7 +442,45 @@ proptest::proptest! {
         let loaded = Store::load(&mut flash);
         if let Some((sector, record)) = loaded.store.newest() {
             proptest::prop_assert!(record.settings.validate().is_ok());
-            proptest::prop_assert_ne!(loaded.store.prepare(&settings(7)).sector(), sector);
+            proptest::prop_assert_ne!(loaded.store.prepare(&settings(7), DEFAULT_BAUD).sector(), sector);
         }
     }
+}
+
+/// A board in the field holds a format-3 record (no baud rate). Written here from the format-3
+/// table (control::record's docs): the format-4 bytes without `baud`'s four, re-headed and
+/// checksummed again.
+#[test]
+fn a_format_3_save_from_the_field_loads_at_the_default_rate_and_the_next_save_follows_it() {
+    let mut flash = RamFlash::new();
+    let new = record::encode(&Record {
+        sequence: 17,
+        settings: settings(3),
+        baud: 921_600,
+    });
+    let mut old = Vec::new();
+    old.extend_from_slice(&new[..228]);
+    old.extend_from_slice(&new[232..236]);
+    old[4..8].copy_from_slice(&[3, 0, 220, 0]);
+    let crc = record::crc32(&old);
+    old.extend_from_slice(&crc.to_le_bytes());
+    let mut page = [0xFF; PAGE_BYTES];
+    page[..old.len()].copy_from_slice(&old);
+    flash.program_page(0, &page).unwrap();
+
+    let loaded = Store::load(&mut flash);
+    assert_eq!(loaded.found, Found::Saved { sequence: 17 });
+    assert_eq!(loaded.settings(), Some(&settings(3)));
+    assert_eq!(loaded.store.saved_baud(), Some(115_200));
+    // The next save is format 4, save 18, in the other sector; the old one stays as it was.
+    let mut store = loaded.store;
+    store.save(&mut flash, &settings(4), 921_600).unwrap();
+    let mut first = [0u8; PAGE_BYTES];
+    flash.read(0, &mut first);
+    assert_eq!(first, page, "the format-3 record untouched");
+    let loaded = Store::load(&mut flash);
+    assert_eq!(loaded.found, Found::Saved { sequence: 18 });
+    assert_eq!(loaded.store.newest().map(|(i, _)| i), Some(1));
+    assert_eq!(loaded.settings(), Some(&settings(4)));
+    assert_eq!(loaded.store.saved_baud(), Some(921_600));
 }

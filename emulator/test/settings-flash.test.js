@@ -1,14 +1,16 @@
 // Settings saved in flash, through the real firmware ELF and the flash model (gap 7 of
 // src/gaps/flash.js: the boot ROM's erase and program as the W25Q080 does them, its rules
 // enforced): `save`, power cycles (a fresh chip, the same flash), power cuts at every step of a
-// save, a damaged copy, a thousand saves, and what the firmware does meanwhile (the pins hold,
-// the watchdog stays quiet). What to expect comes from docs/settings.md ("Saving the settings")
+// save, a damaged copy, a thousand saves, what the firmware does meanwhile (the pins hold,
+// the watchdog stays quiet), and a sim rig that streams at its saved rate after a power cycle. What to expect comes from docs/settings.md ("Saving the settings")
 // and the record layout documented in control/src/record.rs, read here by an independent decoder.
 
 import assert from 'node:assert/strict';
 import { before, test } from 'node:test';
 
 import { BANNER, EmulatedBoard } from '../src/chip/board.js';
+import { binaryFrame } from '../src/bench/firmware-bench.js';
+import { HostReference } from '../src/test-support/host-reference.js';
 import {
   assertConstant,
   assertPins,
@@ -16,6 +18,7 @@ import {
   capture,
   firmwareBootrom,
   FRAME_MS,
+  defaultSettings,
   ok,
   quantisedUs,
   refused,
@@ -25,15 +28,21 @@ import {
 } from '../src/test-support/e2e-support.js';
 
 let bootrom;
+let reference;
 before(() => {
   bootrom = firmwareBootrom();
+  reference = new HostReference();
 });
 
 const SECTOR_BYTES = 4096;
-/** The record (control/src/record.rs): 236 bytes, sequence number at 228, CRC-32 at 232. */
-const RECORD_BYTES = 236;
-const SEQUENCE_AT = 228;
-const CRC_AT = 232;
+/**
+ * The record (control/src/record.rs), format 4: 240 bytes, UART0's baud rate at 228, sequence
+ * number at 232, CRC-32 at 236.
+ */
+const RECORD_BYTES = 240;
+const BAUD_AT = 228;
+const SEQUENCE_AT = 232;
+const CRC_AT = 236;
 const NOTHING_SAVED = '# warning: no settings saved in flash; using the defaults';
 const USING_DEFAULTS = /^# warning: .*using the defaults$/;
 const OTHER_COPY = new RegExp(
@@ -66,7 +75,7 @@ function sectorState(board, sector) {
   const view = new DataView(page.buffer);
   const good =
     String.fromCharCode(...page.subarray(0, 4)) === 'HXPS' &&
-    view.getUint16(4, true) === 3 &&
+    view.getUint16(4, true) === 4 &&
     view.getUint32(CRC_AT, true) === crc32(page.subarray(0, CRC_AT));
   return good ? { sequence: view.getUint32(SEQUENCE_AT, true) } : 'unusable';
 }
@@ -121,7 +130,7 @@ test('save keeps the settings across a power cycle; the pins start at the saved 
   ok(board, 'set servo6.dir reversed');
   ok(board, 'set rod_mm 122');
   ok(board, 'set frame_hz 100');
-  ok(board, 'set baud 230400'); // a link setting: not saved
+  ok(board, 'set baud 230400'); // a link setting, saved too
   board.runMs(5);
   assert.equal(config(board).saved, 'none', 'changed, but still nothing saved');
   ok(board, 'save');
@@ -136,12 +145,10 @@ test('save keeps the settings across a power cycle; the pins start at the saved 
   assert.deepEqual(warnings, [], 'the last save loads without a word');
   const after = config(board);
   assert.equal(after.saved, 'yes');
-  // The same settings, but the link's own: 115200 baud again (and echo, turned off by boot).
-  assert.deepEqual(
-    after.settings,
-    saved.settings.map((l) => (l.startsWith('baud: ') ? 'baud: 115200' : l)),
-  );
-  assert.ok(Math.abs(board.baud - 115200) / 115200 < 0.01, `UART0 at ${board.baud} baud`);
+  // The same settings, UART0 at the saved rate (echo, the link's own, turned off by boot).
+  assert.deepEqual(after.settings, saved.settings);
+  assert.ok(saved.settings.includes('baud: 230400'), JSON.stringify(saved.settings));
+  assert.ok(Math.abs(board.baud - 230400) / 230400 < 0.01, `UART0 at ${board.baud} baud`);
   // At power-up every servo gets its home pulse: its saved trim
   // (docs/geometry-and-calibration.md, "Calibration"), at the saved frame rate.
   runFrames(board, 5, 100);
@@ -151,8 +158,11 @@ test('save keeps the settings across a power cycle; the pins start at the saved 
     'saved frame rate',
   );
 
-  // defaults, then save: the factory settings at the next power-up.
+  // defaults (which keeps the link's rate) and 115200, then save: the factory settings at the
+  // next power-up.
   ok(board, 'defaults');
+  ok(board, 'set baud 115200');
+  board.runMs(2);
   ok(board, 'save');
   powerCycle(board);
   const defaults = config(board);
@@ -176,8 +186,8 @@ test('save while moving is error:busy and writes nothing', () => {
 
 /**
  * Every step of a save a power cut can fall on, with what the documented layout says the next
- * power-up loads: the old settings until the record is complete to its last byte (236 bytes,
- * the sequence number at 228 and the CRC last), the new ones from then on.
+ * power-up loads: the old settings until the record is complete to its last byte (240 bytes,
+ * the baud rate at 228, the sequence number at 232 and the CRC last), the new ones from then on.
  */
 const CUTS = [
   { routine: 'erase', bytes: 0, loads: 'old', what: 'before the erase' },
@@ -187,6 +197,7 @@ const CUTS = [
   { routine: 'program', bytes: 0, mask: 0x01, loads: 'old', what: 'at the first byte' },
   { routine: 'program', bytes: 4, loads: 'old', what: 'after the magic' },
   { routine: 'program', bytes: 100, mask: 0xa5, loads: 'old', what: 'mid-program' },
+  { routine: 'program', bytes: BAUD_AT + 1, loads: 'old', what: 'mid baud rate' },
   { routine: 'program', bytes: SEQUENCE_AT, loads: 'old', what: 'before the sequence number' },
   { routine: 'program', bytes: SEQUENCE_AT + 2, loads: 'old', what: 'mid sequence number' },
   { routine: 'program', bytes: CRC_AT, loads: 'old', what: 'before the CRC' },
@@ -431,4 +442,51 @@ test('over USB, lines sent during a save wait in the host: none lost, every one 
   assert.equal(board.uart.request('set echo off').reply, 'ok');
   const uartConfig = board.uart.request('config').lines;
   assert.ok(uartConfig.includes('# saved: yes (these settings are the ones saved in flash)'));
+});
+
+test('a sim rig comes back: saved at 921600 with its stream set-up, it streams after a power cycle with no command first', () => {
+  const board = freshBoard();
+  // The FlyPT Mover steps (docs/streaming.md): pass-through, the full scales, the rate, save.
+  ok(board, 'set speed_mm_s off');
+  ok(board, 'set speed_deg_s off');
+  ok(board, 'set stream.z_mm 12');
+  ok(board, 'set stream.roll_deg 10');
+  ok(board, 'set baud 921600');
+  board.runMs(2);
+  ok(board, 'save');
+  // The record holds the rate where the documented layout puts it.
+  const { offset } = board.settingsStorage;
+  const page = board.flash.read(offset, 256);
+  assert.deepEqual(sectorState(board, 0), { sequence: 1 });
+  assert.equal(new DataView(page.buffer).getUint32(BAUD_AT, true), 921600);
+
+  // Off and on: nothing is sent but the frames, at the saved rate.
+  board.powerCycle();
+  board.waitForLine(BANNER, { timeoutMs: 1000 });
+  assert.ok(Math.abs(board.baud - 921600) / 921600 < 0.01, `UART0 at ${board.baud} baud`);
+  board.runUntil(() => board.servos().every((servo) => servo.live), { timeoutMs: 100 });
+  const scales = [25, 25, 12, 10, 15, 20];
+  const count = (v, i) => Math.round(32768 + (v / scales[i]) * 32768);
+  const carried = (pose) => pose.map((v, i) => ((count(v, i) - 32768) / 32768) * scales[i]);
+  for (const pose of [
+    [0, 0, 6, 0, 0, 0],
+    [0, 0, -4, 5, 0, 0],
+    [0, 0, 4, -3, 0, 0],
+  ]) {
+    board.sendBytes(binaryFrame(pose.map(count)));
+    runFrames(board, 3, 50);
+    const [answer] = reference.solve(defaultSettings(), [carried(pose)]);
+    assert.ok(answer.ok, JSON.stringify(answer));
+    // Pass-through (the saved limits are off): the pins are at the frame's pose at once.
+    assertPins(board, answer.pulse_us, `after the frame for ${pose}`);
+  }
+  // Then a person at a terminal (echo on since power-up; off for the reply's parsing).
+  board.request('set echo off');
+  assert.deepEqual(status(board).stream, {
+    frames: 3,
+    applied: 3,
+    damaged: 0,
+    clamped: 0,
+    refused: 0,
+  });
 });

@@ -13,8 +13,10 @@ import os
 import struct
 import zlib
 
-FORMAT_VERSION = 3
-PAYLOAD_LEN = 220
+FORMAT_VERSION = 4
+PAYLOAD_LEN = 224
+# Format 3 (boards in the field hold it): no baud rate, 4 bytes shorter.
+FORMAT_VERSION_NO_BAUD = 3
 PIN_OFF = 0xFF
 AXES = ['x', 'y', 'z', 'roll', 'pitch', 'yaw']
 RATE = 1600 / math.pi  # the default servo rate, us/rad
@@ -24,12 +26,13 @@ def record(sequence, frame_hz, speeds, layout, servos, accels=(0.0, 0.0),
            stream_scale=(25.0, 25.0, 15.0, 15.0, 15.0, 20.0), stream_bits=8,
            stream_order=('x', 'y', 'z', 'roll', 'pitch', 'yaw'), estop_pin=None,
            estop_home=False, power_pin=None, payload_g=0.0, com_mm=(0.0, 0.0, 0.0),
-           ratings_kgcm=(0.0,) * 6):
+           ratings_kgcm=(0.0,) * 6, baud=115200, version=FORMAT_VERSION):
     """sequence: the save's number; speeds: (mm/s, deg/s, link timeout s); layout: base radius,
     base half angle, platform radius, platform half angle, arm, rod; servos: six (trim, rate,
     min, max, reversed); accels: (mm/s^2, deg/s^2); stream_order: six axis names or None;
     pins: GPIO or None; payload_g, com_mm: the payload; ratings_kgcm: six torque ratings
-    (kgf cm, kept in hundredths; 0 not rated)."""
+    (kgf cm, kept in hundredths; 0 not rated); baud: UART0's rate; version: 4, or 3 for the
+    older format without the baud rate."""
     payload = struct.pack('<HH', frame_hz, 0) + struct.pack('<3f', *speeds)
     payload += struct.pack('<6f', *layout)
     for (trim, rate, lo, hi, reversed_), rating in zip(servos, ratings_kgcm):
@@ -40,8 +43,12 @@ def record(sequence, frame_hz, speeds, layout, servos, accels=(0.0, 0.0),
     pin = lambda p: PIN_OFF if p is None else p
     payload += bytes([pin(estop_pin), 1 if estop_home else 0, pin(power_pin), 0, 0])
     payload += struct.pack('<f3f', payload_g, *com_mm)
-    assert len(payload) == PAYLOAD_LEN
-    body = b'HXPS' + struct.pack('<HH', FORMAT_VERSION, PAYLOAD_LEN) + payload
+    if version == FORMAT_VERSION:
+        payload += struct.pack('<I', baud)
+    else:
+        assert version == FORMAT_VERSION_NO_BAUD
+    assert len(payload) == (PAYLOAD_LEN if version == FORMAT_VERSION else PAYLOAD_LEN - 4)
+    body = b'HXPS' + struct.pack('<HH', version, len(payload)) + payload
     body += struct.pack('<I', sequence)
     return body + struct.pack('<I', zlib.crc32(body))
 
@@ -51,17 +58,22 @@ def default_servos():
     return [(1500.0, RATE, 1500.0 - travel, 1500.0 + travel, n % 2 == 1) for n in range(1, 7)]
 
 
+# The same custom settings in both formats.
+CUSTOM = dict(
+    sequence=0xFFFFFFFF, frame_hz=100, speeds=(20.0, 0.0, 2.5),
+    layout=(90.0, 15.0, 50.0, 25.0, 25.0, 110.0),
+    servos=[(trim, RATE, 1000.0, 2000.0, n % 2 == 1)
+            for n, trim in zip(range(1, 7), (1450.0, 1500.0, 1520.0, 1490.0, 1510.0, 1500.0))],
+    accels=(400.0, 0.0), stream_scale=(30.0, -30.0, 10.0, 0.0, 12.5, 45.0), stream_bits=12,
+    stream_order=('roll', None, 'z', 'x', 'yaw', 'pitch'), estop_pin=15, estop_home=True,
+    power_pin=22, payload_g=1500.0, com_mm=(5.0, -2.5, 40.0),
+    ratings_kgcm=(10.0, 10.0, 12.5, 0.0, 9.99, 600.0))
+
 SEEDS = {
     'record-default': record(1, 50, (50.0, 60.0, 0.0), (75.0, 20.0, 60.0, 20.0, 20.0, 120.0),
                              default_servos()),
-    'record-custom': record(
-        0xFFFFFFFF, 100, (20.0, 0.0, 2.5), (90.0, 15.0, 50.0, 25.0, 25.0, 110.0),
-        [(trim, RATE, 1000.0, 2000.0, n % 2 == 1)
-         for n, trim in zip(range(1, 7), (1450.0, 1500.0, 1520.0, 1490.0, 1510.0, 1500.0))],
-        accels=(400.0, 0.0), stream_scale=(30.0, -30.0, 10.0, 0.0, 12.5, 45.0), stream_bits=12,
-        stream_order=('roll', None, 'z', 'x', 'yaw', 'pitch'), estop_pin=15, estop_home=True,
-        power_pin=22, payload_g=1500.0, com_mm=(5.0, -2.5, 40.0),
-        ratings_kgcm=(10.0, 10.0, 12.5, 0.0, 9.99, 600.0)),
+    'record-custom': record(**CUSTOM, baud=921600),
+    'record-v3-custom': record(**CUSTOM, version=FORMAT_VERSION_NO_BAUD),
 }
 
 if __name__ == '__main__':

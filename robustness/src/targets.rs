@@ -248,6 +248,7 @@ fn saved(settings: Settings) -> record::Record {
     record::Record {
         sequence: 42,
         settings,
+        baud: control::settings::DEFAULT_BAUD,
     }
 }
 
@@ -259,11 +260,17 @@ fn check_decoded(bytes: &[u8]) {
         if let Err(e) = s.validate() {
             panic!("decoded settings do not validate: {e:?}");
         }
-        assert_eq!(
-            &record::encode(&r)[..],
-            &bytes[..ENCODED_LEN],
-            "decode/encode is not the identity"
-        );
+        if bytes[4..6] == record::FORMAT_VERSION_NO_BAUD.to_le_bytes() {
+            // Format 3 is read, never written: a save writes it again in the new format.
+            assert_eq!(r.baud, control::settings::DEFAULT_BAUD);
+            assert_eq!(record::decode(&record::encode(&r)), Ok(r));
+        } else {
+            assert_eq!(
+                &record::encode(&r)[..],
+                &bytes[..ENCODED_LEN],
+                "decode/encode is not the identity"
+            );
+        }
         let mut c = Checked::new(s, true);
         c.frames(2);
         c.line("status", b"\r");

@@ -74,6 +74,23 @@ fn settings_record_seeds_decode() {
         if data.starts_with(b"HXPS") {
             let record = control::record::decode(&data).unwrap_or_else(|e| panic!("{name}: {e:?}"));
             let s = record.settings;
+            // The baud rate each was written with (format 3 has none: the default rate).
+            if name.ends_with("/record-custom") {
+                assert_eq!(record.baud, 921_600, "{name}");
+            }
+            if name.ends_with("/record-default") {
+                assert_eq!(record.baud, 115_200, "{name}");
+            }
+            if name.ends_with("/record-v3-custom") {
+                assert_eq!(record.baud, 115_200, "{name}");
+                // The same settings as record-custom, in the format boards in the field hold.
+                let new = seeds("settings")
+                    .into_iter()
+                    .find(|(n, _)| n.ends_with("/record-custom"))
+                    .expect("record-custom is a seed");
+                let new = control::record::decode(&new.1).expect("record-custom decodes");
+                assert_eq!((record.sequence, s), (new.sequence, new.settings));
+            }
             if name.ends_with("record-default") {
                 // The first save of a board (the encoder's sequence number 1).
                 assert_eq!(record.sequence, 1);

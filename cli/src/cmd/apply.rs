@@ -1,6 +1,9 @@
 //! `hexapod apply`: a build file checked with the firmware's own code, and with `--port` sent
-//! to a board: `defaults`, each `set` in an order the board accepts, then `save` (unless
-//! `--no-save`); stops at the first refusal with the board's words.
+//! to a board: `defaults`, each `set` in an order the board accepts, the file's `baud` if it
+//! gives one, then `save` (unless `--no-save`); stops at the first refusal with the board's
+//! words. `set baud` comes last so that it cannot cut the link before the other settings are
+//! in: once its `ok` is read the port is moved to the new rate (the board switches as soon as
+//! that `ok` has left), and `save` goes at the new rate: its `ok` shows the link works there.
 
 use std::path::PathBuf;
 
@@ -45,6 +48,10 @@ impl Cmd {
                     reply: reply.last,
                 });
             }
+        }
+        if let Some(baud) = file.baud {
+            link.request_ok(&format!("set baud {baud}"))?;
+            link.set_baud(baud)?;
         }
         if save {
             link.request_ok("save")?;

@@ -47,7 +47,9 @@ impl Cmd {
             let start = storage_start(&file)
                 .map_err(|e| elf_problem(e.to_string()))?
                 .map_err(|e| elf_problem(e.to_string()))?;
-            segments.extend(settings_segments(start, &build.settings));
+            // Without `baud` in the file, the rate a board starts at unsaved.
+            let baud = build.baud.unwrap_or(control::settings::DEFAULT_BAUD);
+            segments.extend(settings_segments(start, &build.settings, baud));
         }
         let image = uf2::from_segments(&segments).map_err(|e| elf_problem(e.to_string()))?;
         fs::write(&self.output, &image).map_err(|error| Error::File {

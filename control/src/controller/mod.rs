@@ -176,7 +176,7 @@ enum Begun {
 #[derive(Debug, Clone)]
 pub struct Controller<M: Math = Libm> {
     settings: Settings,
-    /// UART0's baud rate (a link setting: `defaults` keeps it).
+    /// UART0's baud rate (a link setting: `defaults` keeps it, `save` saves it).
     baud: u32,
     generation: u32,
     /// The IK of the settings' geometry (and the geometry).
@@ -276,12 +276,14 @@ impl<M: Math> Controller<M> {
     }
 
     /// The controller at power-up, from what the flash holds ([`Store::load`]): the newest
-    /// good saved settings, or the defaults; a warning notice says why when it is not simply
-    /// the last save (nothing saved, a copy that cannot be used). Saved settings these maths
+    /// good saved settings and UART0's baud rate, or the defaults; a warning notice says why
+    /// when it is not simply the last save (nothing saved, a copy that cannot be used). Saved settings these maths
     /// cannot drive are replaced by the defaults too (see [`Controller::with_math`]).
     pub fn power_up(loaded: Loaded) -> Self {
         let Loaded { store, found } = loaded;
         let mut c = Self::with_math(store.saved().copied().unwrap_or_default());
+        // UART0 opens at the saved rate (the USB port answers whatever it is).
+        c.baud = store.saved_baud().unwrap_or(DEFAULT_BAUD);
         c.store = store;
         match found {
             Found::Saved { .. } => {}
@@ -788,9 +790,11 @@ impl<M: Math> Controller<M> {
             Command::Servo { servo, pulse_us } => self.drive_servo(servo, pulse_us),
             Command::Geometry => Ok(self.list(Listing::Geometry)),
             Command::Config => {
-                let saved = match self.store.saved() {
+                let saved = match self.store.newest() {
                     None => Saved::Nothing,
-                    Some(s) if *s == self.settings => Saved::Same,
+                    Some((_, r)) if r.settings == self.settings && r.baud == self.baud => {
+                        Saved::Same
+                    }
                     Some(_) => Saved::Differs,
                 };
                 let link = LinkSettings {
@@ -833,8 +837,9 @@ impl<M: Math> Controller<M> {
                 if self.motion.is_moving() {
                     return Err(Error::Busy);
                 }
-                // The platform's settings only: the links keep theirs (see crate::record).
-                let write = self.store.prepare(&self.settings);
+                // The platform's settings and UART0's rate; echo stays the links' own (see
+                // crate::record).
+                let write = self.store.prepare(&self.settings, self.baud);
                 self.job = Some(Job::Save(Save::new(write)));
                 Ok(Begun::Pending)
             }

@@ -12,7 +12,7 @@ use super::format::{degrees, Fixed, PoseText, Six, ValueText, Vector};
 use crate::error::{Error, PoseError};
 use crate::payload::TorqueError;
 use crate::protocol::Feed;
-use crate::record::{DecodeError, FORMAT_VERSION};
+use crate::record::{DecodeError, FORMAT_VERSION, FORMAT_VERSION_NO_BAUD};
 use crate::safety::{Estop, EstopAction};
 use crate::settings::{LinkSettings, ServoParam, ServoSel, SettingId, Settings};
 
@@ -375,7 +375,8 @@ impl Display for Unusable<'_> {
         match self.0 {
             DecodeError::UnsupportedVersion(v) => write!(
                 f,
-                "written in format version {v}; this firmware reads version {FORMAT_VERSION}"
+                "written in format version {v}; this firmware reads versions \
+                 {FORMAT_VERSION_NO_BAUD} and {FORMAT_VERSION}"
             ),
             DecodeError::BadChecksum => f.write_str("damaged: checksum mismatch"),
             DecodeError::BadMagic | DecodeError::TooShort => {
