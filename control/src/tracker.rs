@@ -626,9 +626,12 @@ mod tests {
     }
 
     proptest::proptest! {
+        // Positions within +-600 mm: 200 frames of at most 100 mm/s away from the target (v0)
+        // reach at most 400 mm further, inside the tracker's +-1024 mm range; beyond it an axis
+        // is held (`beyond_the_range_an_axis_is_held`), which no platform reaches.
         #[test]
         fn never_nan_never_beyond_the_limits(
-            from in -1e3f32..1e3, to in -1e3f32..1e3, v0 in -100f32..100.0,
+            from in -600f32..600.0, to in -600f32..600.0, v0 in -100f32..100.0,
             v_max in 0f32..500.0, a_max in 0f32..5000.0, hz in 50f32..333.0,
         ) {
             let dt = 1.0 / hz;
