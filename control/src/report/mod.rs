@@ -327,6 +327,23 @@ mod tests {
             })),
             "speed_mm_s 5000 is outside 0.1..1000 mm/s (or 0/off)"
         );
+        // Every word the setting takes, the two config shows first.
+        assert_eq!(
+            text(Error::Setting(SettingError::BadValue {
+                setting: SettingId::Echo,
+                word: word("maybe"),
+                expected: Expected::OnOrOff,
+            })),
+            "echo: 'maybe' is not on or off (1 / 0)"
+        );
+        assert_eq!(
+            text(Error::Setting(SettingError::BadValue {
+                setting: SettingId::Servo(ServoSel::All, ServoParam::Dir),
+                word: word("0"),
+                expected: Expected::NormalOrReversed,
+            })),
+            "servos.dir: '0' is not normal or reversed (1 / +1 / -1)"
+        );
         assert_eq!(
             text(Error::Setting(SettingError::OutOfRange {
                 setting: SettingId::FrameHz,
@@ -358,6 +375,16 @@ mod tests {
                 max_us: 1900.0,
             }),
             "servo 2: 2000.00 us is outside its limits 1100.00..1900.00 us (servo2.min_us, max_us)"
+        );
+        // The pulse as typed, not rounded onto the limit it exceeds.
+        assert_eq!(
+            text(Error::PulseOutsideLimits {
+                servo: 2,
+                pulse_us: 1900.004,
+                min_us: 1100.0,
+                max_us: 1900.0,
+            }),
+            "servo 2: 1900.004 us is outside its limits 1100.00..1900.00 us (servo2.min_us, max_us)"
         );
         assert!(
             text(Error::NoPose(KinematicsError::ElbowFlipped { leg: 4 }))
