@@ -42,11 +42,9 @@
 
 use std::path::Path;
 
-use control::command::ParseError;
-use control::report::ValueText;
+use control::report::{nearest_setting, ValueText};
 use control::safety::FREE_GPIOS;
 use control::settings::{Kind, ServoParam, ServoSel, SettingId, SettingValue, Settings};
-use control::word::word;
 use kinematics_core::{Libm, Pose, LEGS};
 use toml::de::{DeTable, DeValue};
 
@@ -137,9 +135,8 @@ pub fn parse(file: &str, text: &str) -> Result<BuildFile, Error> {
         }
         let refused = |e: control::Error| problem(&name, line, KeyError::Refused(Box::new(e)));
         let id = SettingId::parse(&name).ok_or_else(|| {
-            refused(control::Error::from(ParseError::UnknownSetting {
-                word: word(&name),
-            }))
+            let near = nearest_setting(&name);
+            problem(&name, line, KeyError::UnknownSetting { near })
         })?;
         if id.is_link() {
             return Err(problem(&name, line, KeyError::LinkSetting));
@@ -436,6 +433,18 @@ mod tests {
         assert!(err("colour = \"red\"").starts_with("b.toml:1: colour: error:unknown-setting"));
         assert!(err("[servo7]\ndir = \"normal\"")
             .starts_with("b.toml:2: servo7.dir: error:unknown-setting"));
+        // Not "type config": a file is no terminal; where the list is, and a close name.
+        assert_eq!(
+            err("colour = \"red\""),
+            "b.toml:1: colour: error:unknown-setting not a setting (the settings are listed in \
+             docs/settings.md of the firmware's repository)"
+        );
+        assert_eq!(
+            err("frame_hz = 50\nrdo_mm = 120\n"),
+            "b.toml:2: rdo_mm: error:unknown-setting not a setting; did you mean rod_mm? (the \
+             settings are listed in docs/settings.md of the firmware's repository)"
+        );
+        assert!(err("[servo3]\ntrim = 1500").contains("did you mean servo3.trim_us?"));
         assert!(err("speed_mm_s = \"fast\"").contains("error:bad-number"));
         assert!(err("baud = 9600").contains("belongs to the serial link"));
         assert!(err("rod_mm = [1, 2]").contains("not a setting value"));

@@ -10,7 +10,10 @@
 use std::fmt::{self, Display, Formatter};
 use std::io;
 
-use control::report::refusal;
+use control::report::{refusal, Code};
+
+/// Where the list of settings is, for a user who is not at a terminal.
+const SETTINGS_DOC: &str = "docs/settings.md of the firmware's repository";
 
 /// The board's own words for a refusal: `error:<code> <message>` as the firmware writes it.
 pub fn board_words(error: &control::Error) -> String {
@@ -124,6 +127,12 @@ pub enum KeyError {
     /// Refused by the firmware's own checks (an unknown name, a bad or out-of-range value, a
     /// servo set or geometry that does not hold together): the board's words.
     Refused(Box<control::Error>),
+    /// Not a setting name; the closest one, if one is close
+    /// ([`control::report::nearest_setting`]).
+    UnknownSetting {
+        /// The setting the key is probably meant to be.
+        near: Option<control::settings::SettingId>,
+    },
     /// `baud` or `echo`: the link's, not the platform's.
     LinkSetting,
     /// A value that is not a number or a word (an array, a date, a table too deep).
@@ -256,6 +265,15 @@ impl Display for Error {
                 file_line(f, file, line)?;
                 match why {
                     KeyError::Refused(error) => write!(f, "{key}: {}", board_words(error)),
+                    KeyError::UnknownSetting { near } => {
+                        // The board's code, then the file's words: a file is not a terminal
+                        // to type `config` on, so the list is where the docs keep it.
+                        write!(f, "{key}: error:{} not a setting", Code::UnknownSetting)?;
+                        if let Some(id) = near {
+                            write!(f, "; did you mean {id}?")?;
+                        }
+                        write!(f, " (the settings are listed in {SETTINGS_DOC})")
+                    }
                     KeyError::LinkSetting => write!(
                         f,
                         "{key}: belongs to the serial link, not the platform (it is not saved); \

@@ -100,7 +100,11 @@ const PARSE_CASES = [
   ],
   ['bad-character', 'sta\xfftus', /^byte 0xFF is not printable ASCII/],
   ['unknown-command', 'fly', /^'fly' is not a command; type help$/],
-  ['unknown-command', 'poses 1 2 3 4 5 6', /^'poses' is not a command/],
+  [
+    'unknown-command',
+    'poses 1 2 3 4 5 6',
+    /^'poses' is not a command; did you mean pose\? type help$/,
+  ],
   ['missing-field', 'pose 1 2 3', /^missing roll; usage: pose <x> <y> <z> <roll> <pitch> <yaw>$/],
   ['missing-field', 'check', /^missing x; usage: check /],
   ['missing-field', 'move', /^missing axis=value; usage: move /],
@@ -122,6 +126,11 @@ const PARSE_CASES = [
   ['bad-assignment', 'move z 10', /^'z' should be axis=value, for example z=10$/],
   ['unknown-setting', 'set colour red', /^'colour' is not a setting; type config for the list$/],
   ['unknown-setting', 'set servo7.trim_us 1500', /^'servo7.trim_us' is not a setting/],
+  [
+    'unknown-setting',
+    'set rdo_mm 120',
+    /^'rdo_mm' is not a setting; did you mean rod_mm\? type config for the list$/,
+  ],
   ['bad-value', 'set echo sometimes', /^echo: 'sometimes' is not on or off \(1 \/ 0\)$/],
   [
     'bad-value',

@@ -13,6 +13,7 @@ use kinematics_core::servo::{
 use kinematics_core::KinematicsError;
 
 use super::format::{AsGiven, Fixed};
+use super::near::{nearest_setting, nearest_verb};
 use crate::command::{Field, Missing, ParseError, Verb};
 use crate::error::{Error, PoseError};
 use crate::payload::TorqueError;
@@ -480,7 +481,11 @@ impl Display for ParseError {
         match self {
             ParseError::Spoiled(s) => SpoiledMessage(*s).fmt(f),
             ParseError::UnknownCommand { word } => {
-                write!(f, "'{word}' is not a command; type help")
+                write!(f, "'{word}' is not a command; ")?;
+                if let Some(verb) = nearest_verb(word) {
+                    write!(f, "did you mean {}? ", verb.name())?;
+                }
+                f.write_str("type help")
             }
             ParseError::NoCommand => f.write_str("only separators, no command; type help"),
             ParseError::MissingField { what, verb } => {
@@ -521,7 +526,11 @@ impl Display for ParseError {
                 write!(f, "'{word}' should be axis=value, for example z=10")
             }
             ParseError::UnknownSetting { word } => {
-                write!(f, "'{word}' is not a setting; type config for the list")
+                write!(f, "'{word}' is not a setting; ")?;
+                if let Some(id) = nearest_setting(word) {
+                    write!(f, "did you mean {id}? ")?;
+                }
+                f.write_str("type config for the list")
             }
             ParseError::Setting(e) => e.fmt(f),
         }

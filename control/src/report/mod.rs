@@ -4,6 +4,7 @@
 //!
 //! - [`errors`](self::Code): the error vocabulary, the code and message of every refusal;
 //! - `format`: how numbers, poses and setting values are written;
+//! - `near`: the known name closest to a mistyped command or setting ("did you mean");
 //! - `replies`: the writers of every reply, data line and notice.
 //!
 //! # Output conventions
@@ -30,10 +31,12 @@
 
 mod errors;
 mod format;
+mod near;
 mod replies;
 
 pub use errors::{usage, write_error_codes_doc, Code};
 pub use format::{degrees, Fixed, PoseText, Six, ValueText, Vector};
+pub use near::{nearest_setting, nearest_verb};
 pub use replies::{
     kinematics_refusal, refusal, write_banner, write_echo, write_error, write_notice, write_ok,
     write_prompt, Fault, Listing, MotionReport, Notice, Saved, StatusReport, StreamCounts, EOL,
@@ -326,6 +329,25 @@ mod tests {
                 off_allowed: true,
             })),
             "speed_mm_s 5000 is outside 0.1..1000 mm/s (or 0/off)"
+        );
+        // A close name is suggested; none when nothing is close.
+        assert_eq!(
+            text(Error::Parse(ParseError::UnknownCommand {
+                word: word("stauts")
+            })),
+            "'stauts' is not a command; did you mean status? type help"
+        );
+        assert_eq!(
+            text(Error::Parse(ParseError::UnknownSetting {
+                word: word("rdo_mm")
+            })),
+            "'rdo_mm' is not a setting; did you mean rod_mm? type config for the list"
+        );
+        assert_eq!(
+            text(Error::Parse(ParseError::UnknownSetting {
+                word: word("colour")
+            })),
+            "'colour' is not a setting; type config for the list"
         );
         // Every word the setting takes, the two config shows first.
         assert_eq!(
