@@ -80,6 +80,11 @@ pub enum Error {
         /// What is wrong.
         why: RowError,
     },
+    /// `uf2`: no firmware ELF where it was looked for (not built yet).
+    NoFirmware {
+        /// The path looked at.
+        path: String,
+    },
     /// An ELF file the UF2 writer cannot use.
     Elf {
         /// The file.
@@ -380,6 +385,11 @@ impl Display for Error {
                     RowError::Empty => f.write_str("no rows: nothing to do"),
                 }
             }
+            Error::NoFirmware { path } => write!(
+                f,
+                "{path}: no firmware there; build it first with `cargo fw` (at the top of the \
+                 firmware's repository), or run `./dev uf2`, which builds it and writes the UF2"
+            ),
             Error::Elf { path, why } => write!(f, "{path}: {why}"),
             Error::Option { option, why } => write!(f, "{option}: {why}"),
             Error::Pose { pose, why } => write!(f, "pose {pose}: {why}"),
