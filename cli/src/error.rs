@@ -178,8 +178,15 @@ pub enum SizingError {
 /// What went wrong with a serial port.
 #[derive(Debug)]
 pub enum PortError {
-    /// It could not be opened (the system's words).
-    Open(String),
+    /// It could not be opened.
+    Open {
+        /// The system's words.
+        why: String,
+        /// The serial ports the system lists (`serialport::available_ports`).
+        present: Vec<String>,
+        /// The system refused for want of permission (on Linux: the `dialout` group).
+        denied: bool,
+    },
     /// Reading or writing failed (the system's words).
     Io(String),
     /// No final reply to a line in time.
@@ -314,7 +321,29 @@ impl Display for Error {
                 }
             }
             Error::Port { port, why } => match why {
-                PortError::Open(e) => write!(f, "{port}: cannot open the serial port: {e}"),
+                PortError::Open {
+                    why,
+                    present,
+                    denied,
+                } => {
+                    write!(f, "{port}: cannot open the serial port: {why}")?;
+                    if *denied && cfg!(target_os = "linux") {
+                        write!(
+                            f,
+                            "; your user may not use serial ports: add it to the `dialout` group \
+                             (`sudo usermod -aG dialout $USER`), then log in again"
+                        )?;
+                    }
+                    if present.is_empty() {
+                        write!(f, "; no serial ports found (is the board plugged in?)")?;
+                    } else {
+                        write!(f, "; serial ports present: {}", present.join(", "))?;
+                    }
+                    write!(
+                        f,
+                        "; for the emulated board, `./dev run --pty` prints the port to give"
+                    )
+                }
                 PortError::Io(e) => write!(f, "{port}: serial port error: {e}"),
                 PortError::NoReply { line, waited_s } => write!(
                     f,
@@ -443,4 +472,43 @@ fn setting_placement(id: control::settings::SettingId, value: Option<f32>) -> St
 /// A torque refusal in the board's words, without its code.
 fn torque_words(cause: &control::payload::TorqueError) -> String {
     control::Error::Torque(*cause).to_string()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn not_opened(present: &[&str], denied: bool) -> String {
+        Error::Port {
+            port: "/dev/ttyACM0".into(),
+            why: PortError::Open {
+                why: "Permission denied".into(),
+                present: present.iter().map(|p| p.to_string()).collect(),
+                denied,
+            },
+        }
+        .to_string()
+    }
+
+    #[test]
+    fn a_port_that_does_not_open_says_what_to_try() {
+        let denied = not_opened(&["/dev/ttyACM0", "/dev/ttyS0"], true);
+        assert!(
+            denied.starts_with("/dev/ttyACM0: cannot open the serial port: Permission denied; "),
+            "{denied}"
+        );
+        assert_eq!(
+            denied.contains("`dialout` group"),
+            cfg!(target_os = "linux"),
+            "{denied}"
+        );
+        assert!(
+            denied.contains("; serial ports present: /dev/ttyACM0, /dev/ttyS0;"),
+            "{denied}"
+        );
+        assert!(denied.ends_with("`./dev run --pty` prints the port to give"));
+        let none = not_opened(&[], false);
+        assert!(none.contains("; no serial ports found"), "{none}");
+        assert!(!none.contains("dialout"), "{none}");
+    }
 }
