@@ -30,7 +30,8 @@
 //! value (`servos.trim_us` then `servo3.trim_us`). If no order works, the first key that
 //! cannot be applied is the error, in the board's words, with its file, line and key.
 //!
-//! The `[sizing]` table holds what the board has no setting for (`crate::sizing`).
+//! The `[sizing]` table holds what the board has no setting for (`crate::sizing`); the `[cue]`
+//! table is `hexapod cue`'s (`crate::cue::config`), skipped here.
 //!
 //! A file is written commented ([`write`]: `init`, `pull`): each key with what it is and its
 //! range, taken from the firmware's own [`Kind`] (the free GPIOs from
@@ -90,6 +91,9 @@ pub fn read(path: &Path) -> Result<BuildFile, Error> {
     parse(&path.display().to_string(), &read_text(path)?)
 }
 
+/// The `[cue]` table's name: `hexapod cue`'s (`crate::cue::config` reads it), skipped here.
+pub const CUE_TABLE: &str = "cue";
+
 /// Reads and checks a build file's text; `file` names it in errors.
 pub fn parse(file: &str, text: &str) -> Result<BuildFile, Error> {
     let line_of = |offset: usize| text[..offset.min(text.len())].matches('\n').count() + 1;
@@ -100,6 +104,9 @@ pub fn parse(file: &str, text: &str) -> Result<BuildFile, Error> {
     })?;
     let mut found = Vec::new();
     for (key, value) in table.get_ref() {
+        if key.get_ref() == CUE_TABLE {
+            continue; // `hexapod cue`'s (crate::cue::config), never the board's
+        }
         let line = line_of(key.span().start);
         match value.get_ref() {
             DeValue::Table(inner) => {

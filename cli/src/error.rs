@@ -124,6 +124,8 @@ pub enum Error {
         /// The platform (a build file, or the default platform).
         source: String,
     },
+    /// `cue`'s telemetry or board, or `cue-plot`'s record.
+    Cue(Box<CueError>),
 }
 
 /// What is wrong with a key of a build file.
@@ -147,6 +149,176 @@ pub enum KeyError {
     /// With the payload and ratings so far, a servo would need more than its rating to hold
     /// the platform at home: the board, holding home, refuses the setting (`pose-conflict`).
     OverloadedAtHome(control::payload::TorqueError),
+    /// A `[cue]` key (`hexapod cue`'s) that is not one, or its value out of range.
+    Cue(CueKeyError),
+}
+
+/// What is wrong with a `[cue]` key.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum CueKeyError {
+    /// Not one of the table's keys.
+    Unknown,
+    /// Not a number in `min..=max`.
+    Number {
+        /// Smallest.
+        min: f64,
+        /// Largest.
+        max: f64,
+    },
+    /// Not a whole number in `min..=max` (a filter's order).
+    Whole {
+        /// Smallest.
+        min: f64,
+        /// Largest.
+        max: f64,
+    },
+    /// Not 1 or -1 (an axis' sign).
+    Sign,
+}
+
+/// What went wrong in `cue` (its telemetry, its board) or `cue-plot` (its record).
+#[derive(Debug)]
+pub enum CueError {
+    /// The telemetry address cannot be listened on.
+    Listen {
+        /// The address.
+        address: String,
+        /// What the system said.
+        why: String,
+    },
+    /// Nothing valid came.
+    NoTelemetry {
+        /// Where it listened.
+        address: String,
+        /// How long it waited, s.
+        waited_s: f64,
+        /// Datagrams received.
+        datagrams: u64,
+        /// What was dropped, by why.
+        dropped: Dropped,
+        /// The fields a line must have, in order.
+        fields: &'static [&'static str],
+        /// The sender's own names for its fields, if it sent them (JSBSim's `<LABELS>`).
+        labels: Option<Vec<String>>,
+    },
+    /// The board's settings are not a platform (never: the board checks them).
+    NotAPlatform,
+    /// A record file that cannot be plotted.
+    Record {
+        /// The file.
+        file: String,
+        /// Its line, from 1.
+        line: u64,
+        /// Why.
+        why: RecordError,
+    },
+}
+
+/// Why a telemetry line was dropped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum BadLine {
+    /// Not UTF-8 text.
+    NotText,
+    /// Not as many fields as a line has.
+    FieldCount,
+    /// A field that is not a number.
+    NotANumber,
+    /// NaN or infinite.
+    NotFinite,
+    /// Beyond what an aircraft does (30 g, 30 rad/s).
+    OutOfRange,
+}
+
+impl BadLine {
+    /// Every kind, in the order summaries list them.
+    pub const ALL: [BadLine; 5] = [
+        BadLine::NotText,
+        BadLine::FieldCount,
+        BadLine::NotANumber,
+        BadLine::NotFinite,
+        BadLine::OutOfRange,
+    ];
+}
+
+impl Display for BadLine {
+    fn fmt(&self, f: &mut Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            BadLine::NotText => "not text",
+            BadLine::FieldCount => "not 10 fields",
+            BadLine::NotANumber => "a field not a number",
+            BadLine::NotFinite => "NaN or infinite",
+            BadLine::OutOfRange => "beyond 30 g or 30 rad/s",
+        })
+    }
+}
+
+/// Telemetry dropped, by why.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Dropped {
+    /// Lines, per [`BadLine::ALL`] kind.
+    pub bad: [u64; 5],
+    /// Samples whose time did not advance (repeated, out of order, or a storm faster than
+    /// the washout takes them).
+    pub stale: u64,
+    /// Datagrams dropped because the queue was full (a storm).
+    pub overflowed: u64,
+}
+
+impl Dropped {
+    /// Counts a bad line.
+    pub fn count(&mut self, kind: BadLine) {
+        if let Some(i) = BadLine::ALL.iter().position(|k| *k == kind) {
+            self.bad[i] += 1;
+        }
+    }
+
+    /// Everything dropped.
+    pub fn total(&self) -> u64 {
+        self.bad.iter().sum::<u64>() + self.stale + self.overflowed
+    }
+}
+
+impl Display for Dropped {
+    fn fmt(&self, f: &mut Formatter<'_>) -> fmt::Result {
+        let mut parts: Vec<String> = BadLine::ALL
+            .iter()
+            .zip(self.bad)
+            .filter(|(_, n)| *n > 0)
+            .map(|(kind, n)| format!("{n} {kind}"))
+            .collect();
+        if self.stale > 0 {
+            parts.push(format!("{} whose time did not advance", self.stale));
+        }
+        if self.overflowed > 0 {
+            parts.push(format!("{} in a storm (queue full)", self.overflowed));
+        }
+        if parts.is_empty() {
+            f.write_str("none")
+        } else {
+            f.write_str(&parts.join(", "))
+        }
+    }
+}
+
+/// What is wrong with a `cue --record` file.
+#[derive(Debug, Clone, PartialEq)]
+pub enum RecordError {
+    /// The header is not the record's.
+    Header {
+        /// The columns it must name.
+        columns: &'static [&'static str],
+    },
+    /// Fewer or more fields than the header.
+    FieldCount(usize),
+    /// A field that is not a finite number.
+    NotFinite {
+        /// Its column.
+        column: &'static str,
+        /// As found.
+        text: String,
+    },
+    /// No rows.
+    Empty,
 }
 
 /// What is wrong with a `[sizing]` key.
@@ -313,6 +485,7 @@ impl Display for Error {
                          (error:pose-conflict)",
                         torque_words(cause)
                     ),
+                    KeyError::Cue(why) => write!(f, "{key}: {why}"),
                     KeyError::NotAValue => write!(
                         f,
                         "{key}: not a setting value (a setting takes a number or a word; \
@@ -428,6 +601,7 @@ impl Display for Error {
                  is 0; give payload_g (g) and payload_com_x_mm, payload_com_y_mm, \
                  payload_com_z_mm (mm, platform frame) in the build file (--settings)"
             ),
+            Error::Cue(why) => write!(f, "{why}"),
             Error::StreamTrouble {
                 file,
                 refused,
@@ -445,6 +619,74 @@ impl Display for Error {
 }
 
 impl std::error::Error for Error {}
+
+impl Display for CueKeyError {
+    fn fmt(&self, f: &mut Formatter<'_>) -> fmt::Result {
+        match self {
+            CueKeyError::Unknown => write!(
+                f,
+                "not a [cue] key; see docs/cueing.md for the keys (margin, knee, stall_s, \
+                 ease_s, pivot_*_mm, x.scale ... tilt.max_deg)"
+            ),
+            CueKeyError::Number { min, max } => write!(f, "must be a number {min}..{max}"),
+            CueKeyError::Whole { min, max } => write!(f, "must be a whole number {min}..{max}"),
+            CueKeyError::Sign => write!(f, "must be 1 or -1"),
+        }
+    }
+}
+
+impl Display for CueError {
+    fn fmt(&self, f: &mut Formatter<'_>) -> fmt::Result {
+        match self {
+            CueError::Listen { address, why } => {
+                write!(f, "cannot listen for telemetry on {address}: {why}")
+            }
+            CueError::NoTelemetry {
+                address,
+                waited_s,
+                datagrams,
+                dropped,
+                fields,
+                labels,
+            } => {
+                write!(
+                    f,
+                    "no valid telemetry on {address} in {waited_s} s: {datagrams} datagrams, \
+                     lines dropped: {dropped}. Each line must be {} numbers: {} \
+                     (docs/cueing.md)",
+                    fields.len(),
+                    fields.join(",")
+                )?;
+                if let Some(labels) = labels {
+                    write!(f, "; the sender named its fields {}", labels.join(","))?;
+                }
+                Ok(())
+            }
+            CueError::NotAPlatform => write!(f, "the board's settings are not a platform"),
+            CueError::Record { file, line, why } => {
+                file_line(f, file, line)?;
+                match why {
+                    RecordError::Header { columns } => write!(
+                        f,
+                        "not a cue record: the header must be {}",
+                        columns.join(",")
+                    ),
+                    RecordError::FieldCount(n) => write!(f, "{n} fields"),
+                    RecordError::NotFinite { column, text } => {
+                        write!(f, "{column}: '{text}' is not a finite number")
+                    }
+                    RecordError::Empty => f.write_str("no rows: nothing to plot"),
+                }
+            }
+        }
+    }
+}
+
+impl From<CueError> for Error {
+    fn from(why: CueError) -> Error {
+        Error::Cue(Box::new(why))
+    }
+}
 
 /// The unit of a setting, from the firmware's own [`Kind`](control::settings::Kind).
 fn setting_unit(id: control::settings::SettingId) -> &'static str {

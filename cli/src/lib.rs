@@ -11,6 +11,8 @@
 //!   say (`config` as settings, `status`'s counters);
 //! - [`trajectory`]: trajectory CSV files, and each row as the board will get it, checked;
 //!   [`demo`]: built-in trajectories; [`streamer`]: sending them at their own timing;
+//! - [`cue`]: a flight simulator's telemetry to motion cues (washout filter) to stream frames,
+//!   and a record of a flight plotted;
 //! - [`size`]: a platform's reach, stiffness and servo torques; [`draw`], [`workspace_plot`],
 //!   [`torque_plot`]: the pictures, on [`picture`] scenes with [`plot`]'s axes;
 //! - [`flash_image`]: the settings sectors as the board's `save` leaves them; [`elf`]: the load
@@ -23,6 +25,7 @@
 pub mod board;
 pub mod build_file;
 pub mod cmd;
+pub mod cue;
 pub mod demo;
 pub mod draw;
 pub mod elf;

@@ -8,7 +8,8 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 
 use hexapod::cmd::{
-    apply, demo, describe, draw, init, pull, send, shell, stream, torque, uf2, workspace,
+    apply, cue, cue_plot, demo, describe, draw, init, pull, send, shell, stream, torque, uf2,
+    workspace,
 };
 use hexapod::messages;
 
@@ -63,6 +64,14 @@ enum Command {
     /// Built-in trajectories, streamed to a board (--port) or written as CSV (--output)
     Demo(demo::Cmd),
 
+    /// Fly it: a flight simulator's telemetry (UDP: JSBSim, FlightGear, or a bridge; see
+    /// docs/cueing.md) turned into motion cues by a washout filter and streamed to the board as
+    /// binary frames; a stall or the end of the telemetry, or Ctrl-C, eases the platform home
+    Cue(cue::Cmd),
+    /// Plot a `cue --record` file (SVG and PNG): per axis the aircraft's specific force or
+    /// rate beside what the platform delivers
+    CuePlot(cue_plot::Cmd),
+
     // Flash it.
     /// Write a UF2 file of the firmware (and, with --settings, of a build file's settings):
     /// hold BOOTSEL while plugging the Pico in, then copy the file onto the RPI-RP2 drive
@@ -82,6 +91,8 @@ fn main() -> ExitCode {
         Command::Shell(cmd) => cmd.run(),
         Command::Stream(cmd) => cmd.run(),
         Command::Demo(cmd) => cmd.run(),
+        Command::Cue(cmd) => cmd.run(),
+        Command::CuePlot(cmd) => cmd.run(),
         Command::Uf2(cmd) => cmd.run(),
     })
 }

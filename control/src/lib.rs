@@ -15,7 +15,8 @@
 //! - [`protocol`]: bytes -> lines (terminal line editing, like grbl's `protocol`/`serial`) and
 //!   stream frames among them; [`stream`]: the stream frames' grammar (binary, SimTools text),
 //!   `Frame`, and what their counts mean (the `stream.*` settings); a leaf `protocol` uses.
-//! - [`number`]: strict decimal parsing; [`word`]: quoting what the user typed.
+//! - [`number`]: strict decimal parsing (short decimals by one exact `f32` division, the rest
+//!   by core's parser); [`word`]: quoting what the user typed.
 //! - [`command`]: one line -> one [`command::Command`] or a [`command::ParseError`] (like
 //!   grbl's `gcode`); [`command::Verb`] is the list of command words.
 //! - [`settings`]: [`Settings`] (the platform's) and [`settings::LinkSettings`] (`baud`,
@@ -25,7 +26,8 @@
 //!   trait the board implements, so a power cut during a save never loses the last good one.
 //! - [`motion`]: straight-line moves at bounded speed and acceleration (trapezoid), path
 //!   checks; [`tracker`]: the stream tracker (per-axis speed and acceleration limits,
-//!   time-optimal, no overshoot).
+//!   time-optimal, no overshoot; in integers: fixed-point positions, an exact discrete braking
+//!   rule with an integer square root).
 //! - [`payload`]: the payload carried and the servos' torque ratings: holding torques in
 //!   kgf cm from `kinematics_core::statics`, [`payload::TorqueError`].
 //! - [`safety`]: the e-stop input's and servo-power output's settings, the e-stop latch.

@@ -19,11 +19,22 @@
 //!   frame (if `5A` does not follow, the `A5` was a stray byte and spoils the line like any
 //!   byte outside ASCII); in a line already spoiled by such bytes (garbage), `A5 5A` begins a
 //!   frame too and the garbage is dropped without a reply, so a binary stream recovers from
-//!   anything; digits and commas, starting with a digit, then `X`, are a text frame. Frames are
-//!   not lines: no echo, no reply; garbage and damaged frames are reported as such, to count.
-//!   A binary frame whose bytes stop coming for more than a whole servo frame (a stream cut
-//!   mid-frame) is dropped as damaged, so what comes next (a command typed after a stream
-//!   software crashed) is read as it was meant ([`LineBuffer::feed_at`]).
+//!   anything. Frames are not lines: no echo, no reply; garbage and damaged frames are
+//!   reported as such, to count. A binary frame whose bytes stop coming for more than a whole
+//!   servo frame (a stream cut mid-frame) is dropped as damaged, so what comes next (a command
+//!   typed after a stream software crashed) is read as it was meant ([`LineBuffer::feed_at`]).
+//! - Text frames (a SimTools stream never sends a line end): a line that begins with a digit
+//!   is not echoed as it comes (only whole, if a line end shows it is a line: refused as a
+//!   command). An `X` ends the line in progress as a text frame when the line began with a
+//!   digit (or with no character kept yet), right after a digit, or in a spoiled line; in a
+//!   command line otherwise it is a character (`MOVE X=1`). The frame is applied only if every
+//!   byte since the last sync point (the `X` that ended the line before, a line end) was a
+//!   digit or comma, six counts, and what came before that sync point cannot have been the
+//!   start of the frame's first count cut there (see `judge_trust`); anything else
+//!   ending at an `X` is a damaged frame. So any byte, in any place, costs its frame and no
+//!   more, and a stream picks up again at the next whole frame; a stray `X` in a count (a
+//!   bit flip of `8`) may cost one frame more. A digit lost or changed, or an `X` cutting the
+//!   last count short, still makes well-formed counts: no format can tell.
 //!
 //! This module only classifies bytes; the controller decides what to echo and reply.
 
@@ -101,6 +112,17 @@ enum Escape {
     Ss3,
 }
 
+/// What the line in progress began as (its first kept character).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Kind {
+    /// Nothing kept yet.
+    Start,
+    /// A digit first: a text frame (an `X` ends it), or a line refused at its line end.
+    Frame,
+    /// Another printable character first: a command line.
+    Command,
+}
+
 /// Assembles bytes into lines.
 #[derive(Debug, Clone)]
 pub struct LineBuffer {
@@ -108,6 +130,21 @@ pub struct LineBuffer {
     spoiled: Option<Spoiled>,
     after_cr: bool,
     escape: Escape,
+    kind: Kind,
+    /// Every byte since the last sync point (an `X` that ended a line, a line end) was a digit
+    /// or a comma: an `X` now ends a text frame that may be applied.
+    pure: bool,
+    /// A comma came since the last sync point.
+    comma: bool,
+    /// The next text frame may be applied: what came before its sync point cannot have been
+    /// the start of a frame cut there (its first count; see [`LineBuffer::sync`]).
+    trusted: bool,
+    /// The last sync point was an `X` (not a line end).
+    after_x: bool,
+    /// The last byte was a digit.
+    after_digit: bool,
+    /// The command line in progress had a byte outside printable ASCII, or an `X`.
+    unusual: bool,
     /// A binary stream frame in progress.
     frame: BinaryFrame,
     /// The servo-frame count when the frame in progress last got a byte.
@@ -130,6 +167,13 @@ impl LineBuffer {
             spoiled: None,
             after_cr: false,
             escape: Escape::None,
+            kind: Kind::Start,
+            pure: true,
+            comma: false,
+            trusted: true,
+            after_x: false,
+            after_digit: false,
+            unusual: false,
             frame: BinaryFrame::new(),
             frame_tick: 0,
             abandoned: false,
@@ -156,10 +200,19 @@ impl LineBuffer {
     pub fn clear(&mut self) {
         self.buf.clear();
         self.spoiled = None;
+        self.kind = Kind::Start;
+    }
+
+    /// True while the line in progress began with a digit (it may be a text frame): its
+    /// characters are not echoed as they come.
+    pub fn holds_echo(&self) -> bool {
+        self.kind == Kind::Frame
     }
 
     /// Records that bytes were lost on the way in: the current line is spoiled.
     pub fn rx_overflow(&mut self, lost: Lost) {
+        self.pure = false;
+        self.after_digit = false;
         self.spoiled = Some(Spoiled::RxOverflow(match self.spoiled {
             Some(Spoiled::RxOverflow(before)) => Lost {
                 bytes: before.bytes.saturating_add(lost.bytes),
@@ -192,9 +245,79 @@ impl LineBuffer {
         let frame_starts = byte == stream::BINARY_HEADER[0]
             && (self.at_line_start() || matches!(self.spoiled, Some(Spoiled::BadByte(_))));
         if !self.frame.is_empty() || frame_starts {
+            self.pure = false;
+            self.after_digit = false;
             return self.feed_frame(byte);
         }
+        if byte == stream::TEXT_FRAME_END && self.x_ends_line() {
+            return self.end_text_frame();
+        }
+        self.after_digit = byte.is_ascii_digit();
+        if byte == b',' {
+            self.comma = true;
+        } else if !byte.is_ascii_digit() && byte != b'\r' && byte != b'\n' {
+            // (A line end is a sync point itself; the LF of a CRLF is swallowed.)
+            self.pure = false;
+        }
+        let line_end = byte == b'\r' || byte == b'\n';
+        if (!(0x20..=0x7E).contains(&byte) && !line_end) || byte == stream::TEXT_FRAME_END {
+            self.unusual = true;
+        }
         self.feed_line(byte)
+    }
+
+    /// Whether an `X` now ends the line as a text frame: unless the line is a command line
+    /// (it began with a printable character other than a digit), not spoiled, and the `X` does
+    /// not follow a digit (`MOVE X=1` stays a command).
+    fn x_ends_line(&self) -> bool {
+        self.kind != Kind::Command || self.spoiled.is_some() || self.after_digit
+    }
+
+    /// An `X` ended the line: a text frame if everything since the last sync point was six
+    /// counts and the frame is trusted; otherwise a damaged frame (dropped without a reply).
+    fn end_text_frame(&mut self) -> Feed {
+        let whole = self.pure && self.trusted && self.spoiled.is_none();
+        let frame = whole
+            .then(|| core::str::from_utf8(&self.buf).ok())
+            .flatten()
+            .and_then(stream::parse_text_frame);
+        self.judge_trust();
+        self.sync();
+        self.after_x = true;
+        self.clear();
+        frame.map_or(Feed::DamagedFrame, |counts| {
+            Feed::Frame(Frame::Text(counts))
+        })
+    }
+
+    /// At a sync point: whether the text frame after it may be applied. Not if what came since
+    /// the last sync point may have been the start of a frame's first count, cut here (by a
+    /// stray `X` or line end): the rest of that frame would then look like six counts. That
+    /// is a stretch without a comma that was not plain digits after a line end (a frame's
+    /// last count, cut from the rest by a line end, is), unless it was a plain command line or
+    /// an empty one. A comma since the last sync point trusts what follows again: the rest of
+    /// a frame cut after one of its commas has fewer than six counts.
+    fn judge_trust(&mut self) {
+        let plain_line = match self.kind {
+            Kind::Start => self.spoiled.is_none(),
+            Kind::Command => !self.unusual,
+            Kind::Frame => false,
+        };
+        if self.comma {
+            self.trusted = true;
+        } else if (!self.pure || self.after_x) && !plain_line {
+            self.trusted = false;
+        }
+    }
+
+    /// A sync point (an `X` that ended a line, a line end): a text frame may begin.
+    fn sync(&mut self) {
+        self.pure = true;
+        self.comma = false;
+        self.after_digit = false;
+        self.unusual = false;
+        self.after_cr = false;
+        self.escape = Escape::None;
     }
 
     /// A byte of a binary frame (or of what may begin one).
@@ -211,7 +334,11 @@ impl LineBuffer {
                 Feed::Nothing
             }
             BinaryFeed::Pending => Feed::Nothing,
-            BinaryFeed::Frame(counts) => Feed::Frame(Frame::Binary(counts)),
+            BinaryFeed::Frame(counts) => {
+                self.sync();
+                self.after_x = false;
+                Feed::Frame(Frame::Binary(counts))
+            }
             BinaryFeed::Damaged => Feed::DamagedFrame,
             // `A5` then not `5A`: a stray byte, not a frame: it spoils the line (if nothing
             // did already). This byte is read afresh (another `A5` may begin a frame).
@@ -309,15 +436,12 @@ impl LineBuffer {
         if self.spoiled.is_some() {
             return Feed::Nothing;
         }
-        if byte == stream::TEXT_FRAME_END && stream::is_text_frame_so_far(&self.buf) {
-            // A line that began with a digit and ends with `X`: a text frame, whole or damaged.
-            let frame = core::str::from_utf8(&self.buf)
-                .ok()
-                .and_then(stream::parse_text_frame);
-            self.buf.clear();
-            return frame.map_or(Feed::DamagedFrame, |counts| {
-                Feed::Frame(Frame::Text(counts))
-            });
+        if self.kind == Kind::Start {
+            self.kind = if stream::starts_text_frame(byte) {
+                Kind::Frame
+            } else {
+                Kind::Command
+            };
         }
         match self.buf.push(byte) {
             Ok(()) => Feed::Added(byte),
@@ -329,6 +453,11 @@ impl LineBuffer {
     }
 
     fn end_line(&mut self) -> Feed {
+        self.judge_trust();
+        let after_cr = self.after_cr;
+        self.sync();
+        self.after_cr = after_cr;
+        self.after_x = false;
         if let Some(why) = self.spoiled {
             self.clear();
             Feed::Spoiled(why)
@@ -645,6 +774,273 @@ mod tests {
         assert_eq!(inputs(b"123,4\n"), ["line 123,4"]);
         // X elsewhere is just a character, also after a digit when other characters came.
         assert_eq!(inputs(b"move x=1\n"), ["line move x=1"]);
-        assert_eq!(inputs(b"0a0 X1\n"), ["line 0a0 X1"]);
+        assert_eq!(inputs(b"MOVE X=1\n"), ["line MOVE X=1"]);
+        // A line that began with a digit is ended by any `X`: a damaged frame, no reply (it
+        // was a command line up to a line end before; a stream never sends one).
+        assert_eq!(inputs(b"0a0 X1\n"), ["damaged", "line 1"]);
+        // So is a command line by an `X` right after a digit.
+        assert_eq!(inputs(b"move z=1X\n"), ["damaged", "empty"]);
+    }
+
+    /// A SimTools text frame for these counts.
+    fn text(counts: &[u32; 6]) -> std::vec::Vec<u8> {
+        let fields: std::vec::Vec<std::string::String> = counts
+            .iter()
+            .map(std::string::ToString::to_string)
+            .collect();
+        std::format!("{}X", fields.join(",")).into_bytes()
+    }
+
+    /// Feeds a byte stream; returns the text frames applied, in order.
+    fn applied(input: &[u8]) -> std::vec::Vec<[u32; 6]> {
+        let mut lb = LineBuffer::new();
+        let mut out = std::vec::Vec::new();
+        for &b in input {
+            match lb.feed(b) {
+                Feed::Line => lb.clear(),
+                Feed::Frame(Frame::Text(c)) => out.push(c),
+                _ => {}
+            }
+        }
+        out
+    }
+
+    /// Whether `got` is `sent` in order with some left out, all of `must` (indices) kept.
+    fn kept_in_order(
+        sent: &[[u32; 6]],
+        got: &[[u32; 6]],
+        must: &[bool],
+    ) -> Result<(), std::string::String> {
+        let mut next = 0;
+        for (i, frame) in sent.iter().enumerate() {
+            if got.get(next) == Some(frame) {
+                next += 1;
+            } else if must[i] {
+                return Err(std::format!("frame {i} {frame:?} was not applied: {got:?}"));
+            }
+        }
+        if next == got.len() {
+            Ok(())
+        } else {
+            Err(std::format!(
+                "{:?} was applied though no frame sent was that",
+                got[next]
+            ))
+        }
+    }
+
+    /// Six counts, distinct between frames by the first (whatever its digits).
+    fn counts(i: usize, rest: [u32; 6]) -> [u32; 6] {
+        let mut c = rest;
+        c[0] = i as u32 * 1000 + rest[0] % 1000;
+        c
+    }
+
+    #[test]
+    fn one_stray_byte_anywhere_costs_only_its_frame() {
+        let sent: std::vec::Vec<[u32; 6]> = (0..5)
+            .map(|i| counts(i + 1, [127 + i as u32, 0, 255, 9, 12, 130]))
+            .collect();
+        let frames: std::vec::Vec<std::vec::Vec<u8>> = sent.iter().map(text).collect();
+        let damaged = 2;
+        // Every byte value but digits and `X` (a stray digit makes a wrong count, well-formed,
+        // that no format can tell; so does an `X` in the last count, cutting it short: see
+        // below), before each byte of frame 2 (its X included).
+        for byte in (0..=255u8).filter(|&b| !b.is_ascii_digit() && b != b'X') {
+            for at in 0..frames[damaged].len() {
+                let mut input = std::vec::Vec::new();
+                for (i, frame) in frames.iter().enumerate() {
+                    if i == damaged {
+                        input.extend_from_slice(&frame[..at]);
+                        input.push(byte);
+                        input.extend_from_slice(&frame[at..]);
+                    } else {
+                        input.extend_from_slice(frame);
+                    }
+                }
+                let got = applied(&input);
+                let must = [true, true, false, true, true];
+                if let Err(e) = kept_in_order(&sent, &got, &must) {
+                    panic!("byte {byte:#04x} before byte {at} of frame 2: {e}");
+                }
+                // Frame 2 itself only if the byte came before it, not inside it.
+                assert!(
+                    at == 0 || !got.contains(&sent[damaged]),
+                    "{byte:#04x} at {at}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn a_lost_comma_or_x_costs_its_frame_and_a_lost_digit_no_more() {
+        let sent: std::vec::Vec<[u32; 6]> = (0..4)
+            .map(|i| counts(i + 1, [0, 11, 22, 33, 44, 55]))
+            .collect();
+        let frames: std::vec::Vec<std::vec::Vec<u8>> = sent.iter().map(text).collect();
+        for at in 0..frames[1].len() {
+            let mut input = frames[0].clone();
+            let mut cut = frames[1].clone();
+            let lost = cut.remove(at);
+            input.extend(cut);
+            input.extend(frames[2].clone());
+            input.extend(frames[3].clone());
+            let got = applied(&input);
+            match lost {
+                // Frames 1 and 2 run together: both lost, 3 applied.
+                b'X' => assert_eq!(got, [sent[0], sent[3]]),
+                b',' => assert_eq!(got, [sent[0], sent[2], sent[3]]),
+                // A wrong count, but the stream stays in step.
+                _ => {
+                    assert_eq!(got.len(), 4, "{got:?}");
+                    assert_eq!([got[0], got[2], got[3]], [sent[0], sent[2], sent[3]]);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_stray_x_cuts_a_frame_in_two() {
+        // In the last count: the first part is six counts, a wrong frame no format can tell
+        // (like a lost digit; see the stream guard); the rest is dropped, and so is the frame
+        // after it (those digits could as well have been a frame's first count, cut short).
+        assert_eq!(
+            applied(b"1,2,3,4,5,6X1,2,3,4,5,1X38X1,2,3,4,5,7X1,2,3,4,5,8X"),
+            [[1, 2, 3, 4, 5, 6], [1, 2, 3, 4, 5, 1], [1, 2, 3, 4, 5, 8]]
+        );
+        // Elsewhere: both parts dropped, the next frame applied.
+        assert_eq!(
+            applied(b"1,2,3,4,5,6X1,2,3X,4,5,6X1,2,3,4,5,7X"),
+            [[1, 2, 3, 4, 5, 6], [1, 2, 3, 4, 5, 7]]
+        );
+    }
+
+    #[test]
+    fn a_frame_cut_in_its_first_count_never_leaves_six_counts_applied() {
+        // `X`, CR or LF inside the first count: what follows has six counts but is the rest of
+        // a frame; it is dropped, and the next frame is applied.
+        for cut in [b"X", b"\r", b"\n"] {
+            let mut input = b"180,1,2,3,4,5X1".to_vec();
+            input.extend_from_slice(cut);
+            input.extend_from_slice(b"80,1,2,3,4,5X181,1,2,3,4,5X");
+            assert_eq!(
+                applied(&input),
+                [[180, 1, 2, 3, 4, 5], [181, 1, 2, 3, 4, 5]],
+                "{cut:?}"
+            );
+        }
+        // Through a line that garbage started (a letter) and a stray `X` before it ended.
+        assert_eq!(
+            applied(b"179,1,2,3,4,5X180,1,2,3,4,5\rqX1\r81,1,2,3,4,5X182,1,2,3,4,5X"),
+            [[179, 1, 2, 3, 4, 5], [182, 1, 2, 3, 4, 5]]
+        );
+    }
+
+    #[test]
+    fn a_text_stream_recovers_from_anything_a_byte_outside_ascii_included() {
+        // One byte of 0x80 or above used to spoil the stream for good (no line end ever came).
+        let mut input = b"1,2,3,4,5,6X".to_vec();
+        input.extend_from_slice(b"7,\xC2,9,10,11,12X");
+        for i in 0..50u32 {
+            input.extend(text(&[i, 1, 2, 3, 4, 5]));
+        }
+        let got = applied(&input);
+        assert_eq!(got.len(), 51, "{got:?}");
+        assert_eq!(got[1], [0, 1, 2, 3, 4, 5]);
+        // The same with the other kinds of garbage: control characters, NUL, a too-long line.
+        for garbage in [
+            &b"\x00"[..],
+            b"\x03",
+            b"\x1b[",
+            b"\x08\x08",
+            b"\x15",
+            &[b'a'; 200],
+        ] {
+            let mut input = b"1,2,3,4,5,6X7,".to_vec();
+            input.extend_from_slice(garbage);
+            input.extend_from_slice(b"8,9,10,11,12X13,14,15,16,17,18X");
+            assert_eq!(
+                applied(&input),
+                [[1, 2, 3, 4, 5, 6], [13, 14, 15, 16, 17, 18]],
+                "{garbage:?}"
+            );
+        }
+    }
+
+    /// Garbage for the property test: any byte but digits, commas and `X` (those can make
+    /// wrong but well-formed counts), and never the binary frame's header (a frame would
+    /// begin).
+    fn garbage(bytes: std::vec::Vec<u8>) -> std::vec::Vec<u8> {
+        let mut out: std::vec::Vec<u8> = bytes
+            .into_iter()
+            .map(|b| {
+                if b.is_ascii_digit() || b == b',' || b == b'X' {
+                    b'#'
+                } else {
+                    b
+                }
+            })
+            .collect();
+        for i in 1..out.len() {
+            if out[i - 1] == 0xA5 && out[i] == 0x5A {
+                out[i] = 0;
+            }
+        }
+        out
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(512))]
+        /// A text stream with garbage inserted at random places (one burst, or one lost comma
+        /// or `X`, per frame at most): no frame is applied that was not sent as it is, and
+        /// every frame that came whole after a frame that came whole is applied.
+        #[test]
+        fn a_text_stream_with_garbage_applies_every_whole_frame_and_nothing_else(
+            rest in proptest::collection::vec(proptest::array::uniform6(0u32..=65535), 2..14),
+            damage in proptest::collection::vec(
+                proptest::option::weighted(
+                    0.4,
+                    (
+                        proptest::bool::weighted(0.8),
+                        proptest::sample::select(std::vec![1usize, 2, 3, 5, 30]),
+                        proptest::num::usize::ANY,
+                        proptest::collection::vec(proptest::num::u8::ANY, 1..8),
+                    ),
+                ),
+                14,
+            ),
+        ) {
+            let sent: std::vec::Vec<[u32; 6]> = rest
+                .iter()
+                .enumerate()
+                .map(|(i, r)| counts(i, r.map(|c| c >> (c % 13))))
+                .collect();
+            let mut input = std::vec::Vec::new();
+            let mut touched = std::vec::Vec::new();
+            for (frame, damage) in sent.iter().zip(&damage) {
+                let mut bytes = text(frame);
+                if let Some((insert, _, at, junk)) = damage {
+                    if *insert {
+                        let at = at % bytes.len();
+                        let junk = garbage(junk.clone());
+                        bytes.splice(at..at, junk);
+                    } else {
+                        let seps: std::vec::Vec<usize> = (0..bytes.len())
+                            .filter(|&i| bytes[i] == b',' || bytes[i] == b'X')
+                            .collect();
+                        bytes.remove(seps[at % seps.len()]);
+                    }
+                }
+                touched.push(damage.is_some());
+                input.extend(bytes);
+            }
+            let must: std::vec::Vec<bool> = (0..sent.len())
+                .map(|i| !touched[i] && (i == 0 || !touched[i - 1]))
+                .collect();
+            let got = applied(&input);
+            if let Err(e) = kept_in_order(&sent, &got, &must) {
+                proptest::prop_assert!(false, "{}", e);
+            }
+        }
     }
 }

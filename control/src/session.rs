@@ -95,9 +95,17 @@ impl Session {
     /// Feeds one received byte to the line, echoing it when echo is on; `tick` is the number
     /// of servo frames so far (see [`LineBuffer::feed_at`]).
     pub(crate) fn feed(&mut self, byte: u8, tick: u32, out: &mut impl Write) -> Feed {
+        // A line that began with a digit may be a text frame: it is not echoed as it comes,
+        // only whole if it turns out to be a line.
+        let held = self.line.holds_echo();
         let feed = self.line.feed_at(byte, tick);
         if self.echo {
-            report::write_echo(out, feed);
+            match feed {
+                Feed::Line if held => report::write_held_echo(out, self.line.line()),
+                Feed::Added(_) | Feed::Erased | Feed::ErasedLine(_) | Feed::Overflowed
+                    if held || self.line.holds_echo() => {}
+                _ => report::write_echo(out, feed),
+            }
         }
         feed
     }

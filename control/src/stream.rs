@@ -10,9 +10,9 @@
 //!   the next `A5 5A` among the bytes already received, so one lost byte costs one frame.
 //! - **Text frame** (the SimTools / Mini-6DOF profiles' format): six decimal counts separated
 //!   by commas and ended by `X`, e.g. `127,127,131,127,120,127X`, with no line end. It starts
-//!   with a digit, which no command does. Digits and commas from a line's start, then `X`, are
-//!   a frame (damaged if they are not six counts); anything else (another character, or a line
-//!   end before the `X`) makes it a command line like any other (refused as one).
+//!   with a digit, which no command does. How a stream picks up again after line noise (an `X`
+//!   ends whatever a digit began; a frame counts only if nothing else came since the last
+//!   frame's `X` or line end) is the line assembler's: see [`crate::protocol`].
 //!
 //! What the counts mean is [`StreamSettings`]' (the `stream.*` settings): count `c` of a
 //! `b`-bit axis is the fraction `(c - 2^(b-1)) / 2^(b-1)` of that axis' full scale (mm for x,
@@ -204,13 +204,6 @@ impl BinaryFrame {
 /// Whether a (command) line that has just started with `byte` is a text frame's beginning.
 pub fn starts_text_frame(byte: u8) -> bool {
     byte.is_ascii_digit()
-}
-
-/// Whether the bytes of a line so far can be a text frame's (an `X` now would end one): a
-/// digit, then only digits and commas.
-pub fn is_text_frame_so_far(bytes: &[u8]) -> bool {
-    bytes.first().is_some_and(|&b| starts_text_frame(b))
-        && bytes.iter().all(|&b| b.is_ascii_digit() || b == b',')
 }
 
 /// The counts of a text frame (its text without the final `X`): exactly six decimal counts

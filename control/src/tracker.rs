@@ -18,6 +18,19 @@
 //! [`Pose`]'s units). A limit of 0 (or below, or not finite) is off: without a speed limit the speed is only
 //! bounded by the acceleration; with both off the axis follows its target at once
 //! (pass-through).
+//!
+//! The step computes in integers (the RP2040 has no FPU: in `f32` every operation is a library
+//! call, and six axes cost ~28,000 cycles). Each axis counts in whole *units*: 2^-20 mm
+//! (about 1e-6 mm) for x, y, z and 2^-28 rad (about 4e-9 rad) for roll, pitch, yaw, in an
+//! `i32`, within +-2^30 units (+-1024 mm, +-4 rad; an axis whose position or target lies
+//! beyond is held where it is: no platform reaches that far). Velocities are units per frame;
+//! each frame the limits become whole units per frame, `v_max dt`, and per frame per frame,
+//! `h = a_max dt^2` (the products in `f32`, then rounded down to a whole unit; kept while the
+//! limits and the frame time stay the same), so the rule
+//! above holds exactly in these units: the braking speed is the exact floor of its formula (an
+//! integer square root and two integer divisions), and every velocity change, the landing
+//! included, is at most `h`. A target lands exactly: the axis' pose is then the target's own
+//! `f32`. (Velocities are per frame: if the frame time changes, they are rescaled to it.)
 
 use kinematics_core::{Math, Pose};
 
@@ -42,30 +55,78 @@ impl TrackLimits {
         rad_per_s: 0.0,
         rad_per_s2: 0.0,
     };
+}
 
-    /// `(speed, acceleration)` for axis `index` (0..=5, [`Pose::to_array`] order).
-    fn of_axis(&self, index: usize) -> (f32, f32) {
-        if index < 3 {
-            (self.mm_per_s, self.mm_per_s2)
-        } else {
-            (self.rad_per_s, self.rad_per_s2)
-        }
+/// Fraction bits of x, y and z: units of 2^-20 mm.
+const MM_FRAC: u32 = 20;
+/// Fraction bits of roll, pitch and yaw: units of 2^-28 rad.
+const RAD_FRAC: u32 = 28;
+/// Bound (exclusive) on a position, in units: 2^30. A distance is then below 2^31, and so is
+/// every velocity (never faster than a distance or the velocity before it).
+const MAX_UNITS: u32 = 1 << 30;
+/// The position of an axis that is beyond [`MAX_UNITS`] (held where it is).
+const OUTSIDE: i32 = i32::MIN;
+/// Limits, and the frame time, beyond these (2^30 per second or per second squared, 8 s) are
+/// taken as these: the products stay finite, and a limit this large is already more than a
+/// whole range per frame.
+const MAX_LIMIT: f32 = 1_073_741_824.0;
+const MAX_FRAME_S: f32 = 8.0;
+
+/// Fraction bits of axis `index` (0..=5, [`Pose::to_array`] order).
+fn frac_of(index: usize) -> u32 {
+    if index < 3 {
+        MM_FRAC
+    } else {
+        RAD_FRAC
     }
 }
 
 /// Where the tracker is and how fast it goes.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy)]
 pub struct Tracker {
+    /// The pose of the last step, as the IK gets it: an axis on its target holds the target's
+    /// own `f32`.
     pose: [f32; 6],
-    velocity: [f32; 6],
+    /// Each axis' position in its units ([`OUTSIDE`] if beyond their range).
+    position: [i32; 6],
+    /// Each axis' velocity, units per frame of `frame_s`.
+    velocity: [i32; 6],
+    /// The frame time the velocities are per, s (0 before the first step).
+    frame_s: f32,
+    /// The bits of the limits and the frame time [`Tracker::per_frame`] was computed from
+    /// ([`TrackLimits`]' fields in order, then the frame time; none before the first step).
+    limits_from: [u32; 5],
+    /// The limits per frame of x, y, z and of roll, pitch, yaw: computed when the limits or
+    /// the frame time change (the products are library calls on the RP2040), else kept.
+    per_frame: [FrameLimits; 2],
+}
+
+impl PartialEq for Tracker {
+    /// The same state: poses of the same bits (no float comparisons: library calls on the
+    /// RP2040), positions, velocities and their frame time.
+    fn eq(&self, other: &Tracker) -> bool {
+        // (Word by word, all of them: an array comparison is a `memcmp` call.)
+        let differ = (0..6).fold(self.frame_s.to_bits() ^ other.frame_s.to_bits(), |d, i| {
+            d | (self.pose[i].to_bits() ^ other.pose[i].to_bits())
+                | (self.position[i] ^ other.position[i]) as u32
+                | (self.velocity[i] ^ other.velocity[i]) as u32
+        });
+        differ == 0
+    }
 }
 
 impl Tracker {
     /// At rest at `pose`.
     pub fn new(pose: &Pose) -> Tracker {
+        let pose = pose.to_array();
         Tracker {
-            pose: pose.to_array(),
-            velocity: [0.0; 6],
+            pose,
+            position: core::array::from_fn(|i| to_units(pose[i], frac_of(i)).unwrap_or(OUTSIDE)),
+            velocity: [0; 6],
+            frame_s: 0.0,
+            // (Not the bits of a frame time: a NaN.)
+            limits_from: [u32::MAX; 5],
+            per_frame: [FrameLimits::OFF; 2],
         }
     }
 
@@ -76,24 +137,54 @@ impl Tracker {
 
     /// True if every axis is at rest.
     pub fn at_rest(&self) -> bool {
-        self.velocity.iter().all(|&v| v == 0.0)
+        self.velocity.iter().fold(0, |d, &v| d | v) == 0
     }
 
     /// The tracker one frame (`dt_s`, > 0) later, chasing `target` within `limits`. `self` is
-    /// unchanged: the caller keeps the new one once it has checked its pose can be driven.
+    /// unchanged: the caller keeps the new one once it has checked its pose can be driven. (A
+    /// `dt_s` that is not a positive number is no time at all: nothing moves.) `M`'s `f32`
+    /// multiplication turns the limits into units (six products, when the limits or the frame
+    /// time change).
     pub fn step<M: Math>(&self, target: &Pose, limits: &TrackLimits, dt_s: f32) -> Tracker {
+        if !positive_finite(dt_s) {
+            return *self;
+        }
+        let dt = capped(dt_s, MAX_FRAME_S);
         let target = target.to_array();
         let mut next = *self;
+        if dt.to_bits() != self.frame_s.to_bits() {
+            next.velocity = self.velocity_per(dt);
+            next.frame_s = dt;
+        }
+        let from = [
+            limits.mm_per_s.to_bits(),
+            limits.mm_per_s2.to_bits(),
+            limits.rad_per_s.to_bits(),
+            limits.rad_per_s2.to_bits(),
+            dt.to_bits(),
+        ];
+        if (0..5).fold(0, |d, i| d | (from[i] ^ self.limits_from[i])) != 0 {
+            next.limits_from = from;
+            next.per_frame = [
+                FrameLimits::new::<M>(limits.mm_per_s, limits.mm_per_s2, dt, MM_FRAC),
+                FrameLimits::new::<M>(limits.rad_per_s, limits.rad_per_s2, dt, RAD_FRAC),
+            ];
+        }
         for (i, &goal) in target.iter().enumerate() {
-            let (pose, velocity) = axis_step::<M>(
-                self.pose[i],
-                self.velocity[i],
-                goal,
-                limits.of_axis(i),
-                dt_s,
-            );
-            next.pose[i] = pose;
-            next.velocity[i] = velocity;
+            // At rest on its target, an axis stays there (most axes of a stream often are).
+            if goal.to_bits() == self.pose[i].to_bits() && next.velocity[i] == 0 {
+                continue;
+            }
+            let limits = next.per_frame[usize::from(i >= 3)];
+            let axis = Axis {
+                pose: self.pose[i],
+                position: self.position[i],
+                velocity: next.velocity[i],
+            }
+            .step(goal, limits, frac_of(i));
+            next.pose[i] = axis.pose;
+            next.position[i] = axis.position;
+            next.velocity[i] = axis.velocity;
         }
         next
     }
@@ -102,29 +193,291 @@ impl Tracker {
     pub fn hold_at(&mut self, pose: &Pose) {
         *self = Tracker::new(pose);
     }
+
+    /// The velocities in units per frame of `dt` (> 0) instead of `frame_s`, rounded towards
+    /// zero: the same speeds when the frame time changes.
+    #[cold]
+    fn velocity_per(&self, dt: f32) -> [i32; 6] {
+        if self.at_rest() || !positive_finite(self.frame_s) {
+            return [0; 6];
+        }
+        let ratio = dt / self.frame_s;
+        // (`as` saturates; the bound keeps |v| below 2^31.)
+        self.velocity
+            .map(|v| ((v as f32 * ratio) as i32).clamp(-i32::MAX, i32::MAX))
+    }
 }
 
-/// The fastest speed for this frame from which the axis still stops exactly on the target,
-/// slowing by at most `h = a_max dt` per frame: the discrete form of `sqrt(2 a_max d)`.
-/// `frames_of_distance` is the distance over `dt`.
+/// One group's limits for one frame, in its units (`None`: off).
+#[derive(Debug, Clone, Copy)]
+struct FrameLimits {
+    /// `v_max dt`, units per frame, rounded down.
+    speed: Option<u32>,
+    /// `h = a_max dt^2`, units per frame per frame, rounded down.
+    accel: Option<u32>,
+}
+
+impl FrameLimits {
+    const OFF: FrameLimits = FrameLimits {
+        speed: None,
+        accel: None,
+    };
+
+    /// From `speed` (per s) and `accel` (per s^2) for a frame of `dt` s (positive, at most
+    /// [`MAX_FRAME_S`]), in units of 2^-`frac`.
+    fn new<M: Math>(speed: f32, accel: f32, dt: f32, frac: u32) -> FrameLimits {
+        FrameLimits {
+            speed: positive_finite(speed)
+                .then(|| units_below(M::mul(capped(speed, MAX_LIMIT), dt), frac)),
+            accel: positive_finite(accel)
+                .then(|| units_below(M::mul(M::mul(capped(accel, MAX_LIMIT), dt), dt), frac)),
+        }
+    }
+}
+
+/// One axis' state.
+#[derive(Debug, Clone, Copy)]
+struct Axis {
+    /// As the IK gets it.
+    pose: f32,
+    /// Units ([`OUTSIDE`]: beyond the range).
+    position: i32,
+    /// Units per frame.
+    velocity: i32,
+}
+
+impl Axis {
+    /// One frame towards `target` within `limits`, in units of 2^-`frac`.
+    fn step(self, target: f32, limits: FrameLimits, frac: u32) -> Axis {
+        if limits.speed.is_none() && limits.accel.is_none() {
+            // Pass-through: the target itself (its position only as far as the range goes).
+            return Axis {
+                pose: target,
+                position: to_units(target, frac).unwrap_or(OUTSIDE),
+                velocity: 0,
+            };
+        }
+        self.limited(target, limits, frac).unwrap_or(Axis {
+            velocity: 0,
+            ..self
+        })
+    }
+
+    /// A step with at least one limit on; `None` if the position or the target is beyond the
+    /// range.
+    fn limited(self, target: f32, limits: FrameLimits, frac: u32) -> Option<Axis> {
+        let goal = to_units(target, frac)?;
+        if self.position == OUTSIDE {
+            return None;
+        }
+        // Both within +-2^30: the difference fits.
+        let error = goal - self.position;
+        let landed = |velocity| Axis {
+            pose: target,
+            position: goal,
+            velocity,
+        };
+        if error == 0 {
+            // On the target (to the unit): there, exactly.
+            return Some(landed(0));
+        }
+        let distance = error.unsigned_abs();
+        // The speed aimed at: what reaches the target this frame, what can still stop on it
+        // ([`braking_speed`]), and the speed limit; all at most `distance`, below 2^31.
+        let mut wanted = distance;
+        if let Some(h) = limits.accel {
+            wanted = wanted.min(braking_speed(distance, h));
+        }
+        if let Some(speed) = limits.speed {
+            wanted = wanted.min(speed);
+        }
+        let wanted = if error < 0 {
+            -(wanted as i32)
+        } else {
+            wanted as i32
+        };
+        let velocity = match limits.accel {
+            // Towards the one wanted by at most h (h <= 2^31: saturated, as i32 at 2^31 - 1,
+            // which no velocity needs to change by).
+            Some(h) => {
+                let h = h.min(i32::MAX as u32) as i32;
+                if wanted > self.velocity {
+                    wanted.min(self.velocity.saturating_add(h))
+                } else {
+                    wanted.max(self.velocity.saturating_sub(h))
+                }
+            }
+            None => wanted,
+        };
+        // Never past the target: a step that would reach or cross it ends on it. Its velocity
+        // is that of the step it took (not zero: the next steps slow from it within the limit,
+        // staying on the target, so a target that then moves away is not chased from a
+        // standstill that never happened).
+        let reached = if error < 0 {
+            velocity <= error
+        } else {
+            velocity >= error
+        };
+        if reached {
+            return Some(landed(error));
+        }
+        // Short of the target, or (braking after the target jumped behind) moving away from
+        // it: then kept within the range.
+        let bound = i64::from(MAX_UNITS) - 1;
+        let position = (i64::from(self.position) + i64::from(velocity)).clamp(-bound, bound) as i32;
+        Some(Axis {
+            pose: to_f32(position, frac),
+            position,
+            velocity: position - self.position,
+        })
+    }
+}
+
+/// The fastest whole speed (units per frame) from which the axis still stops exactly on a
+/// target `distance` units away (> 0), slowing by at most `h` units per frame each frame: the
+/// discrete form of `sqrt(2 a_max d)`.
 ///
 /// Moving at `v` this frame and then at `v - h`, `v - 2h`, ... (while positive) covers
-/// `dt ((n + 1) v - h n (n + 1) / 2)` with `n = floor(v / h)`. Setting that to the distance
-/// `d = D dt` and solving: `n` is the largest whole number with `h n (n + 1) / 2 <= D`, and
-/// `v = D / (n + 1) + h n / 2`. The last frame of a stop then moves at most `h`, so the speed
-/// changes by at most `h` every frame, landing included.
-fn braking_speed<M: Math>(frames_of_distance: f32, h: f32) -> f32 {
-    let d = frames_of_distance;
-    // (Truncation is floor here: the value is not negative; `as` saturates.)
-    let root = (M::sqrt(1.0 + 8.0 * d / h) - 1.0) * 0.5;
-    let mut n = (if root > 0.0 { root } else { 0.0 } as u32) as f32;
-    // Rounding of the square root: make sure n is the largest whole number that fits.
-    if h * n * (n + 1.0) * 0.5 > d {
-        n -= 1.0;
-    } else if h * (n + 1.0) * (n + 2.0) * 0.5 <= d {
-        n += 1.0;
+/// `(n + 1) v - h n (n + 1) / 2` with `n = floor(v / h)`. Setting that to the distance `d` and
+/// solving: `n` is the largest whole number with `h n (n + 1) / 2 <= d`, and
+/// `v = d / (n + 1) + h n / 2`, here rounded down (a whole speed at most that stops in time
+/// too: the sum is increasing in `v`). The last frame of a stop then moves at most `h`, so the
+/// speed changes by at most `h` every frame, landing included. With `h = 0` (an acceleration
+/// limit below a unit per frame per frame) no speed can stop: 0.
+fn braking_speed(distance: u32, h: u32) -> u32 {
+    if h == 0 {
+        return 0;
     }
-    d / (n + 1.0) + h * n * 0.5
+    if distance <= h {
+        return distance; // n = 0
+    }
+    // n (n + 1) / 2 <= d / h, a whole number on the left: <= q = floor(d / h), i.e.
+    // n (n + 1) <= 2q (below 2^32: d < 2^31). With r = floor(sqrt(2q)), n is r if r (r + 1)
+    // fits, else r - 1 (r >= 1 here; r (r + 1) < 2^32 for r < 2^16).
+    let twice = 2 * (distance / h);
+    let r = isqrt(twice);
+    let n = if r * (r + 1) <= twice { r } else { r - 1 };
+    // floor(d / (n + 1) + h n / 2), exactly, from d = whole (n + 1) + rest (h n <= d here).
+    let (whole, rest) = (distance / (n + 1), distance % (n + 1));
+    let hn = h * n;
+    let half = u32::from(hn % 2 == 1 && 2 * rest > n);
+    whole + hn / 2 + half
+}
+
+/// `floor(sqrt(x))`, digit by digit (two bits of `x` per result bit).
+fn isqrt(x: u32) -> u32 {
+    if x == 0 {
+        return 0;
+    }
+    // The highest power of four at most x.
+    let mut bit = 1u32 << ((31 - normalise(x).1) & !1);
+    let (mut rest, mut root) = (x, 0u32);
+    while bit != 0 {
+        if rest >= root + bit {
+            rest -= root + bit;
+            root = (root >> 1) + bit;
+        } else {
+            root >>= 1;
+        }
+        bit >>= 2;
+    }
+    root
+}
+
+/// `x` (not 0) shifted left until its leading one is bit 31, and the shift (its leading zeros):
+/// a few compares in line, where `leading_zeros` is a library call on the M0+ (no such
+/// instruction).
+fn normalise(x: u32) -> (u32, u32) {
+    let (mut x, mut zeros) = (x, 0);
+    for width in [16, 8, 4, 2, 1] {
+        if x >> (32 - width) == 0 {
+            x <<= width;
+            zeros += width;
+        }
+    }
+    (x, zeros)
+}
+
+/// `x * 2^frac` rounded to the nearest whole unit (halves away from zero), by its bits; `None`
+/// if `x` is not finite or that is [`MAX_UNITS`] or more in size.
+fn to_units(x: f32, frac: u32) -> Option<i32> {
+    if !finite(x) {
+        return None;
+    }
+    let bits = x.to_bits();
+    let exponent = (bits >> 23) & 0xff;
+    if exponent == 0 {
+        return Some(0); // zero or below 2^-126: far below a unit
+    }
+    let mantissa = (bits & 0x7f_ffff) | 0x80_0000;
+    // |x| 2^frac = mantissa 2^shift.
+    let shift = exponent as i32 - 150 + frac as i32;
+    let units = if shift >= 0 {
+        if shift > 6 {
+            return None; // at least 2^23 2^7 = 2^30
+        }
+        mantissa << shift
+    } else if shift > -25 {
+        let down = (-shift) as u32;
+        (mantissa + (1 << (down - 1))) >> down
+    } else {
+        0
+    };
+    if units >= MAX_UNITS {
+        return None;
+    }
+    let units = units as i32;
+    Some(if bits >> 31 == 1 { -units } else { units })
+}
+
+/// The `f32` nearest (ties to even) to `units * 2^-frac` (`|units| < 2^31`, `frac <= 28`), by
+/// its bits.
+fn to_f32(units: i32, frac: u32) -> f32 {
+    if units == 0 {
+        return 0.0;
+    }
+    let sign = units as u32 & 0x8000_0000;
+    let (normal, zeros) = normalise(units.unsigned_abs()); // leading one in bit 31
+    let mantissa = normal >> 8; // 24 bits, the leading one in bit 23
+    let cut = normal & 0xff;
+    let up = u32::from(cut > 0x80 || (cut == 0x80 && mantissa & 1 == 1));
+    // The leading one's biased exponent is 127 + 31 - zeros - frac (at least 99: normal); the
+    // mantissa's leading one adds the 1 the exponent field lacks, and a carry out of rounding
+    // moves into the exponent, which is then right.
+    let exponent = 127 + 31 - zeros - frac;
+    f32::from_bits(sign | (((exponent - 1) << 23) + mantissa + up))
+}
+
+/// A positive finite `x * 2^frac` rounded down to a whole unit, at most 2^31 (which is more
+/// than any distance: no limit at all), by its bits.
+fn units_below(x: f32, frac: u32) -> u32 {
+    let bits = x.to_bits();
+    let exponent = (bits >> 23) & 0xff;
+    if exponent == 0 || bits >> 31 == 1 {
+        return 0; // zero or below 2^-126 (or, not reached, negative)
+    }
+    let mantissa = (bits & 0x7f_ffff) | 0x80_0000;
+    let shift = exponent as i32 - 150 + frac as i32;
+    let units = if shift >= 8 {
+        1 << 31
+    } else if shift >= 0 {
+        mantissa << shift
+    } else if shift > -24 {
+        mantissa >> (-shift) as u32
+    } else {
+        0
+    };
+    units.min(1 << 31)
+}
+
+/// `x` (positive) or `max` if that is less, by the bits (which order positive floats as
+/// their values).
+fn capped(x: f32, max: f32) -> f32 {
+    if x.to_bits() > max.to_bits() {
+        max
+    } else {
+        x
+    }
 }
 
 /// `x` is finite, by its bit pattern: the exponent is not all ones. (The tests below, on the
@@ -139,84 +492,24 @@ fn positive_finite(x: f32) -> bool {
     (1..0x7f80_0000).contains(&x.to_bits())
 }
 
-/// `a.min(b)` for a finite `a` (one comparison where `f32::min` is a library call with NaN
-/// handling on the RP2040; a NaN `b` leaves `a`, as `min` does).
-fn smaller(a: f32, b: f32) -> f32 {
-    if b < a {
-        b
-    } else {
-        a
-    }
-}
-
-/// One axis, one frame: `(position, velocity)` after it.
-fn axis_step<M: Math>(
-    position: f32,
-    velocity: f32,
-    target: f32,
-    (v_max, a_max): (f32, f32),
-    dt: f32,
-) -> (f32, f32) {
-    // At rest on its target, an axis stays there (what the steps below give too, without a
-    // float operation: on the RP2040 each is a library call, and a stream often leaves some
-    // axes still).
-    if target.to_bits() == position.to_bits() && velocity.to_bits() << 1 == 0 {
-        return (position, 0.0);
-    }
-    let error = target - position;
-    if !(finite(error) && finite(velocity)) {
-        // Not reachable from finite inputs; hold rather than pass a NaN on.
-        return (position, 0.0);
-    }
-    // A limit that is not a positive finite number is off.
-    let (speed_limited, accel_limited) = (positive_finite(v_max), positive_finite(a_max));
-    if !speed_limited && !accel_limited {
-        return (target, 0.0);
-    }
-    let distance = error.abs();
-    // The direction to the target, -1 or 1, as a flag: `error < 0.0` by the bits (finite
-    // here: the sign bit, and not -0); multiplying by the direction is then a negation.
-    let backwards = error.to_bits() > 0x8000_0000;
-    // The speed aimed at: what reaches the target this frame, what can still stop on it
-    // ([`braking_speed`]), and the speed limit.
-    let reach_speed = distance / dt;
-    let mut wanted = reach_speed;
-    if accel_limited {
-        wanted = smaller(wanted, braking_speed::<M>(reach_speed, a_max * dt));
-    }
-    if speed_limited {
-        wanted = smaller(wanted, v_max);
-    }
-    let wanted = if backwards { -wanted } else { wanted };
-    let new_velocity = if accel_limited {
-        let change = a_max * dt;
-        velocity + (wanted - velocity).clamp(-change, change)
-    } else {
-        wanted
-    };
-    let new_position = position + new_velocity * dt;
-    // Never past the target: a step that would cross it ends on it. Its velocity is that of
-    // the step it took (not zero: the next steps slow from it within the limit, staying on
-    // the target, so a target that then moves away is not chased from a standstill that never
-    // happened).
-    let ahead = target - new_position;
-    let reached = if backwards {
-        ahead >= 0.0
-    } else {
-        ahead <= 0.0
-    };
-    if reached {
-        return (target, error / dt);
-    }
-    (new_position, new_velocity)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use kinematics_core::Libm;
 
     const DT: f32 = 1.0 / 333.0;
+
+    /// `t` with x moving at `mm_per_s` in frames of `dt` s, as a step would leave it.
+    fn moving(mut t: Tracker, mm_per_s: f32, dt: f32) -> Tracker {
+        t.velocity[0] = (f64::from(mm_per_s) * f64::from(dt) * f64::from(1u32 << MM_FRAC)) as i32;
+        t.frame_s = dt;
+        t
+    }
+
+    /// The speed of x, mm/s.
+    fn speed_x(t: &Tracker) -> f32 {
+        (f64::from(t.velocity[0]) / f64::from(1u32 << MM_FRAC) / f64::from(t.frame_s)) as f32
+    }
 
     #[test]
     fn the_bit_tests_are_the_float_comparisons() {
@@ -340,14 +633,14 @@ mod tests {
         ) {
             let dt = 1.0 / hz;
             let l = TrackLimits { mm_per_s: v_max, mm_per_s2: a_max, rad_per_s: 0.0, rad_per_s2: 0.0 };
-            let mut t = Tracker::new(&Pose::from_degrees(from, 0.0, 0.0, 0.0, 0.0, 0.0));
-            t.velocity[0] = v0.clamp(-v_max.max(0.0), v_max.max(0.0));
+            let t = Tracker::new(&Pose::from_degrees(from, 0.0, 0.0, 0.0, 0.0, 0.0));
+            let mut t = moving(t, v0.clamp(-v_max.max(0.0), v_max.max(0.0)), dt);
             let target = Pose::from_degrees(to, 0.0, 0.0, 0.0, 0.0, 0.0);
             let mut x = t.pose().x_mm;
-            let mut v = t.velocity[0];
+            let mut v = speed_x(&t);
             for _ in 0..200 {
                 t = t.step::<Libm>(&target, &l, dt);
-                let (nx, nv) = (t.pose().x_mm, t.velocity[0]);
+                let (nx, nv) = (t.pose().x_mm, speed_x(&t));
                 proptest::prop_assert!(nx.is_finite() && nv.is_finite());
                 if v_max > 0.0 {
                     proptest::prop_assert!(nv.abs() <= v_max * 1.0001 + 1e-3, "speed {}", nv);
@@ -365,5 +658,395 @@ mod tests {
                 v = nv;
             }
         }
+    }
+
+    // ----- the integer arithmetic against f64 -----
+
+    /// xorshift32: reproducible random words.
+    struct Rng(u32);
+
+    impl Rng {
+        fn word(&mut self) -> u32 {
+            self.0 ^= self.0 << 13;
+            self.0 ^= self.0 >> 17;
+            self.0 ^= self.0 << 5;
+            self.0
+        }
+
+        /// Uniform in `[0, 1)`.
+        fn unit(&mut self) -> f64 {
+            f64::from(self.word()) / 4_294_967_296.0
+        }
+
+        /// A whole number of up to `bits` bits, its size spread evenly over them.
+        fn spread(&mut self, bits: u32) -> u32 {
+            let size = self.word() % (bits + 1);
+            if size == 0 {
+                0
+            } else {
+                self.word() >> (32 - size)
+            }
+        }
+    }
+
+    #[test]
+    fn units_are_the_values_rounded() {
+        let mut rng = Rng(0x1234_5678);
+        for frac in [MM_FRAC, RAD_FRAC] {
+            let scale = f64::from(1u32 << frac);
+            for k in 0..200_000 {
+                // Any bits, or values around the range's edge and a unit's.
+                let x = match k % 3 {
+                    0 => f32::from_bits(rng.word()),
+                    1 => ((rng.unit() - 0.5) * 2.2 * f64::from(MAX_UNITS) / scale) as f32,
+                    _ => ((rng.unit() - 0.5) * 64.0 / scale) as f32,
+                };
+                let exact = f64::from(x) * scale; // exact in f64
+                let expected = (x.is_finite() && exact.round().abs() < f64::from(MAX_UNITS))
+                    .then(|| exact.round() as i32);
+                assert_eq!(to_units(x, frac), expected, "{x:e}");
+                if x.is_finite() && x > 0.0 {
+                    let below = exact.floor().min(2_147_483_648.0) as u32;
+                    assert_eq!(units_below(x, frac), below, "{x:e}");
+                }
+            }
+            for k in 0..200_000 {
+                let units = match k % 2 {
+                    0 => rng.word() as i32 >> 1,
+                    _ => rng.spread(30) as i32 * if rng.word() & 1 == 1 { -1 } else { 1 },
+                };
+                let expected = (f64::from(units) / scale) as f32; // rounds to nearest even
+                assert_eq!(to_f32(units, frac).to_bits(), expected.to_bits(), "{units}");
+            }
+        }
+    }
+
+    #[test]
+    fn the_square_root_is_the_floor_and_the_leading_zeros_are_counted() {
+        let mut rng = Rng(0x9e37_79b9);
+        let edges = [
+            0,
+            1,
+            2,
+            3,
+            4,
+            15,
+            16,
+            17,
+            u32::MAX,
+            u32::MAX - 1,
+            0xffff * 0xffff,
+        ];
+        for x in edges
+            .into_iter()
+            .chain((0..200_000).map(|_| rng.spread(32)))
+        {
+            if x != 0 {
+                assert_eq!(
+                    normalise(x),
+                    (x << x.leading_zeros(), x.leading_zeros()),
+                    "{x}"
+                );
+            }
+            let r = u64::from(isqrt(x));
+            assert!(
+                r * r <= u64::from(x) && (r + 1) * (r + 1) > u64::from(x),
+                "{x}: {r}"
+            );
+        }
+    }
+
+    /// The braking speed by its definition, computed another way: `n` from an `f64` square
+    /// root, corrected by exact `u128` sums; the speed as one exact `u128` division.
+    fn braking_reference(d: u32, h: u32) -> u32 {
+        if h == 0 {
+            return 0;
+        }
+        let (d, h) = (u128::from(d), u128::from(h));
+        let fits = |n: u128| h * n * (n + 1) / 2 <= d;
+        // (`as` saturates: a negative estimate is 0.)
+        let mut n = (((1.0 + 8.0 * d as f64 / h as f64).sqrt() - 1.0) / 2.0) as u128;
+        while n > 0 && !fits(n) {
+            n -= 1;
+        }
+        while fits(n + 1) {
+            n += 1;
+        }
+        ((2 * d + h * n * (n + 1)) / (2 * (n + 1))) as u32
+    }
+
+    #[test]
+    fn the_braking_speed_is_its_formula_and_stops_exactly() {
+        let mut rng = Rng(0x0bad_cafe);
+        for _ in 0..300_000 {
+            let d = rng.spread(31).max(1);
+            let h = rng.spread(32).min(1 << 31);
+            assert_eq!(braking_speed(d, h), braking_reference(d, h), "d {d} h {h}");
+        }
+        // What it means, on small numbers: braking by h each frame from that speed covers at
+        // most d (the axis lands), and from one unit more it would cover more.
+        let covered = |v: u32, h: u32| -> u64 { (0..=v / h).map(|j| u64::from(v - j * h)).sum() };
+        for h in 1..40 {
+            for d in 1..400 {
+                let v = braking_speed(d, h);
+                assert!(covered(v, h) <= u64::from(d), "d {d} h {h} v {v}");
+                assert!(
+                    covered(v + 1, h) > u64::from(d),
+                    "d {d} h {h} v {v}: slower than needed"
+                );
+            }
+        }
+    }
+
+    /// The rule of the module docs in `f64`, for one axis and one frame, in units: position
+    /// `p`, velocity `v` (per frame), target `x`, limits per frame (`None` off, any value).
+    fn rule_f64(p: f64, v: f64, x: f64, speed: Option<f64>, h: Option<f64>) -> (f64, f64) {
+        let error = x - p;
+        if error == 0.0 {
+            return (x, 0.0);
+        }
+        let d = error.abs();
+        let mut wanted = d;
+        if let Some(h) = h {
+            let braking = if h > 0.0 {
+                let mut n = ((1.0 + 8.0 * d / h).sqrt() - 1.0) / 2.0;
+                n = n.floor().max(0.0);
+                while n > 0.0 && h * n * (n + 1.0) / 2.0 > d {
+                    n -= 1.0;
+                }
+                while h * (n + 1.0) * (n + 2.0) / 2.0 <= d {
+                    n += 1.0;
+                }
+                d / (n + 1.0) + h * n / 2.0
+            } else {
+                0.0
+            };
+            wanted = wanted.min(braking);
+        }
+        if let Some(s) = speed {
+            wanted = wanted.min(s);
+        }
+        let wanted = wanted.copysign(error);
+        let nv = match h {
+            Some(h) => v + (wanted - v).clamp(-h, h),
+            None => wanted,
+        };
+        if (error > 0.0 && nv >= error) || (error < 0.0 && nv <= error) {
+            return (x, error);
+        }
+        (p + nv, nv)
+    }
+
+    /// Random limits for a group: off, or spread over the settings' ranges and beyond.
+    fn random_limit(rng: &mut Rng, low: f64, high: f64) -> f32 {
+        match rng.word() % 5 {
+            0 => 0.0,
+            _ => (low * (high / low).powf(rng.unit())) as f32,
+        }
+    }
+
+    #[test]
+    fn a_step_is_the_f64_rule_within_a_unit() {
+        // Each case: a random state, target, limits and frame time; the step in integers
+        // against the rule in f64 with the same limits per frame (the integer ones: their own
+        // rounding is checked below), from the same position in units. The integer step rounds
+        // the braking speed down (by less than a unit); the rest is exact.
+        let mut rng = Rng(0x5eed_0001);
+        let mut worst: f64 = 0.0;
+        for case in 0..200_000 {
+            let axis = (case % 6) as usize;
+            let frac = frac_of(axis);
+            let scale = f64::from(1u32 << frac);
+            let hz = 50.0 + 283.0 * rng.unit();
+            let dt = (1.0 / hz) as f32;
+            let (speed, accel) = if axis < 3 {
+                (
+                    random_limit(&mut rng, 0.1, 1000.0),
+                    random_limit(&mut rng, 1.0, 1e5),
+                )
+            } else {
+                (
+                    random_limit(&mut rng, 1e-3, 60.0),
+                    random_limit(&mut rng, 0.017, 2e4),
+                )
+            };
+            let limits = FrameLimits::new::<Libm>(speed, accel, dt, frac);
+            if limits.speed.is_none() && limits.accel.is_none() {
+                continue;
+            }
+            let range = f64::from(MAX_UNITS) / 8.0;
+            let position = ((rng.unit() - 0.5) * range) as i32;
+            // Near the position (a stop in progress) or anywhere.
+            let reach = if rng.word() & 1 == 0 {
+                1e-4 * range
+            } else {
+                range
+            };
+            let target = ((f64::from(position) + (rng.unit() - 0.5) * reach) / scale) as f32;
+            let goal = to_units(target, frac).unwrap();
+            // A velocity within the speed limit, or at the braking speed (so the stop is
+            // on), or any.
+            let cap = f64::from(limits.speed.unwrap_or(1 << 20).min(1 << 20));
+            let velocity = (match rng.word() % 3 {
+                0 => (rng.unit() - 0.5) * 2.0 * cap,
+                1 => {
+                    let d = (goal - position).unsigned_abs().max(1);
+                    let b = f64::from(braking_speed(d, limits.accel.unwrap_or(u32::MAX)));
+                    b.copysign(f64::from(goal - position)) * rng.unit()
+                }
+                _ => (rng.unit() - 0.5) * f64::from(1u32 << 24),
+            }) as i32;
+            let axis_state = Axis {
+                pose: to_f32(position, frac),
+                position,
+                velocity,
+            };
+            let next = axis_state.step(target, limits, frac);
+            let (p, v) = rule_f64(
+                f64::from(position),
+                f64::from(velocity),
+                f64::from(goal),
+                limits.speed.map(f64::from),
+                limits.accel.map(f64::from),
+            );
+            let error = (f64::from(next.position) - p)
+                .abs()
+                .max((f64::from(next.velocity) - v).abs());
+            assert!(
+                error < 1.0,
+                "case {case}: {next:?} vs ({p}, {v}); from {axis_state:?} to {goal} within {limits:?}"
+            );
+            worst = worst.max(error);
+            if next.position == goal {
+                assert_eq!(next.pose.to_bits(), target.to_bits(), "landed exactly");
+            } else {
+                assert_eq!(next.pose, to_f32(next.position, frac));
+            }
+        }
+        assert!(worst > 0.0, "the braking speed's rounding shows somewhere");
+    }
+
+    #[test]
+    fn the_limits_per_frame_are_the_products_rounded_down() {
+        // Off-by: the two f32 products' rounding (2^-24 each, relative), then down to a unit.
+        let mut rng = Rng(0x5eed_0002);
+        for _ in 0..100_000 {
+            let frac = if rng.word() & 1 == 0 {
+                MM_FRAC
+            } else {
+                RAD_FRAC
+            };
+            let scale = f64::from(1u32 << frac);
+            let dt = (1.0 / (50.0 + 283.0 * rng.unit())) as f32;
+            let speed = random_limit(&mut rng, 1e-3, 1e6);
+            let accel = random_limit(&mut rng, 1e-3, 1e7);
+            let l = FrameLimits::new::<Libm>(speed, accel, dt, frac);
+            let check = |got: Option<u32>, exact: f64, on: bool| {
+                if !on {
+                    assert_eq!(got, None);
+                    return;
+                }
+                let got = f64::from(got.unwrap());
+                let exact = (exact * scale).min(2_147_483_648.0);
+                assert!(got <= exact * (1.0 + 2.0f64.powi(-22)), "{got} > {exact}");
+                assert!(
+                    got > exact * (1.0 - 2.0f64.powi(-22)) - 1.0,
+                    "{got} << {exact}"
+                );
+            };
+            let dt64 = f64::from(dt);
+            check(l.speed, f64::from(speed) * dt64, speed > 0.0);
+            check(l.accel, f64::from(accel) * dt64 * dt64, accel > 0.0);
+        }
+    }
+
+    #[test]
+    fn whole_moves_follow_the_f64_rule_with_exact_limits() {
+        // Whole moves, the integer tracker against the rule in f64 with the limits unrounded
+        // (real units per frame). Rounding the limits down to whole units makes the integer
+        // tracker slower by up to `1 / h` (and `1 / (v_max dt)`) relatively (`h` in units: 94
+        // at 10 mm/s^2 and 333 Hz): the positions stay within that fraction of the distance
+        // plus 2e-5 mm, and the arrivals within a frame plus that fraction of the time.
+        let mut rng = Rng(0x5eed_0003);
+        for case in 0..2_000 {
+            let hz = [50.0f32, 100.0, 200.0, 333.0][case % 4];
+            let dt = 1.0 / hz;
+            let (speed, accel) = (
+                random_limit(&mut rng, 1.0, 1000.0),
+                (10.0 * 1e4f64.powf(rng.unit())) as f32,
+            );
+            let l = TrackLimits {
+                mm_per_s: speed,
+                mm_per_s2: accel,
+                rad_per_s: 0.0,
+                rad_per_s2: 0.0,
+            };
+            let from = ((rng.unit() - 0.5) * 200.0) as f32;
+            let to = ((rng.unit() - 0.5) * 200.0) as f32;
+            let scale = f64::from(1u32 << MM_FRAC);
+            let dt64 = f64::from(dt);
+            let speed_units = (speed > 0.0).then(|| f64::from(speed) * dt64 * scale);
+            let h_units = Some(f64::from(accel) * dt64 * dt64 * scale);
+            let mut t = Tracker::new(&Pose::from_degrees(from, 0.0, 0.0, 0.0, 0.0, 0.0));
+            let target = Pose::from_degrees(to, 0.0, 0.0, 0.0, 0.0, 0.0);
+            let (mut p, mut v) = (f64::from(from) * scale, 0.0);
+            let x = f64::from(to) * scale;
+            // What rounding the limits down to whole units costs, relatively.
+            let rounding = h_units.map_or(0.0, |h| 1.0 / h.floor())
+                + speed_units.map_or(0.0, |s| 1.0 / s.floor());
+            let bound = rounding * f64::from((to - from).abs()) + 2e-5;
+            let (mut arrived, mut arrived_f64) = (None, None);
+            for frame in 0..100_000u32 {
+                t = t.step::<Libm>(&target, &l, dt);
+                (p, v) = rule_f64(p, v, x, speed_units, h_units);
+                let off = (f64::from(t.pose().x_mm) - p / scale).abs();
+                assert!(off <= bound, "case {case} frame {frame}: {off} mm");
+                if arrived.is_none() && t.pose() == target {
+                    arrived = Some(frame);
+                }
+                if arrived_f64.is_none() && p == x {
+                    arrived_f64 = Some(frame);
+                }
+                if arrived.is_some() && arrived_f64.is_some() {
+                    break;
+                }
+            }
+            let (a, b) = (arrived.unwrap(), arrived_f64.unwrap());
+            assert!(
+                f64::from(a.abs_diff(b)) <= 1.0 + rounding * f64::from(b),
+                "case {case}: arrived at frame {a}, f64 at {b}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_new_frame_time_keeps_the_speed() {
+        let l = limits(100.0, 1000.0);
+        let target = Pose::from_degrees(50.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+        let mut t = Tracker::new(&Pose::HOME);
+        for _ in 0..20 {
+            t = t.step::<Libm>(&target, &l, 1.0 / 50.0);
+        }
+        let before = speed_x(&t);
+        assert!((before - 100.0).abs() < 1e-3, "{before}");
+        let (x0, next) = (t.pose().x_mm, t.step::<Libm>(&target, &l, 1.0 / 333.0));
+        let moved = (next.pose().x_mm - x0) * 333.0;
+        assert!(
+            (moved - 100.0).abs() < 0.01,
+            "{moved} mm/s after the change"
+        );
+    }
+
+    #[test]
+    fn beyond_the_range_an_axis_is_held() {
+        let l = limits(100.0, 1000.0);
+        let far = Pose::from_degrees(2000.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+        let t = Tracker::new(&Pose::HOME).step::<Libm>(&far, &l, DT);
+        assert_eq!(t.pose(), Pose::HOME);
+        let t = Tracker::new(&far).step::<Libm>(&Pose::HOME, &l, DT);
+        assert_eq!(t.pose(), far);
+        // Pass-through needs no range.
+        let t = Tracker::new(&Pose::HOME).step::<Libm>(&far, &TrackLimits::OFF, DT);
+        assert_eq!(t.pose(), far);
     }
 }

@@ -161,6 +161,37 @@ fn damaged_frames_and_garbage_are_counted_and_never_applied() {
 }
 
 #[test]
+fn a_text_stream_with_echo_on_is_never_echoed_and_survives_a_byte_outside_ascii() {
+    // Echo on, as after power-up: a sim streams into the board without any set-up command.
+    let mut s = pass_through();
+    s.link.set_echo(true);
+    // Text frames (8 bits, 128 is home), one of them hit by 0xC2 and one by a NUL.
+    let frame = |z: u32| format!("128,128,{z},128,128,128X").into_bytes();
+    let mut bytes = frame(160);
+    bytes.extend_from_slice(b"128,128,\xC2170,128,128,128X");
+    bytes.extend(frame(150));
+    bytes.extend_from_slice(b"128,1\x0028,170,128,128,128X");
+    bytes.extend(frame(140));
+    let out = s.feed(&bytes);
+    assert_eq!(
+        out, "",
+        "frames and damaged frames are neither echoed nor answered"
+    );
+    s.apply_stream();
+    // 140 of 8 bits: (140 - 128) / 128 of stream.z_mm (15 mm).
+    assert!(
+        close(s.ctl.pose().z_mm, 12.0 / 128.0 * 15.0, 1e-3),
+        "{:?}",
+        s.ctl.pose()
+    );
+    let c = s.ctl.stream_counts();
+    assert_eq!((c.frames, c.damaged), (3, 2), "{c:?}");
+    // A line that began with a digit is echoed whole when its line end shows it is one.
+    let out = s.feed(b"12\r");
+    assert!(out.starts_with("12\r\nerror:unknown-command"), "{out:?}");
+}
+
+#[test]
 fn an_unreachable_target_is_clamped_on_the_way_to_it_and_counted() {
     let mut s = pass_through();
     s.ok("set stream.z_mm 100");

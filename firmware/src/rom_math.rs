@@ -14,7 +14,7 @@
 //! functions, which this implementation keeps: faster than these routines and more accurate
 //! than `f32`; `./dev bench` measures both). These routines serve the rest: the IK's float
 //! path (builds beyond the fixed-point bounds), Jacobians, forward kinematics, statics, the
-//! stream tracker. Subtraction is `fadd` with the
+//! stream tracker's limits per frame (its step is integer). Subtraction is `fadd` with the
 //! second operand's sign flipped (IEEE defines `a - b` as `a + (-b)`; both are correctly
 //! rounded): the ROM's `fsub` costs about 9 cycles more per call.
 //!

@@ -23,7 +23,9 @@
 //!   reply), begins a 16-byte binary frame, whole if it ends `0D 0A`, else damaged, and then
 //!   decoding goes on from the next `A5 5A` (or a last lone `A5`) among its bytes; an `A5` not
 //!   followed by `5A` is a byte outside ASCII; a binary frame whose bytes stop for two servo
-//!   frames is dropped; a digit, then digits and commas, then `X` is a text frame.
+//!   frames is dropped; an `X` ends the line as a text frame (whole or damaged) when the line
+//!   began with a digit or has kept no character yet, when the byte before it was a digit, or
+//!   when the line is refused; elsewhere it is a character like any other.
 
 /// The longest line kept, in characters (documented: 128).
 pub const MAX_LINE: usize = 128;
@@ -92,6 +94,10 @@ pub struct LineModel {
     lost: bool,
     previous_was_cr: bool,
     esc: Esc,
+    /// The first character kept since the line began (erasing does not forget it).
+    first: Option<u8>,
+    /// The byte before was a digit (read as part of a line).
+    previous_was_digit: bool,
     /// The binary frame in progress (from its `A5`), if any.
     frame: Option<Vec<u8>>,
     /// Servo frames so far, and when the frame in progress last got a byte.
@@ -115,6 +121,8 @@ impl LineModel {
             lost: false,
             previous_was_cr: false,
             esc: Esc::Off,
+            first: None,
+            previous_was_digit: false,
             frame: None,
             ticks: 0,
             frame_byte_tick: 0,
@@ -134,6 +142,7 @@ impl LineModel {
     /// The receive queue lost bytes here.
     pub fn lost(&mut self) {
         self.lost = true;
+        self.previous_was_digit = false;
     }
 
     /// One received byte.
@@ -152,6 +161,7 @@ impl LineModel {
 
     fn frame_byte(&mut self, b: u8) -> LineEnd {
         self.previous_was_cr = false;
+        self.previous_was_digit = false;
         let mut bytes = self.frame.take().unwrap_or_default();
         if bytes.len() == 1 && b != 0x5A {
             // A stray A5: a byte outside ASCII in the line; this byte is read afresh.
@@ -183,6 +193,16 @@ impl LineModel {
     }
 
     fn line_byte(&mut self, b: u8) -> LineEnd {
+        let began_as_command = self.first.is_some_and(|c| !c.is_ascii_digit());
+        if b == b'X' && (self.refused() || !began_as_command || self.previous_was_digit) {
+            // A text frame ends here (whole or damaged: the model does not tell them apart).
+            self.reset();
+            self.esc = Esc::Off;
+            self.previous_was_cr = false;
+            self.previous_was_digit = false;
+            return LineEnd::Frame;
+        }
+        self.previous_was_digit = b.is_ascii_digit();
         let previous_was_cr = self.previous_was_cr;
         self.previous_was_cr = b == b'\r';
         match (self.esc, b) {
@@ -246,12 +266,7 @@ impl LineModel {
         if self.refused() {
             return LineEnd::None;
         }
-        let digits_and_commas = self.text.first().is_some_and(u8::is_ascii_digit)
-            && self.text.iter().all(|&c| c.is_ascii_digit() || c == b',');
-        if b == b'X' && digits_and_commas {
-            self.text.clear();
-            return LineEnd::Frame;
-        }
+        self.first.get_or_insert(b);
         if self.text.len() == MAX_LINE {
             self.too_long = true;
         } else {
@@ -262,6 +277,7 @@ impl LineModel {
 
     fn reset(&mut self) {
         self.text.clear();
+        self.first = None;
         self.too_long = false;
         self.bad_character = false;
         self.lost = false;
@@ -343,7 +359,11 @@ mod tests {
         );
         let garbage = [b"\x80\x81".as_slice(), &frame].concat();
         assert_eq!(ends(&garbage), [LineEnd::Frame, LineEnd::Frame]);
-        // Digits, commas and X only make a frame from a line's start.
-        assert_eq!(ends(b"0a X\n"), [line("0a X")]);
+        // An X ends whatever a digit began (a damaged frame), and a command line right after a
+        // digit; elsewhere in a command line it is a character.
+        assert_eq!(ends(b"0a X\n"), [LineEnd::Frame, LineEnd::Blank]);
+        assert_eq!(ends(b"MOVE X=1\n"), [line("MOVE X=1")]);
+        assert_eq!(ends(b"move z=1X\n"), [LineEnd::Frame, LineEnd::Blank]);
+        assert_eq!(ends(b"a\x08X\n"), [line("X")]);
     }
 }

@@ -4,6 +4,8 @@
 //! several write.
 
 pub mod apply;
+pub mod cue;
+pub mod cue_plot;
 pub mod demo;
 pub mod describe;
 pub mod draw;

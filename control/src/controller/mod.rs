@@ -861,10 +861,16 @@ impl<M: Math> Controller<M> {
         core::array::from_fn(|i| {
             let s = &servos[i];
             let w = self.solution.pulse_us[i];
-            if w.is_finite() {
-                w.clamp(s.min_us, s.max_us)
-            } else {
+            // `clamp` by `total_cmp` (integer instructions; float comparisons are library
+            // calls on the RP2040): the same for a finite pulse and limits (min < max).
+            if w.to_bits() & 0x7f80_0000 == 0x7f80_0000 {
                 s.home_us
+            } else if w.total_cmp(&s.min_us).is_lt() {
+                s.min_us
+            } else if w.total_cmp(&s.max_us).is_gt() {
+                s.max_us
+            } else {
+                w
             }
         })
     }

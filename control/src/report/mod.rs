@@ -38,9 +38,9 @@ pub use errors::{usage, write_error_codes_doc, Code};
 pub use format::{degrees, Fixed, PoseText, Six, ValueText, Vector};
 pub use near::{nearest_setting, nearest_verb};
 pub use replies::{
-    kinematics_refusal, refusal, write_banner, write_echo, write_error, write_notice, write_ok,
-    write_prompt, Fault, Listing, MotionReport, Notice, Saved, StatusReport, StreamCounts, EOL,
-    HELP, PROMPT, USB_MANUFACTURER, USB_PRODUCT, VERSION,
+    kinematics_refusal, refusal, write_banner, write_echo, write_error, write_held_echo,
+    write_notice, write_ok, write_prompt, Fault, Listing, MotionReport, Notice, Saved,
+    StatusReport, StreamCounts, EOL, HELP, PROMPT, USB_MANUFACTURER, USB_PRODUCT, VERSION,
 };
 
 #[cfg(test)]

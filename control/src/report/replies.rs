@@ -108,6 +108,12 @@ pub fn write_echo(out: &mut impl Write, feed: Feed) {
     };
 }
 
+/// Echoes a whole line whose characters were held back as they came (it began with a digit,
+/// so it might have been a text frame), with its line end.
+pub fn write_held_echo(out: &mut impl Write, line: &str) {
+    let _ = out.write_str(line).and_then(|()| out.write_str(EOL));
+}
+
 /// The greeting written at start-up.
 pub fn write_banner(out: &mut impl Write) {
     line(

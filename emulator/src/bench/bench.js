@@ -443,8 +443,10 @@ frames (\`c\` and \`k\` in \`firmware/src/bin/bench.rs\`), on the first ${stream
 | tracker frame: \`Controller::on_frame\` while streaming with the tracker's limits on (\`Tracker::step\` on six axes and one IK; ${stream.track.moved} of ${stream.track.frames} frames) | ${fmt(stream.track.mean)} | ${fmt(stream.track.min)} | ${fmt(stream.track.max)} | ${fmt(us(stream.track.mean), 1)} | ${fmt((100 * stream.track.max) / FRAME_333_CYCLES, 1)}% |
 ${stream.trackClamped.frames > 0 ? `| tracker frame whose step left the workspace: the step and its IK, which fails, so the tracker holds a step short of the edge (the goal itself was clamped when it came; ${stream.trackClamped.frames} of ${stream.track.frames} frames) | ${fmt(stream.trackClamped.mean)} | ${fmt(stream.trackClamped.min)} | ${fmt(stream.trackClamped.max)} | ${fmt(us(stream.trackClamped.mean), 1)} | ${fmt((100 * stream.trackClamped.max) / FRAME_333_CYCLES, 1)}% |\n` : ''}
 A clamp's IK solutions that fail stop at the first leg that cannot reach, so a clamp costs less
-than 7 full IKs. The tracker's step computes in \`f32\` through \`RomMath\` (six axes, each a
-square root, divisions and a few multiplications: boot ROM calls), most of a frame's cycles.
+than 7 full IKs. The tracker's step computes in integers (fixed point, an exact discrete braking
+rule with an integer square root and two divisions per axis: \`control/src/tracker.rs\`); the
+IK is most of a frame's cycles. (The \`f32\` step before it: 37,394 cycles a frame, measured
+once.) \`node emulator/src/bench/quick-bench.js tracker-profile\` shows where a frame's cycles go.
 
 ## The rest of the kinematics
 
@@ -529,9 +531,8 @@ ${streamCpu
   .join('\n')}
 
 Target: under 30 % of the CPU at 333 Hz with clamping active (all six axes moving:
-${fmt(streamCpu333.cpuShare * 100, 2)} %). A tracker frame's own step is \`f32\` arithmetic
-through library calls (each division also pays rp2040-hal's checks for zero and NaN, which
-are float comparisons), the next thing to move to fixed point if the margin must grow.
+${fmt(streamCpu333.cpuShare * 100, 2)} %). A tracker frame's own step is integer arithmetic
+(\`control/src/tracker.rs\`); the IK is most of it.
 
 ## Sustained pose lines per second
 

@@ -1,0 +1,233 @@
+// One benchmark of `./dev bench` alone, printed rather than written to BENCHMARKS.md: a quick
+// figure while working on one part (seconds to a minute instead of the whole bench's minutes).
+//
+//   node src/bench/quick-bench.js ik|stream|tracker-profile|pose-profile [--poses N] [--seed S]
+//
+//   ik               cycles per IK on the benchmark firmware (every variant it carries)
+//   stream           a clamp and tracker frames (`Controller::on_frame` while streaming), as
+//                    BENCHMARKS.md's "The stream pipeline" table measures them (first 40 poses)
+//   tracker-profile  where a tracker frame's cycles go: per function of the ELF's symbol table
+//                    (inlined code counts in the function it was inlined into; the boot ROM as
+//                    one), per measured frame
+//   pose-profile     where a `pose` line's cycles go on the real firmware (echo and speeds
+//                    off, 921,600 baud, 200 lines of small steps each answered before the
+//                    next): every cycle the core runs from a line's first byte to its reply, per
+//                    function, per line
+//
+// Expects `cargo fw` to have built the firmware and the benchmark firmware. The same
+// measurements, in the same harness, as `./dev bench` (emulator/src/bench/ik-bench.js).
+
+import { parseArgs } from 'node:util';
+
+import { DEFAULT_ELF, EmulatedBoard } from '../chip/board.js';
+import { streamingBoard } from './firmware-bench.js';
+import { symbolRanges } from '../chip/elf.js';
+import { BENCH_ELF, benchPoses, runIkBench, runStreamBench } from './ik-bench.js';
+
+const { values: args, positionals } = parseArgs({
+  allowPositionals: true,
+  options: {
+    poses: { type: 'string', default: '40' },
+    seed: { type: 'string', default: '1' },
+  },
+});
+
+const fmt = (x) => Math.round(x).toLocaleString('en-US');
+const row = (what, s) =>
+  `${what}: mean ${fmt(s.mean)}, min ${fmt(s.min)}, max ${fmt(s.max)} cycles`;
+
+/** Functions also measured with what they call, when they are not inlined. */
+const INCLUSIVE = /^(control::tracker::Tracker::step|kinematics_core::ik::Solver::solve)/;
+
+const which = positionals[0];
+const poses = which === 'pose-profile' ? [] : benchPoses(Number(args.poses), Number(args.seed));
+if (which === 'ik') {
+  for (const v of runIkBench(poses).variants) {
+    console.log(row(`IK (${v.name})`, v));
+  }
+} else if (which === 'stream') {
+  const stream = runStreamBench(poses.slice(0, 40), { frames: 3, dzMm: 60 });
+  console.log(row(`clamp (${stream.clamp.clamped} clamped)`, stream.clamp));
+  console.log(
+    row(`tracker frame (${stream.track.moved} of ${stream.track.frames} moved)`, stream.track),
+  );
+  if (stream.trackClamped.frames > 0) {
+    console.log(
+      row(
+        `tracker frame, step left the workspace (${stream.trackClamped.frames})`,
+        stream.trackClamped,
+      ),
+    );
+  }
+} else if (which === 'pose-profile') {
+  profilePoseLines(200);
+} else if (which === 'tracker-profile') {
+  profileTracker(poses.slice(0, 40), 3);
+} else {
+  console.error(
+    'usage: node src/bench/quick-bench.js ik|stream|tracker-profile|pose-profile [--poses N] [--seed S]',
+  );
+  process.exit(2);
+}
+
+/** The cycles of `frames` tracker frames towards each pose, per function. */
+function profileTracker(list, frames) {
+  const ROM_END = 0x4000;
+  const MARKER_GPIO = 16;
+  const board = new EmulatedBoard({ elf: BENCH_ELF });
+  board.waitForLine(/^bench ready/, { timeoutMs: 1000 });
+  const ranges = symbolRanges(BENCH_ELF, () => true)
+    .filter((r) => r.end > r.start)
+    .sort((a, b) => a.start - b.start);
+  const nameOf = (pc) => {
+    if (pc < ROM_END) {
+      return 'boot ROM';
+    }
+    let lo = 0;
+    let hi = ranges.length - 1;
+    while (lo <= hi) {
+      const mid = (lo + hi) >> 1;
+      if (ranges[mid].end <= pc) {
+        lo = mid + 1;
+      } else if (ranges[mid].start > pc) {
+        hi = mid - 1;
+      } else {
+        return ranges[mid].name;
+      }
+    }
+    return `? ${pc.toString(16)}`;
+  };
+  let high = false;
+  board.mcu.gpio[MARKER_GPIO].addListener((state) => {
+    high = state === 1;
+  });
+  const core = board.mcu.core;
+  const execute = core.executeInstruction.bind(core);
+  const rows = new Map();
+  // Inclusive: from the entry of a function not inlined to the return to its caller.
+  const inclusive = new Map();
+  const open = [];
+  const entries = new Map(
+    ranges.filter((r) => INCLUSIVE.test(r.name)).map((r) => [r.start, r.name]),
+  );
+  core.executeInstruction = () => {
+    const pc = core.PC;
+    const lr = core.registers[14];
+    const before = core.cycles;
+    const result = execute();
+    if (high) {
+      const name = nameOf(pc);
+      const cycles = core.cycles - before;
+      rows.set(name, (rows.get(name) ?? 0) + cycles);
+      while (open.length > 0 && open[open.length - 1].back === pc) {
+        open.pop();
+      }
+      const entered = entries.get(pc);
+      if (entered) {
+        open.push({ name: entered, back: lr & ~1 });
+      }
+      for (const name of new Set(open.map((o) => o.name))) {
+        inclusive.set(name, (inclusive.get(name) ?? 0) + cycles);
+      }
+    }
+    return result;
+  };
+  const f32Hex = (x) => {
+    const view = new DataView(new ArrayBuffer(4));
+    view.setFloat32(0, x);
+    return view.getUint32(0).toString(16).padStart(8, '0');
+  };
+  for (const pose of list) {
+    board.request(`k ${[...pose.pose_bits, f32Hex(frames)].join(' ')}`, {
+      final: /^(k |error)/,
+      timeoutMs: 2000,
+    });
+  }
+  const perFrame = list.length * frames;
+  const sorted = [...rows].sort((a, b) => b[1] - a[1]);
+  const total = sorted.reduce((sum, [, c]) => sum + c, 0);
+  console.log(
+    `per frame (${perFrame} frames, empty brackets included): ${fmt(total / perFrame)} cycles`,
+  );
+  for (const [name, cycles] of sorted) {
+    console.log(`${fmt(cycles / perFrame).padStart(8)}  ${name}`);
+  }
+  console.log('inclusive (with what they call):');
+  for (const [name, cycles] of inclusive) {
+    console.log(`${fmt(cycles / perFrame).padStart(8)}  ${name}`);
+  }
+}
+
+/** Names the function of a PC from the ELF's symbol table (the boot ROM as one). */
+function functionNames(elf) {
+  const ranges = symbolRanges(elf, () => true)
+    .filter((r) => r.end > r.start)
+    .sort((a, b) => a.start - b.start);
+  return (pc) => {
+    if (pc < 0x4000) {
+      return 'boot ROM';
+    }
+    let lo = 0;
+    let hi = ranges.length - 1;
+    while (lo <= hi) {
+      const mid = (lo + hi) >> 1;
+      if (ranges[mid].end <= pc) {
+        lo = mid + 1;
+      } else if (ranges[mid].start > pc) {
+        hi = mid - 1;
+      } else {
+        return ranges[mid].name;
+      }
+    }
+    return `? ${pc.toString(16)}`;
+  };
+}
+
+/** Every cycle from each `pose` line's first byte to its `ok`, per function, per line. */
+function profilePoseLines(count) {
+  const { board } = streamingBoard({ baud: 921600 });
+  const nameOf = functionNames(DEFAULT_ELF);
+  const core = board.mcu.core;
+  const execute = core.executeInstruction.bind(core);
+  const rows = new Map();
+  let on = false;
+  core.executeInstruction = () => {
+    const pc = core.PC;
+    const before = core.cycles;
+    const result = execute();
+    if (on) {
+      const name = nameOf(pc);
+      rows.set(name, (rows.get(name) ?? 0) + core.cycles - before);
+    }
+    return result;
+  };
+  let bytes = 0;
+  for (let i = 0; i < count; i++) {
+    const a = i * 0.01;
+    const v = [
+      10 * Math.cos(a),
+      10 * Math.sin(a),
+      2 * Math.sin(3 * a),
+      3 * Math.sin(a),
+      3 * Math.cos(2 * a),
+      5 * Math.sin(a / 2),
+    ];
+    const line = `pose ${v.map((x) => x.toFixed(3)).join(' ')}`;
+    bytes += line.length + 1;
+    board.runMs(3); // a quiet stretch between lines (frames run there, not counted)
+    on = true;
+    const { reply } = board.request(line);
+    on = false;
+    if (reply !== 'ok') {
+      throw new Error(`${line}: ${reply}`);
+    }
+  }
+  const sorted = [...rows].sort((a, b) => b[1] - a[1]);
+  const total = sorted.reduce((sum, [, c]) => sum + c, 0);
+  console.log(
+    `per line (${count} lines, ${(bytes / count).toFixed(1)} bytes each): ${fmt(total / count)} cycles`,
+  );
+  for (const [name, cycles] of sorted.slice(0, 40)) {
+    console.log(`${fmt(cycles / count).padStart(8)}  ${name}`);
+  }
+}

@@ -1,0 +1,67 @@
+// A SimTools text stream (`128,128,150,128,128,128X...`, no line end ever) through UART0 of the
+// real firmware, hit by line noise (docs/streaming.md "Line noise"): bytes outside ASCII, a NUL,
+// printable garbage, a lost comma, a frame with five counts. Each costs its frame and no more:
+// `status` counts the damaged ones, the whole frames are all received, the pins end on the last
+// frame's pose (solved by the host core from the documented format), and nothing of the stream
+// is echoed though echo is on, as after power-up.
+
+import assert from 'node:assert/strict';
+import { before, test } from 'node:test';
+
+import {
+  assertPins,
+  bootTerminal,
+  defaultSettings,
+  firmwareBootrom,
+  runFrames,
+  status,
+} from '../src/test-support/e2e-support.js';
+import { HostReference } from '../src/test-support/host-reference.js';
+
+let bootrom;
+let reference;
+before(() => {
+  bootrom = firmwareBootrom();
+  reference = new HostReference();
+});
+
+/** A text frame for heave count `z` (8 bits, default axis order x y z roll pitch yaw). */
+const frame = (z) => `128,128,${z},128,128,128X`;
+
+test('a text stream survives any byte: damaged frames counted, never applied or echoed', () => {
+  const board = bootTerminal(bootrom); // UART0, echo on, no command sent
+  board.runMs(50);
+  const before = board.output.length;
+  // Each damages the frame it is put in (the frame's own counts stay 130..).
+  const damage = [
+    (f) => f.replace(',128,128X', ',1\xC228,128X'), // a byte outside ASCII
+    (f) => f.replace('128,', '12\x008,'), // a NUL
+    (f) => f.replace(',128,', ',12q8,'), // printable garbage
+    (f) => f.replace(',', ''), // a lost comma
+    (f) => f.replace('128,128X', '128X'), // five counts
+    (f) => `\xFF\xFE${f}`.replace('X', '\x1bX'), // garbage before it, ESC before its X
+  ];
+  let whole = 0;
+  for (let k = 0; k < 24; k++) {
+    let bytes = frame(130 + k);
+    if (k % 4 === 1) {
+      bytes = damage[(k - 1) / 4](bytes);
+    } else {
+      whole += 1;
+    }
+    board.sendBytes(bytes);
+    board.runMs(10);
+  }
+  runFrames(board, 50); // the default speed limits: let the tracker arrive
+  const echoed = board.output.slice(before);
+  assert.equal(echoed, '', 'nothing of the stream is echoed or answered');
+  const z = ((130 + 23 - 128) / 128) * 15; // the last frame's heave, mm
+  const [answer] = reference.solve(defaultSettings(), [[0, 0, z, 0, 0, 0]]);
+  assert.ok(answer.ok);
+  assertPins(board, answer.pulse_us, 'on the last frame');
+  board.sendLine('set echo off');
+  board.waitForLine(/^ok$/);
+  const counts = status(board).stream;
+  assert.equal(counts.damaged, damage.length, JSON.stringify(counts));
+  assert.equal(counts.frames, whole, JSON.stringify(counts));
+});
