@@ -50,13 +50,11 @@
 
 use std::path::Path;
 
-use control::command::ParseError;
-use control::report::ValueText;
+use control::report::{nearest_setting, ValueText};
 use control::safety::FREE_GPIOS;
 use control::settings::{
     Kind, ServoParam, ServoSel, SettingId, SettingValue, Settings, BAUD_RATES, DEFAULT_BAUD,
 };
-use control::word::word;
 use kinematics_core::{Libm, Pose, LEGS};
 use toml::de::{DeTable, DeValue};
 
@@ -156,9 +154,8 @@ pub fn parse(file: &str, text: &str) -> Result<BuildFile, Error> {
         }
         let refused = |e: control::Error| problem(&name, line, KeyError::Refused(Box::new(e)));
         let id = SettingId::parse(&name).ok_or_else(|| {
-            refused(control::Error::from(ParseError::UnknownSetting {
-                word: word(&name),
-            }))
+            let near = nearest_setting(&name);
+            problem(&name, line, KeyError::UnknownSetting { near })
         })?;
         if id.is_link() && id != SettingId::Baud {
             return Err(problem(&name, line, KeyError::LinkSetting));
@@ -487,6 +484,18 @@ mod tests {
         assert!(err("colour = \"red\"").starts_with("b.toml:1: colour: error:unknown-setting"));
         assert!(err("[servo7]\ndir = \"normal\"")
             .starts_with("b.toml:2: servo7.dir: error:unknown-setting"));
+        // Not "type config": a file is no terminal; where the list is, and a close name.
+        assert_eq!(
+            err("colour = \"red\""),
+            "b.toml:1: colour: error:unknown-setting not a setting (the settings are listed in \
+             docs/settings.md of the firmware's repository)"
+        );
+        assert_eq!(
+            err("frame_hz = 50\nrdo_mm = 120\n"),
+            "b.toml:2: rdo_mm: error:unknown-setting not a setting; did you mean rod_mm? (the \
+             settings are listed in docs/settings.md of the firmware's repository)"
+        );
+        assert!(err("[servo3]\ntrim = 1500").contains("did you mean servo3.trim_us?"));
         assert!(err("speed_mm_s = \"fast\"").contains("error:bad-number"));
         assert!(err("echo = \"off\"").contains("belongs to the serial link"));
         assert!(err("baud = 100000").starts_with("b.toml:1: baud: error:bad-value baud"));

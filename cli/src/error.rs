@@ -10,7 +10,10 @@
 use std::fmt::{self, Display, Formatter};
 use std::io;
 
-use control::report::refusal;
+use control::report::{refusal, Code};
+
+/// Where the list of settings is, for a user who is not at a terminal.
+const SETTINGS_DOC: &str = "docs/settings.md of the firmware's repository";
 
 /// The board's own words for a refusal: `error:<code> <message>` as the firmware writes it.
 pub fn board_words(error: &control::Error) -> String {
@@ -77,6 +80,11 @@ pub enum Error {
         /// What is wrong.
         why: RowError,
     },
+    /// `uf2`: no firmware ELF where it was looked for (not built yet).
+    NoFirmware {
+        /// The path looked at.
+        path: String,
+    },
     /// An ELF file the UF2 writer cannot use.
     Elf {
         /// The file.
@@ -126,6 +134,12 @@ pub enum KeyError {
     /// Refused by the firmware's own checks (an unknown name, a bad or out-of-range value, a
     /// servo set or geometry that does not hold together): the board's words.
     Refused(Box<control::Error>),
+    /// Not a setting name; the closest one, if one is close
+    /// ([`control::report::nearest_setting`]).
+    UnknownSetting {
+        /// The setting the key is probably meant to be.
+        near: Option<control::settings::SettingId>,
+    },
     /// `echo`: the typing link's own, not the platform's.
     LinkSetting,
     /// A value that is not a number or a word (an array, a date, a table too deep).
@@ -336,8 +350,15 @@ pub enum SizingError {
 /// What went wrong with a serial port.
 #[derive(Debug)]
 pub enum PortError {
-    /// It could not be opened (the system's words).
-    Open(String),
+    /// It could not be opened.
+    Open {
+        /// The system's words.
+        why: String,
+        /// The serial ports the system lists (`serialport::available_ports`).
+        present: Vec<String>,
+        /// The system refused for want of permission (on Linux: the `dialout` group).
+        denied: bool,
+    },
     /// Reading or writing failed (the system's words).
     Io(String),
     /// No final reply to a line in time.
@@ -428,6 +449,15 @@ impl Display for Error {
                 file_line(f, file, line)?;
                 match why {
                     KeyError::Refused(error) => write!(f, "{key}: {}", board_words(error)),
+                    KeyError::UnknownSetting { near } => {
+                        // The board's code, then the file's words: a file is not a terminal
+                        // to type `config` on, so the list is where the docs keep it.
+                        write!(f, "{key}: error:{} not a setting", Code::UnknownSetting)?;
+                        if let Some(id) = near {
+                            write!(f, "; did you mean {id}?")?;
+                        }
+                        write!(f, " (the settings are listed in {SETTINGS_DOC})")
+                    }
                     KeyError::LinkSetting => write!(
                         f,
                         "{key}: belongs to the serial link, not the platform (it is not saved); \
@@ -464,7 +494,29 @@ impl Display for Error {
                 }
             }
             Error::Port { port, why } => match why {
-                PortError::Open(e) => write!(f, "{port}: cannot open the serial port: {e}"),
+                PortError::Open {
+                    why,
+                    present,
+                    denied,
+                } => {
+                    write!(f, "{port}: cannot open the serial port: {why}")?;
+                    if *denied && cfg!(target_os = "linux") {
+                        write!(
+                            f,
+                            "; your user may not use serial ports: add it to the `dialout` group \
+                             (`sudo usermod -aG dialout $USER`), then log in again"
+                        )?;
+                    }
+                    if present.is_empty() {
+                        write!(f, "; no serial ports found (is the board plugged in?)")?;
+                    } else {
+                        write!(f, "; serial ports present: {}", present.join(", "))?;
+                    }
+                    write!(
+                        f,
+                        "; for the emulated board, `./dev run --pty` prints the port to give"
+                    )
+                }
                 PortError::Io(e) => write!(f, "{port}: serial port error: {e}"),
                 PortError::NoReply { line, waited_s } => write!(
                     f,
@@ -535,6 +587,11 @@ impl Display for Error {
                     RowError::Empty => f.write_str("no rows: nothing to do"),
                 }
             }
+            Error::NoFirmware { path } => write!(
+                f,
+                "{path}: no firmware there; build it first with `cargo fw` (at the top of the \
+                 firmware's repository), or run `./dev uf2`, which builds it and writes the UF2"
+            ),
             Error::Elf { path, why } => write!(f, "{path}: {why}"),
             Error::Option { option, why } => write!(f, "{option}: {why}"),
             Error::Pose { pose, why } => write!(f, "pose {pose}: {why}"),
@@ -657,4 +714,43 @@ fn setting_placement(id: control::settings::SettingId, value: Option<f32>) -> St
 /// A torque refusal in the board's words, without its code.
 fn torque_words(cause: &control::payload::TorqueError) -> String {
     control::Error::Torque(*cause).to_string()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn not_opened(present: &[&str], denied: bool) -> String {
+        Error::Port {
+            port: "/dev/ttyACM0".into(),
+            why: PortError::Open {
+                why: "Permission denied".into(),
+                present: present.iter().map(|p| p.to_string()).collect(),
+                denied,
+            },
+        }
+        .to_string()
+    }
+
+    #[test]
+    fn a_port_that_does_not_open_says_what_to_try() {
+        let denied = not_opened(&["/dev/ttyACM0", "/dev/ttyS0"], true);
+        assert!(
+            denied.starts_with("/dev/ttyACM0: cannot open the serial port: Permission denied; "),
+            "{denied}"
+        );
+        assert_eq!(
+            denied.contains("`dialout` group"),
+            cfg!(target_os = "linux"),
+            "{denied}"
+        );
+        assert!(
+            denied.contains("; serial ports present: /dev/ttyACM0, /dev/ttyS0;"),
+            "{denied}"
+        );
+        assert!(denied.ends_with("`./dev run --pty` prints the port to give"));
+        let none = not_opened(&[], false);
+        assert!(none.contains("; no serial ports found"), "{none}");
+        assert!(!none.contains("dialout"), "{none}");
+    }
 }

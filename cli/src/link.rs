@@ -97,6 +97,18 @@ pub struct Received {
     pub line: String,
 }
 
+/// Why a port did not open, with the ports the system does list (none if it cannot list
+/// them).
+fn not_opened(error: &serialport::Error) -> PortError {
+    PortError::Open {
+        why: error.to_string(),
+        present: serialport::available_ports()
+            .map(|ports| ports.into_iter().map(|p| p.port_name).collect())
+            .unwrap_or_default(),
+        denied: error.kind() == serialport::ErrorKind::Io(std::io::ErrorKind::PermissionDenied),
+    }
+}
+
 /// An open link to a board.
 pub struct Link {
     port: String,
@@ -118,10 +130,8 @@ impl Link {
         let writer = serialport::new(port, baud)
             .timeout(READ_POLL)
             .open()
-            .map_err(|e| problem(PortError::Open(e.to_string())))?;
-        let reader = writer
-            .try_clone()
-            .map_err(|e| problem(PortError::Open(e.to_string())))?;
+            .map_err(|e| problem(not_opened(&e)))?;
+        let reader = writer.try_clone().map_err(|e| problem(not_opened(&e)))?;
         let (sender, lines) = mpsc::channel();
         let wanted = Arc::new(AtomicBool::new(true));
         let still_wanted = Arc::clone(&wanted);

@@ -113,6 +113,14 @@ impl Summary {
                      clamped={} refused={}\n",
                     s.sent, c.frames, c.applied, c.damaged, c.clamped, c.refused
                 );
+                let replaced = c.frames.saturating_sub(c.applied + c.refused);
+                if replaced > 0 {
+                    out += &format!(
+                        "  not applied: {replaced} frames, each replaced by a newer one that came \
+                         before the board's next servo frame (the newest frame wins, as \
+                         designed: not a loss)\n"
+                    );
+                }
             }
             _ => {
                 out += &format!(
@@ -336,6 +344,43 @@ pub fn min_median_max(values: &[f64]) -> Option<(f64, f64, f64)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn binary(sent: usize, frames: u64, applied: u64, refused: u64) -> String {
+        Summary {
+            mode: Mode::Binary,
+            sent,
+            duration_s: 1.0,
+            round_trips_ms: Vec::new(),
+            late: 0,
+            late_after_ms: 10.0,
+            worst_late_ms: 0.0,
+            refusals: Vec::new(),
+            notices: Vec::new(),
+            counters: Some(StreamCounters {
+                frames,
+                applied,
+                damaged: 0,
+                clamped: 0,
+                refused,
+            }),
+        }
+        .words("t.csv", "/dev/pts/3")
+    }
+
+    #[test]
+    fn frames_not_applied_are_said_to_be_replaced_not_lost() {
+        // 100 received, 70 applied, 5 refused at the e-stop: 25 replaced by newer frames.
+        let out = binary(100, 100, 70, 5);
+        assert!(
+            out.contains(
+                "\n  not applied: 25 frames, each replaced by a newer one that came before the \
+                 board's next servo frame (the newest frame wins, as designed: not a loss)\n"
+            ),
+            "{out}"
+        );
+        // Every frame applied: nothing to explain.
+        assert!(!binary(100, 100, 100, 0).contains("not applied"));
+    }
 
     #[test]
     fn min_median_max_of_odd_even_and_none() {

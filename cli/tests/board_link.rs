@@ -309,6 +309,13 @@ fn a_missing_port_and_a_silent_board_are_named() {
         err.starts_with("hexapod: /dev/no-such-port: cannot open the serial port"),
         "{err}"
     );
+    // What to do next: the ports there are (or that none are), and the emulator's.
+    assert!(
+        err.contains("; serial ports present: ") || err.contains("; no serial ports found"),
+        "{err}"
+    );
+    assert!(err.contains("`./dev run --pty`"), "{err}");
+    assert!(!err.contains("dialout"), "not a permission error: {err}");
 
     // A board that answers two lines, then nothing.
     let board = SimBoard::start_with(control::store::RamFlash::new(), Some(2));

@@ -123,6 +123,23 @@ fn hexapod_uf2_writes_the_file_and_says_what_to_do_with_it() {
     assert!(!run.status.success());
     assert!(String::from_utf8_lossy(&run.stderr).contains("not an ELF file"));
     assert!(!bad.exists());
+
+    // No firmware built (the default path, from a directory without one): which command
+    // builds it, no file written.
+    let run = Command::new(env!("CARGO_BIN_EXE_hexapod"))
+        .args(["uf2".as_ref(), "-o".as_ref(), bad.as_os_str()])
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    assert!(!run.status.success());
+    let said = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        said.contains("target/thumbv6m-none-eabi/release/firmware: no firmware there")
+            && said.contains("`cargo fw`")
+            && said.contains("`./dev uf2`"),
+        "{said}"
+    );
+    assert!(!bad.exists());
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

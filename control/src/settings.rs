@@ -354,15 +354,30 @@ pub enum Kind {
         /// Decimals shown by `config`.
         decimals: u8,
     },
-    /// `on` / `off`.
+    /// `on` / `off` (or `1` / `0`: [`FLAG_WORDS`]).
     Flag,
-    /// `normal` / `reversed`.
+    /// `normal` / `reversed` (or `1` / `-1`: [`DIR_WORDS`]).
     Dir,
     /// One of these words.
     Choice(&'static [&'static str]),
     /// A GPIO number from [`FREE_GPIOS`], or `off`.
     Pin,
 }
+
+/// Every word a flag ([`Kind::Flag`]) takes and what it means: `on` / `off`, and the `1` / `0`
+/// a script writes. `config` shows the first two; docs/settings.md names them all (tested).
+pub const FLAG_WORDS: [(&str, bool); 4] = [("on", true), ("off", false), ("1", true), ("0", false)];
+
+/// Every word a direction ([`Kind::Dir`]) takes and what it means: `normal` / `reversed`, and
+/// the sign a script writes (`1`, `+1`, `-1`; `0` is no direction). `config` shows the first
+/// two; docs/settings.md names them all (tested).
+pub const DIR_WORDS: [(&str, Direction); 5] = [
+    ("normal", Direction::Normal),
+    ("reversed", Direction::Reversed),
+    ("1", Direction::Normal),
+    ("+1", Direction::Normal),
+    ("-1", Direction::Reversed),
+];
 
 /// A parsed setting value.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -780,15 +795,13 @@ impl SettingId {
                     SettingValue::Number(parse_f32(text).map_err(number_error)?)
                 }
             }
-            Kind::Flag => match text {
-                "on" | "1" => SettingValue::Flag(true),
-                "off" | "0" => SettingValue::Flag(false),
-                _ => return Err(bad_value(Expected::OnOrOff)),
+            Kind::Flag => match FLAG_WORDS.iter().find(|(w, _)| *w == text) {
+                Some(&(_, on)) => SettingValue::Flag(on),
+                None => return Err(bad_value(Expected::OnOrOff)),
             },
-            Kind::Dir => match text {
-                "normal" | "+1" | "1" => SettingValue::Dir(Direction::Normal),
-                "reversed" | "-1" => SettingValue::Dir(Direction::Reversed),
-                _ => return Err(bad_value(Expected::NormalOrReversed)),
+            Kind::Dir => match DIR_WORDS.iter().find(|(w, _)| *w == text) {
+                Some(&(_, direction)) => SettingValue::Dir(direction),
+                None => return Err(bad_value(Expected::NormalOrReversed)),
             },
             Kind::Choice(words) => match words.iter().position(|w| *w == text) {
                 // At most a handful of words: the index fits.
@@ -1169,6 +1182,48 @@ mod tests {
             E::OutOfRange { .. }
         ));
         assert!(matches!(err("payload_g", "nan"), E::NotFinite { .. }));
+    }
+
+    #[test]
+    fn flags_and_directions_take_their_words_and_the_numbers_scripts_write() {
+        for (text, on) in [("on", true), ("1", true), ("off", false), ("0", false)] {
+            assert_eq!(
+                SettingId::Echo.parse_value(text),
+                Ok(SettingValue::Flag(on)),
+                "{text}"
+            );
+        }
+        for (text, direction) in [
+            ("normal", Direction::Normal),
+            ("1", Direction::Normal),
+            ("+1", Direction::Normal),
+            ("reversed", Direction::Reversed),
+            ("-1", Direction::Reversed),
+        ] {
+            let one = parse("servo1.dir", text).unwrap();
+            assert_eq!(one.servos.0[0].direction, direction, "servo1.dir {text}");
+            let all = parse("servos.dir", text).unwrap();
+            assert!(
+                all.servos.0.iter().all(|c| c.direction == direction),
+                "servos.dir {text}"
+            );
+        }
+        // 0 has no sign, and a flag is not a direction nor the other way round.
+        for (name, text) in [
+            ("servos.dir", "0"),
+            ("servo2.dir", "0"),
+            ("servo2.dir", "on"),
+            ("servo2.dir", "2"),
+            ("echo", "normal"),
+            ("echo", "-1"),
+            ("echo", "2"),
+        ] {
+            let id = SettingId::parse(name).unwrap();
+            assert!(
+                matches!(id.parse_value(text), Err(SettingError::BadValue { .. })),
+                "{name} {text}"
+            );
+        }
     }
 
     #[test]

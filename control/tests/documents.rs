@@ -5,7 +5,7 @@
 //! from `Code::ALL`.
 
 use control::report::{write_error_codes_doc, Code};
-use control::settings::{Kind, ServoParam, SettingId};
+use control::settings::{Kind, ServoParam, SettingId, DIR_WORDS, FLAG_WORDS};
 
 const COMMANDS: &str = include_str!("../../docs/commands.md");
 const SETTINGS: &str = include_str!("../../docs/settings.md");
@@ -91,8 +91,8 @@ fn range_words(kind: Kind) -> Vec<String> {
         } => vec![format!("{min}..={max}")],
         Kind::Whole { list, .. } => list.iter().map(|v| v.to_string()).collect(),
         Kind::Number { min, max, unit, .. } => vec![format!("{min}..={max} {unit}")],
-        Kind::Flag => vec!["`on`".into(), "`off`".into()],
-        Kind::Dir => vec!["`normal`".into(), "`reversed`".into()],
+        Kind::Flag => FLAG_WORDS.iter().map(|(w, _)| format!("`{w}`")).collect(),
+        Kind::Dir => DIR_WORDS.iter().map(|(w, _)| format!("`{w}`")).collect(),
         Kind::Choice(words) => words.iter().map(|w| format!("`{w}`")).collect(),
         Kind::Pin => {
             // The free GPIOs as runs of consecutive numbers: `8..=22`, `26..=28`.

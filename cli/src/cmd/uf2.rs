@@ -3,6 +3,7 @@
 //! (`crate::flash_image`).
 
 use std::fs;
+use std::io::ErrorKind;
 use std::path::PathBuf;
 
 use clap::Args;
@@ -36,9 +37,14 @@ impl Cmd {
             path: elf_name.clone(),
             why,
         };
-        let file = fs::read(&self.elf).map_err(|error| Error::File {
-            path: elf_name.clone(),
-            error,
+        let file = fs::read(&self.elf).map_err(|error| match error.kind() {
+            ErrorKind::NotFound => Error::NoFirmware {
+                path: elf_name.clone(),
+            },
+            _ => Error::File {
+                path: elf_name.clone(),
+                error,
+            },
         })?;
         let mut segments = elf::load_segments(&file).map_err(|e| elf_problem(e.to_string()))?;
         let firmware_bytes: usize = segments.iter().map(|s| s.bytes.len()).sum();

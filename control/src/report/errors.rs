@@ -12,13 +12,14 @@ use kinematics_core::servo::{
 };
 use kinematics_core::KinematicsError;
 
-use super::format::Fixed;
+use super::format::{AsGiven, Fixed};
+use super::near::{nearest_setting, nearest_verb};
 use crate::command::{Field, Missing, ParseError, Verb};
 use crate::error::{Error, PoseError};
 use crate::payload::TorqueError;
 use crate::protocol::{Lost, Spoiled, MAX_LINE};
 use crate::safety::{Estop, FREE_GPIOS};
-use crate::settings::{Expected, SettingError};
+use crate::settings::{Expected, SettingError, DIR_WORDS, FLAG_WORDS};
 use crate::store::SaveError;
 
 /// The error codes, one per kind of refusal. `error:<code>` is what programs match on.
@@ -357,6 +358,31 @@ pub const fn usage(verb: Verb) -> &'static str {
     }
 }
 
+/// The words a setting takes, as a refusal lists them: the two `config` shows, then the
+/// forms a script may write, e.g. `on or off (1 / 0)`.
+struct Words<'a>(&'a [&'a str]);
+
+impl Display for Words<'_> {
+    fn fmt(&self, f: &mut Formatter<'_>) -> fmt::Result {
+        let (shown, also) = self.0.split_at(self.0.len().min(2));
+        for (i, w) in shown.iter().enumerate() {
+            if i > 0 {
+                f.write_str(" or ")?;
+            }
+            f.write_str(w)?;
+        }
+        for (i, w) in also.iter().enumerate() {
+            f.write_str(if i == 0 { " (" } else { " / " })?;
+            f.write_str(w)?;
+        }
+        if also.is_empty() {
+            Ok(())
+        } else {
+            f.write_str(")")
+        }
+    }
+}
+
 /// The message of a refused line: `Display` writes it without the code (see
 /// [`super::refusal`] for the whole reply line).
 impl Display for Error {
@@ -386,7 +412,7 @@ impl Display for Error {
             } => write!(
                 f,
                 "servo {servo}: {} us is outside its limits {}..{} us (servo{servo}.min_us, max_us)",
-                Fixed(*pulse_us, 2),
+                AsGiven(*pulse_us, 2),
                 Fixed(*min_us, 2),
                 Fixed(*max_us, 2)
             ),
@@ -455,7 +481,11 @@ impl Display for ParseError {
         match self {
             ParseError::Spoiled(s) => SpoiledMessage(*s).fmt(f),
             ParseError::UnknownCommand { word } => {
-                write!(f, "'{word}' is not a command; type help")
+                write!(f, "'{word}' is not a command; ")?;
+                if let Some(verb) = nearest_verb(word) {
+                    write!(f, "did you mean {}? ", verb.name())?;
+                }
+                f.write_str("type help")
             }
             ParseError::NoCommand => f.write_str("only separators, no command; type help"),
             ParseError::MissingField { what, verb } => {
@@ -496,7 +526,11 @@ impl Display for ParseError {
                 write!(f, "'{word}' should be axis=value, for example z=10")
             }
             ParseError::UnknownSetting { word } => {
-                write!(f, "'{word}' is not a setting; type config for the list")
+                write!(f, "'{word}' is not a setting; ")?;
+                if let Some(id) = nearest_setting(word) {
+                    write!(f, "did you mean {id}? ")?;
+                }
+                f.write_str("type config for the list")
             }
             ParseError::Setting(e) => e.fmt(f),
         }
@@ -524,8 +558,8 @@ impl Display for SettingError {
                 write!(f, "{setting}: '{word}' is not ")?;
                 match expected {
                     Expected::WholeNumber => f.write_str("a whole number"),
-                    Expected::OnOrOff => f.write_str("on or off"),
-                    Expected::NormalOrReversed => f.write_str("normal or reversed"),
+                    Expected::OnOrOff => Words(&FLAG_WORDS.map(|(w, _)| w)).fmt(f),
+                    Expected::NormalOrReversed => Words(&DIR_WORDS.map(|(w, _)| w)).fmt(f),
                     Expected::OneOf(words) => {
                         f.write_str("one of")?;
                         words.iter().try_for_each(|w| write!(f, " {w}"))

@@ -82,6 +82,58 @@ fn rounded_scaled(value: f32, decimals: usize) -> Option<(bool, u64)> {
     Some((negative, quotient + u64::from(up)))
 }
 
+/// A number the user typed, shown as given: the fewest decimals (at least the given count, at most 6) whose
+/// text reads back as the same `f32`. `1900.004` shows as `1900.004`, where [`Fixed`] with 2
+/// decimals would round it onto the limit it exceeds (`1900.00`).
+#[derive(Debug, Clone, Copy)]
+pub struct AsGiven(pub f32, pub usize);
+
+impl Display for AsGiven {
+    fn fmt(&self, f: &mut Formatter<'_>) -> fmt::Result {
+        let AsGiven(value, least) = *self;
+        let most = least.max(6);
+        for decimals in least..most {
+            let mut text = Buffer::new();
+            if write!(text, "{}", Fixed(value, decimals)).is_ok()
+                && text.as_str().parse::<f32>() == Ok(value)
+            {
+                return f.write_str(text.as_str());
+            }
+        }
+        Fixed(value, most).fmt(f)
+    }
+}
+
+/// A short text on the stack, for [`AsGiven`]'s read-back (a number with at most 6 decimals
+/// below 2^40 is under 24 characters; a longer text is an error, not cut).
+struct Buffer {
+    bytes: [u8; 32],
+    len: usize,
+}
+
+impl Buffer {
+    fn new() -> Self {
+        Buffer {
+            bytes: [0; 32],
+            len: 0,
+        }
+    }
+
+    fn as_str(&self) -> &str {
+        core::str::from_utf8(self.bytes.get(..self.len).unwrap_or_default()).unwrap_or_default()
+    }
+}
+
+impl Write for Buffer {
+    fn write_str(&mut self, s: &str) -> fmt::Result {
+        let end = self.len + s.len();
+        let room = self.bytes.get_mut(self.len..end).ok_or(fmt::Error)?;
+        room.copy_from_slice(s.as_bytes());
+        self.len = end;
+        Ok(())
+    }
+}
+
 /// Six values in servo order with a fixed number of decimals, separated by spaces.
 pub struct Six<'a>(pub &'a [f32; LEGS], pub usize);
 
@@ -238,6 +290,27 @@ mod tests {
         assert_eq!(std::format!("{}", Fixed(-0.0, 2)), "0.00");
         assert_eq!(std::format!("{}", Fixed(-0.0006, 3)), "-0.001");
         assert_eq!(std::format!("{}", Fixed(1500.0, 2)), "1500.00");
+    }
+
+    #[test]
+    fn as_given_keeps_the_digits_typed() {
+        // Each text, read as an f32 (core's correctly rounded parser, as `number` uses), shows
+        // as itself: never rounded onto a neighbouring limit.
+        for (typed, shown) in [
+            ("1900.004", "1900.004"),
+            ("1900.0004", "1900.0004"),
+            ("1900.0001", "1900.0001"),
+            ("2000", "2000.00"),
+            ("1099.9", "1099.90"),
+            ("-12.5", "-12.50"),
+            ("0.000001", "0.000001"),
+        ] {
+            let value: f32 = typed.parse().unwrap();
+            assert_eq!(std::format!("{}", AsGiven(value, 2)), shown, "{typed}");
+        }
+        // Past 6 decimals the nearest 6-decimal text (what Fixed writes).
+        assert_eq!(std::format!("{}", AsGiven(1e-7, 2)), "0.000000");
+        assert_eq!(std::format!("{}", AsGiven(f32::NAN, 2)), "NaN");
     }
 
     #[test]

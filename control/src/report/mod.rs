@@ -4,6 +4,7 @@
 //!
 //! - [`errors`](self::Code): the error vocabulary, the code and message of every refusal;
 //! - `format`: how numbers, poses and setting values are written;
+//! - `near`: the known name closest to a mistyped command or setting ("did you mean");
 //! - `replies`: the writers of every reply, data line and notice.
 //!
 //! # Output conventions
@@ -30,10 +31,12 @@
 
 mod errors;
 mod format;
+mod near;
 mod replies;
 
 pub use errors::{usage, write_error_codes_doc, Code};
 pub use format::{degrees, Fixed, PoseText, Six, ValueText, Vector};
+pub use near::{nearest_setting, nearest_verb};
 pub use replies::{
     kinematics_refusal, refusal, write_banner, write_echo, write_error, write_held_echo,
     write_notice, write_ok, write_prompt, Fault, Listing, MotionReport, Notice, Saved,
@@ -327,6 +330,42 @@ mod tests {
             })),
             "speed_mm_s 5000 is outside 0.1..1000 mm/s (or 0/off)"
         );
+        // A close name is suggested; none when nothing is close.
+        assert_eq!(
+            text(Error::Parse(ParseError::UnknownCommand {
+                word: word("stauts")
+            })),
+            "'stauts' is not a command; did you mean status? type help"
+        );
+        assert_eq!(
+            text(Error::Parse(ParseError::UnknownSetting {
+                word: word("rdo_mm")
+            })),
+            "'rdo_mm' is not a setting; did you mean rod_mm? type config for the list"
+        );
+        assert_eq!(
+            text(Error::Parse(ParseError::UnknownSetting {
+                word: word("colour")
+            })),
+            "'colour' is not a setting; type config for the list"
+        );
+        // Every word the setting takes, the two config shows first.
+        assert_eq!(
+            text(Error::Setting(SettingError::BadValue {
+                setting: SettingId::Echo,
+                word: word("maybe"),
+                expected: Expected::OnOrOff,
+            })),
+            "echo: 'maybe' is not on or off (1 / 0)"
+        );
+        assert_eq!(
+            text(Error::Setting(SettingError::BadValue {
+                setting: SettingId::Servo(ServoSel::All, ServoParam::Dir),
+                word: word("0"),
+                expected: Expected::NormalOrReversed,
+            })),
+            "servos.dir: '0' is not normal or reversed (1 / +1 / -1)"
+        );
         assert_eq!(
             text(Error::Setting(SettingError::OutOfRange {
                 setting: SettingId::FrameHz,
@@ -358,6 +397,16 @@ mod tests {
                 max_us: 1900.0,
             }),
             "servo 2: 2000.00 us is outside its limits 1100.00..1900.00 us (servo2.min_us, max_us)"
+        );
+        // The pulse as typed, not rounded onto the limit it exceeds.
+        assert_eq!(
+            text(Error::PulseOutsideLimits {
+                servo: 2,
+                pulse_us: 1900.004,
+                min_us: 1100.0,
+                max_us: 1900.0,
+            }),
+            "servo 2: 1900.004 us is outside its limits 1100.00..1900.00 us (servo2.min_us, max_us)"
         );
         assert!(
             text(Error::NoPose(KinematicsError::ElbowFlipped { leg: 4 }))
