@@ -30,7 +30,7 @@ use control::store::{self, Store};
 use firmware::rom_math::RomMath;
 use firmware::{Board, Controller};
 use flash::SettingsFlash;
-use link::{Link, Links};
+use link::{HoldUpWatch, Link, Links};
 use safety_pins::{FreePin, SafetyPins};
 use serial::Serial;
 use servo_pwm::ServoPwm;
@@ -71,6 +71,7 @@ fn main() -> ! {
         usb,
         mut servos,
         mut safety,
+        mut hold_up,
     } = Drivers::new(board, &controller);
 
     // The links: each its port and its own line assembly, echo and prompt (the platform's
@@ -94,6 +95,9 @@ fn main() -> ! {
     loop {
         watchdog.feed();
         links.open_or_close(&controller, &timer);
+        // A command whose output waits for a slow or stopped USB host holds up the other
+        // link's input 0.05 s at most (link::HOLD_UP_US): then that output is given up.
+        hold_up.watch(&mut links, &controller, &timer);
         // Lost input (only UART0 loses any) is announced at once, to every link; the line it
         // cut is refused when the loop reaches the gap.
         if links.announce_losses(&mut controller) {
@@ -119,13 +123,15 @@ fn main() -> ! {
 struct Drivers {
     /// Started, with [`WATCHDOG_TIMEOUT_MS`].
     watchdog: Watchdog,
-    /// The 1 MHz timer: its alarm 0 polls UART0's RX FIFO, its counter times the USB host's
-    /// reading.
+    /// The 1 MHz timer: its alarm 0 polls UART0's RX FIFO, its alarm 1 is the hold-up
+    /// watch's, its counter times the USB host's reading and the hold-up.
     timer: Timer,
     serial: Serial,
     usb: UsbSerial,
     servos: ServoPwm,
     safety: SafetyPins,
+    /// With the timer's alarm 1, which wakes the loop at the hold-up deadline.
+    hold_up: HoldUpWatch,
 }
 
 impl Drivers {
@@ -143,6 +149,7 @@ impl Drivers {
         } = board;
         let mut timer = Timer::new(timer, &mut resets, &clocks);
         let rx_poll = timer.alarm_0().expect("alarm 0 is taken once, here");
+        let hold_up = HoldUpWatch::new(timer.alarm_1().expect("alarm 1 is taken once, here"));
         let serial = Serial::new(
             uart0,
             pins.gpio0,
@@ -197,6 +204,7 @@ impl Drivers {
             usb,
             servos,
             safety,
+            hold_up,
         }
     }
 }

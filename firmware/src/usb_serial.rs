@@ -27,10 +27,14 @@
 //! - a host that has the port open but stops reading for [`STALL_US`] while output waits (its
 //!   program reads nothing and its OS buffers are full) is taken to have stopped listening:
 //!   what is queued stays queued (up to [`TX_QUEUE_BYTES`]), further output is dropped until
-//!   the host takes a packet again. Without that, a reply to that link could keep the
-//!   controller waiting for ever and with it UART0's commands; with it, the longest such wait is
-//!   [`STALL_US`]. Input from such a host is still taken (a program that streams poses and
-//!   never reads the `ok`s keeps working).
+//!   the host takes a packet again. Input from such a host is still taken (a program that
+//!   streams poses and never reads the `ok`s keeps working).
+//! - a host that reads, but too slowly for a command of its own under way while input waits
+//!   on the other link (or that stopped reading less than [`STALL_US`] ago), has its output
+//!   given up by the main loop ([`UsbSerial::give_up_output`], after
+//!   [`crate::link::HOLD_UP_US`]): dropped until it has taken all that was queued. Without
+//!   that, a reply to this link could keep the controller waiting as long as the host takes
+//!   to read it (seconds, for ever) and with it the other link's commands.
 //!
 //! Opening and closing are the host's doing (DTR, `SET_CONTROL_LINE_STATE`): the main loop asks
 //! [`UsbSerial::take_open_change`] and greets a newly opened port with the banner and a prompt.
@@ -119,6 +123,8 @@ pub struct UsbSerial {
     openings_seen: u32,
     /// The host stopped reading: output is dropped until it takes some again.
     stalled: bool,
+    /// Output was given up ([`UsbSerial::give_up_output`]): dropped until the queue is empty.
+    given_up: bool,
     /// `TX_TAKEN` when output last moved (or nothing waited), and when that was.
     taken_seen: u32,
     moved_at_us: u32,
@@ -181,6 +187,7 @@ impl UsbSerial {
             open: false,
             openings_seen: 0,
             stalled: false,
+            given_up: false,
             taken_seen: 0,
             moved_at_us: 0,
             unsent: false,
@@ -197,6 +204,7 @@ impl UsbSerial {
         let change = self.open_change(reply_awaited)?;
         self.open = change;
         self.stalled = false;
+        self.given_up = false;
         if change {
             self.openings_seen = OPENINGS.load(Ordering::Relaxed);
         }
@@ -225,20 +233,33 @@ impl UsbSerial {
     /// Call once per main-loop pass with the timer's microseconds.
     pub fn watch_output(&mut self, now_us: u32) {
         let taken = TX_TAKEN.load(Ordering::Relaxed);
-        if taken != self.taken_seen || self.tx.len() == 0 || !self.open {
+        let drained = self.tx.len() == 0 || !self.open;
+        if taken != self.taken_seen || drained {
             self.taken_seen = taken;
             self.moved_at_us = now_us;
-            if self.stalled {
+            if self.stalled && (drained || !self.given_up) {
                 defmt::info!(
                     "USB host reads again ({} bytes dropped)",
                     self.dropped_bytes
                 );
+                self.stalled = false;
+                self.given_up = false;
             }
-            self.stalled = false;
         } else if !self.stalled && now_us.wrapping_sub(self.moved_at_us) >= STALL_US {
             defmt::warn!("USB host stopped reading: output dropped until it reads again");
             self.stalled = true;
         }
+    }
+
+    /// Another link's input waited too long behind this link's output (the host reads too
+    /// slowly, or not at all, for the command under way: [`crate::link::HOLD_UP_US`]): output
+    /// is dropped from now on, until the host has taken all that was queued.
+    pub fn give_up_output(&mut self) {
+        if !self.stalled {
+            defmt::warn!("USB host reads too slowly: output dropped until it has caught up");
+        }
+        self.stalled = true;
+        self.given_up = true;
     }
 
     /// True if the controller may take a step on this link: its output fits in the transmit

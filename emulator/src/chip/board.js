@@ -679,6 +679,11 @@ export class UsbLink extends SerialLink {
     this.host.setReading(true);
   }
 
+  /** The host's program reads slowly: one 64-byte IN packet per `ms` at most (0: at once). */
+  readSlowly(ms) {
+    this.host.setReadInterval(ms);
+  }
+
   unplug() {
     this.host.unplug();
   }
