@@ -60,6 +60,10 @@ fn main() -> ! {
     // The newest good settings saved in flash, or the defaults (with a warning saying why).
     let mut settings_flash = SettingsFlash::new();
     let mut controller = Controller::power_up(Store::load_with::<RomMath, _>(&mut settings_flash));
+    // The board's id: the flash chip's unique ID, handed to the controller (the banner) and
+    // to the USB device (its serial number).
+    let board_id = settings_flash.unique_id();
+    controller.set_board_id(board_id);
     defmt::info!(
         "settings storage at flash offset {=u32:#x}",
         settings_flash.base()
@@ -72,7 +76,7 @@ fn main() -> ! {
         mut servos,
         mut safety,
         mut hold_up,
-    } = Drivers::new(board, &controller);
+    } = Drivers::new(board, &controller, board_id);
 
     // The links: each its port and its own line assembly, echo and prompt (the platform's
     // state is the controller's). UART0 is greeted now; the USB port when a host opens it.
@@ -119,7 +123,8 @@ fn main() -> ! {
     }
 }
 
-/// The board's drivers, set up for the controller's power-up settings.
+/// The board's drivers, set up for the controller's power-up settings (the USB device named
+/// with the board's id).
 struct Drivers {
     /// Started, with [`WATCHDOG_TIMEOUT_MS`].
     watchdog: Watchdog,
@@ -135,7 +140,7 @@ struct Drivers {
 }
 
 impl Drivers {
-    fn new(board: Board, controller: &Controller) -> Drivers {
+    fn new(board: Board, controller: &Controller, board_id: u64) -> Drivers {
         let Board {
             mut watchdog,
             clocks,
@@ -196,7 +201,18 @@ impl Drivers {
         ]);
         safety.apply(&controller.settings().safety);
         watchdog.start(WATCHDOG_TIMEOUT_MS.millis());
-        let usb = UsbSerial::new(usbctrl_regs, usbctrl_dpram, clocks.usb_clock, &mut resets);
+        let serial_number =
+            cortex_m::singleton!(: [u8; 16] = control::report::board_id_digits(board_id))
+                .expect("Drivers::new is called once");
+        let serial_number =
+            core::str::from_utf8(serial_number).expect("hexadecimal digits are ASCII");
+        let usb = UsbSerial::new(
+            usbctrl_regs,
+            usbctrl_dpram,
+            clocks.usb_clock,
+            &mut resets,
+            serial_number,
+        );
         Drivers {
             watchdog,
             timer,

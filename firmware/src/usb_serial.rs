@@ -135,13 +135,15 @@ pub struct UsbSerial {
 }
 
 impl UsbSerial {
-    /// Brings up the USB device (full speed, CDC ACM) and starts servicing it from its
+    /// Brings up the USB device (full speed, CDC ACM, named with `serial_number`: the board's
+    /// id, so that `/dev/serial/by-id/` tells boards apart) and starts servicing it from its
     /// interrupt. Call once: the queues and the bus are static singletons.
     pub fn new(
         regs: pac::USBCTRL_REGS,
         dpram: pac::USBCTRL_DPRAM,
         usb_clock: UsbClock,
         resets: &mut pac::RESETS,
+        serial_number: &'static str,
     ) -> Self {
         // The Pico does not route VBUS to the USB controller's detect input: force it.
         let bus = UsbBus::new(regs, dpram, usb_clock, true, resets);
@@ -150,7 +152,8 @@ impl UsbSerial {
         let port = SerialPort::new(allocator);
         let strings = StringDescriptors::default()
             .manufacturer(control::report::USB_MANUFACTURER)
-            .product(control::report::USB_PRODUCT);
+            .product(control::report::USB_PRODUCT)
+            .serial_number(serial_number);
         let device = UsbDeviceBuilder::new(allocator, VID_PID)
             .strings(&[strings])
             .expect("one language")

@@ -13,6 +13,7 @@
 // 8. Pad pulls (`pads.js`, `PadPulls`).
 // 9-12. USB: OUT arms before enumeration, the line state, IN timing, suspend and unplugging
 //    (`usb.js`, `UsbCdcHost`).
+// 13. The flash chip's unique ID, read through the SSI (`flash.js`, `FlashChip.uniqueId`).
 //
 // `patchEmulatorGaps` installs gaps 1 and 2 on a fresh `RP2040`; the board (../chip/board.js)
 // installs the others where it wires the chip up (they need its callbacks).
@@ -23,6 +24,7 @@ import { Pl011 } from './uart.js';
 
 export {
   attachFlashChip,
+  DEFAULT_FLASH_UNIQUE_ID,
   FLASH_PAGE_BYTES,
   FLASH_SECTOR_BYTES,
   FlashChip,
