@@ -73,7 +73,7 @@ pub fn settings_from_config(reply: &Reply) -> Result<Settings, String> {
 }
 
 /// Asks the board for `config` and reads it.
-pub fn read_settings(link: &mut Link) -> Result<Settings, crate::messages::Problem> {
+pub fn read_settings(link: &mut Link) -> Result<Settings, crate::error::Error> {
     let reply = link.request_ok("config")?;
     settings_from_config(&reply).map_err(|line| link.unreadable("config", &line))
 }
@@ -109,7 +109,7 @@ pub fn six(reply: &Reply, key: &str) -> Option<[f32; LEGS]> {
 }
 
 /// Asks the board for `status` and reads its stream counters.
-pub fn read_counters(link: &mut Link) -> Result<StreamCounters, crate::messages::Problem> {
+pub fn read_counters(link: &mut Link) -> Result<StreamCounters, crate::error::Error> {
     let reply = link.request_ok("status")?;
     stream_counters(&reply).ok_or_else(|| link.unreadable("status", &reply.data.join(" / ")))
 }

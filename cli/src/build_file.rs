@@ -32,19 +32,30 @@
 //!
 //! The `[sizing]` table holds what the board has no setting for (`crate::sizing`).
 //!
+//! A file is written commented ([`write`]: `init`, `pull`): each key with what it is and its
+//! range, taken from the firmware's own [`Kind`] (the free GPIOs from
+//! `control::safety::FREE_GPIOS`).
+//!
 //! Values: numbers as typed (TOML's `1_000` and `0x10` are the numbers they mean), words as
 //! strings (`dir = "reversed"`, `speed_mm_s = "off"`). Units are those of the names (`_mm`,
 //! `_deg`, `_us`, `_s`, `_hz`).
 
+use std::path::Path;
+
 use control::command::ParseError;
 use control::report::ValueText;
+use control::safety::FREE_GPIOS;
 use control::settings::{Kind, ServoParam, ServoSel, SettingId, SettingValue, Settings};
 use control::word::word;
 use kinematics_core::{Libm, Pose, LEGS};
 use toml::de::{DeTable, DeValue};
 
-use crate::messages::{KeyProblem, Problem};
-use crate::sizing::{Sizing, SIZING_TABLE};
+use crate::error::{Error, KeyError};
+use crate::files::read_text;
+use crate::sizing::{self, Sizing, SIZING_TABLE};
+
+/// Where the settings come from without a build file (`init`, and `--settings` left out).
+pub const DEFAULT_PLATFORM: &str = "the default platform";
 
 /// One `set` of a build file.
 #[derive(Debug, Clone, PartialEq)]
@@ -76,10 +87,15 @@ pub struct BuildFile {
     pub sizing: Sizing,
 }
 
+/// Reads and checks a build file.
+pub fn read(path: &Path) -> Result<BuildFile, Error> {
+    parse(&path.display().to_string(), &read_text(path)?)
+}
+
 /// Reads and checks a build file's text; `file` names it in errors.
-pub fn parse(file: &str, text: &str) -> Result<BuildFile, Problem> {
+pub fn parse(file: &str, text: &str) -> Result<BuildFile, Error> {
     let line_of = |offset: usize| text[..offset.min(text.len())].matches('\n').count() + 1;
-    let table = DeTable::parse(text).map_err(|e| Problem::Toml {
+    let table = DeTable::parse(text).map_err(|e| Error::Toml {
         file: file.to_string(),
         line: e.span().map_or(1, |s| line_of(s.start)),
         message: e.message().to_string(),
@@ -97,7 +113,7 @@ pub fn parse(file: &str, text: &str) -> Result<BuildFile, Problem> {
             other => found.push((key.get_ref().to_string(), line, other)),
         }
     }
-    let problem = |name: &str, line, why| Problem::Key {
+    let problem = |name: &str, line, why| Error::Key {
         file: file.to_string(),
         line,
         key: name.to_string(),
@@ -116,19 +132,19 @@ pub fn parse(file: &str, text: &str) -> Result<BuildFile, Problem> {
             };
             sizing
                 .set(key, number)
-                .map_err(|why| problem(&name, line, KeyProblem::Sizing(why)))?;
+                .map_err(|why| problem(&name, line, KeyError::Sizing(why)))?;
             continue;
         }
-        let refused = |e: control::Error| problem(&name, line, KeyProblem::Refused(Box::new(e)));
+        let refused = |e: control::Error| problem(&name, line, KeyError::Refused(Box::new(e)));
         let id = SettingId::parse(&name).ok_or_else(|| {
             refused(control::Error::from(ParseError::UnknownSetting {
                 word: word(&name),
             }))
         })?;
         if id.is_link() {
-            return Err(problem(&name, line, KeyProblem::LinkSetting));
+            return Err(problem(&name, line, KeyError::LinkSetting));
         }
-        let value = value_text(value).ok_or_else(|| problem(&name, line, KeyProblem::NotAValue))?;
+        let value = value_text(value).ok_or_else(|| problem(&name, line, KeyError::NotAValue))?;
         let parsed = id
             .parse_value(&value)
             .map_err(|e| refused(control::Error::from(e)))?;
@@ -156,7 +172,7 @@ pub fn parse(file: &str, text: &str) -> Result<BuildFile, Problem> {
                 let why = accepted(&settings.with(step.id, *value))
                     .err()
                     // The first key is never blocked, so it was refused.
-                    .unwrap_or(KeyProblem::Refused(Box::new(control::Error::Busy)));
+                    .unwrap_or(KeyError::Refused(Box::new(control::Error::Busy)));
                 return Err(problem(&step.id.to_string(), step.line, why));
             }
         }
@@ -170,17 +186,17 @@ pub fn parse(file: &str, text: &str) -> Result<BuildFile, Problem> {
 
 /// Whether the board, holding home, accepts these settings: valid ([`Settings::validate`]),
 /// and with a payload and ratings, every servo within its rating at home.
-fn accepted(settings: &Settings) -> Result<(), KeyProblem> {
+fn accepted(settings: &Settings) -> Result<(), KeyError> {
     let solver = settings
         .validate()
-        .map_err(|e| KeyProblem::Refused(Box::new(e.into())))?;
+        .map_err(|e| KeyError::Refused(Box::new(e.into())))?;
     if settings.payload.checked() {
         // Valid settings reach home (their trims are within their limits).
         if let Ok(home) = solver.solve::<Libm>(&settings.servos, &Pose::HOME) {
             settings
                 .payload
                 .check::<Libm>(&solver, &Pose::HOME, &home.arm_rad)
-                .map_err(KeyProblem::OverloadedAtHome)?;
+                .map_err(KeyError::OverloadedAtHome)?;
         }
     }
     Ok(())
@@ -251,7 +267,7 @@ fn toml_value(id: SettingId, value: SettingValue) -> String {
 
 /// What a setting is, with its range from the firmware's own [`Kind`], for the comments.
 fn describe(id: SettingId) -> String {
-    let what = crate::messages::setting_meaning(id);
+    let what = id.meaning();
     match id.kind() {
         Kind::Whole {
             min,
@@ -276,9 +292,49 @@ fn describe(id: SettingId) -> String {
             let quoted: Vec<String> = words.iter().map(|w| format!("\"{w}\"")).collect();
             format!("{what}: {}", quoted.join(" "))
         }
-        Kind::Pin => format!("{what}: a GPIO (8..22, 26..28) or \"off\""),
+        Kind::Pin => format!("{what}: a GPIO ({}) or \"off\"", runs(&FREE_GPIOS)),
         _ => what.to_string(),
     }
+}
+
+/// The first lines of a build file (`init`, `pull`).
+fn header(source: &str) -> String {
+    format!(
+        "# hexapod build file: the settings of {source}.\n\
+         # Keys are the firmware's `set` names (docs/settings.md in the firmware's repository):\n\
+         # `[servo3] trim_us = 1512` is `set servo3.trim_us 1512`.\n\
+         # Lengths in mm, angles in degrees, pulses in microseconds.\n\
+         # A key left out is the firmware's default. `hexapod apply FILE` (no port) checks it;\n\
+         # `hexapod apply FILE --port PORT` sends `defaults`, every `set`, then `save`.\n\n"
+    )
+}
+
+/// A build file without a payload: how to give one (commented, so the file still says the
+/// board's defaults).
+pub const PAYLOAD_EXAMPLE: &str = "\
+# No payload: the board shows and checks no holding torques. To give one, e.g. 500 g whose\n\
+# centre of mass is 20 mm above the platform, on micro servos rated 1.8 kgf cm (an SG90):\n\
+#   payload_g = 500\n\
+#   payload_com_z_mm = 20\n\
+#   and torque_kgcm = 1.8 in each [servoN] below\n";
+
+/// Whole numbers as runs: `8..22, 26..28` for 8 to 22 and 26 to 28 (a run of one is its number).
+fn runs(numbers: &[u32]) -> String {
+    let mut out: Vec<String> = Vec::new();
+    let mut i = 0;
+    while i < numbers.len() {
+        let first = numbers[i];
+        while i + 1 < numbers.len() && numbers[i + 1] == numbers[i] + 1 {
+            i += 1;
+        }
+        out.push(if numbers[i] == first {
+            first.to_string()
+        } else {
+            format!("{first}..{}", numbers[i])
+        });
+        i += 1;
+    }
+    out.join(", ")
 }
 
 /// A key and its value, the comment after them (in a column, at least a space away).
@@ -289,7 +345,7 @@ fn commented(text: &str, comment: &str) -> String {
 /// A commented build file of `settings` and `sizing`; `source` says where they come from.
 /// Without a payload, commented lines show how to give one.
 pub fn write(settings: &Settings, sizing: &Sizing, source: &str) -> String {
-    let mut out = crate::messages::build_file_header(source);
+    let mut out = header(source);
     let line = |out: &mut String, key: &str, id: SettingId| {
         if let Some(value) = settings.get(id) {
             let text = format!("{key} = {}", toml_value(id, value));
@@ -308,7 +364,7 @@ pub fn write(settings: &Settings, sizing: &Sizing, source: &str) -> String {
         }
     }
     if !settings.payload.carried() {
-        out.push_str(crate::messages::PAYLOAD_EXAMPLE);
+        out.push_str(PAYLOAD_EXAMPLE);
     }
     out.push_str("\n[stream]\n");
     for (short, id) in stream {
@@ -324,10 +380,10 @@ pub fn write(settings: &Settings, sizing: &Sizing, source: &str) -> String {
             );
         }
     }
-    out.push_str(crate::messages::SIZING_HEADER);
+    out.push_str(sizing::HEADER);
     for (key, value) in sizing.entries() {
         let text = format!("{key} = {value:?}");
-        out.push_str(&commented(&text, crate::messages::sizing_meaning(key)));
+        out.push_str(&commented(&text, sizing::meaning(key)));
     }
     out
 }
@@ -460,6 +516,16 @@ mod tests {
     }
 
     #[test]
+    fn the_pins_comment_names_the_free_gpios_the_readme_lists() {
+        // README, "Settings": estop_pin and power_pin take 8..=22 or 26..=28.
+        let written = write(&Settings::default(), &Sizing::default(), "a test");
+        let pin = "emergency-stop input: a GPIO (8..22, 26..28) or \"off\"";
+        assert!(written.contains(pin), "{written}");
+        assert_eq!(runs(&[3, 5, 6, 7, 9]), "3, 5..7, 9");
+        assert_eq!(runs(&[]), "");
+    }
+
+    #[test]
     fn the_payload_and_ratings_are_the_board_s_settings() {
         let file = ok(
             "payload_g = 1500\npayload_com_z_mm = 25\nservos.torque_kgcm = 10\n\
@@ -497,12 +563,9 @@ mod tests {
         let default = write(&Settings::default(), &Sizing::default(), "a test");
         assert!(default.contains("\npayload_g = 0.0 "), "{default}");
         assert!(default.contains("\ntorque_kgcm = \"off\" "), "{default}");
-        assert!(
-            default.contains(crate::messages::PAYLOAD_EXAMPLE),
-            "{default}"
-        );
+        assert!(default.contains(PAYLOAD_EXAMPLE), "{default}");
         // The example, uncommented, is a file the board takes.
-        let example: String = crate::messages::PAYLOAD_EXAMPLE
+        let example: String = PAYLOAD_EXAMPLE
             .lines()
             .filter_map(|l| l.strip_prefix("#   "))
             .filter(|l| {

@@ -13,7 +13,6 @@ use control::settings::Settings;
 use kinematics_core::ik::Solver;
 use kinematics_core::{Libm, Pose};
 
-use crate::messages::{self, Problem};
 use crate::trajectory::Row;
 
 /// Which trajectory.
@@ -50,34 +49,6 @@ pub struct Shape {
     pub ramp_s: f64,
     /// The tour stays within this fraction of the reach in each direction.
     pub edge_fraction: f64,
-}
-
-/// Checks a shape's numbers: positive finite times, a rate of 1..=1000 Hz, an amplitude of
-/// 0..=500 mm, an edge fraction in (0, 1].
-pub fn check(shape: &Shape) -> Result<(), Problem> {
-    let bad = |option, why: &str| {
-        Err(Problem::Option {
-            option,
-            why: why.to_string(),
-        })
-    };
-    let positive = |v: f64| v.is_finite() && v > 0.0;
-    if !positive(shape.period_s) {
-        return bad("--period-s", messages::MUST_BE_POSITIVE);
-    }
-    if !positive(shape.duration_s) {
-        return bad("--duration-s", messages::MUST_BE_POSITIVE);
-    }
-    if !(1.0..=1000.0).contains(&shape.rate_hz) {
-        return bad("--rate-hz", messages::RATE_RANGE);
-    }
-    if !(0.0..=500.0).contains(&shape.amplitude_mm) {
-        return bad("--amplitude-mm", messages::AMPLITUDE_RANGE);
-    }
-    if !(shape.edge_fraction > 0.0 && shape.edge_fraction <= 1.0) {
-        return bad("--edge-fraction", messages::FRACTION_RANGE);
-    }
-    Ok(())
 }
 
 /// 0 at home, 1 at full size: a smooth step over the first and last `ramp_s`.

@@ -1,4 +1,4 @@
-//! `hexapod draw`: a picture of a platform at a pose, in four views (top, front, side and
+//! A picture of a platform at a pose (`hexapod draw`), in four views (top, front, side and
 //! perspective), like the architecture plot of the Stewart platform Simscape model
 //! documentation: base plate, servo bodies and arms, rods, the platform plate, the base and
 //! platform frames, leg and servo numbers.
@@ -19,11 +19,8 @@ use kinematics_core::ik::{IkError, Solver};
 use kinematics_core::legs::ArmState;
 use kinematics_core::{Libm, Pose, Vec3, LEGS};
 
-use std::path::Path;
-
-use crate::configure::read_build_file;
-use crate::messages::{self, Problem};
-use crate::picture::{self, Anchor, Scene, Shape, Style};
+use crate::error::board_words;
+use crate::picture::{Anchor, Scene, Shape, Style};
 
 /// A view: how a point in the base frame (mm) lands on the panel (mm, y down).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -127,10 +124,8 @@ pub struct Model {
 /// The model of a platform at a pose; `Err` with the board's words if the settings are not
 /// a platform or the pose is not a pose (angles beyond 180 degrees, not finite).
 pub fn model(settings: &Settings, pose: &Pose) -> Result<Model, String> {
-    let solver: Solver = settings
-        .validate()
-        .map_err(|e| messages::board_words(&e.into()))?;
-    kinematics_core::ik::check_pose(pose).map_err(|e| messages::board_words(&e.into()))?;
+    let solver: Solver = settings.validate().map_err(|e| board_words(&e.into()))?;
+    kinematics_core::ik::check_pose(pose).map_err(|e| board_words(&e.into()))?;
     let (arm_rad, verdict) = match solver.solve::<Libm>(&settings.servos, pose) {
         Ok(solution) => (solution.arm_rad, Verdict::Reachable),
         Err(error) => {
@@ -139,7 +134,7 @@ pub fn model(settings: &Settings, pose: &Pose) -> Result<Model, String> {
                 IkError::ServoLimit { servo, .. } => servo,
                 _ => 0,
             };
-            let words = messages::board_words(&error.into());
+            let words = board_words(&error.into());
             // The last pose on the way from home whose arm angles the IK gives.
             let along = |t: f64| {
                 let home = Pose::HOME.to_array();
@@ -278,21 +273,57 @@ const HEADER_PX: f64 = 76.0;
 
 const RED: &str = "#d00000";
 
+// The picture's words.
+
+/// A view's title.
+fn view_title(view: View) -> &'static str {
+    match view {
+        View::Top => "top (looking down; x right, y up)",
+        View::Front => "front (looking along +y; x right, z up)",
+        View::Side => "side (looking along -x; y right, z up)",
+        View::Perspective => "perspective",
+    }
+}
+
+/// A scale bar's label.
+fn scale_bar(mm: f64) -> String {
+    format!("{mm:.0} mm")
+}
+
+/// A drawing's title.
+fn drawing_title(pose: &str) -> String {
+    format!("pose {pose}  (x y z mm, roll pitch yaw degrees)")
+}
+
+/// A drawing of a pose the platform takes.
+const DRAWING_REACHABLE: &str = "reachable: every leg reaches its joint within its servo's limits";
+
+/// A drawing of a pose the platform cannot take: its lines.
+fn drawing_refused(words: &str, arms_at: f64) -> Vec<String> {
+    let mut lines = vec![format!("refused: {words}")];
+    if arms_at < 1.0 {
+        lines.push(format!(
+            "the arms are drawn at the last reachable pose on the straight way from home ({:.0}% \
+             of the way); the dashed rod cannot meet its joint",
+            arms_at * 100.0
+        ));
+    }
+    lines
+}
+
 /// The picture of a model: four panels and a header with the pose and the verdict.
 pub fn scene(model: &Model, pose_text: &str) -> Scene {
     let mut scene = Scene::new(2.0 * PANEL[0], HEADER_PX + 2.0 * PANEL[1]);
     scene.text(
         "title",
         [12.0, 24.0],
-        &messages::drawing_title(pose_text),
+        &drawing_title(pose_text),
         18.0,
         Anchor::Start,
     );
     let (verdict_lines, colour) = match &model.verdict {
-        Verdict::Reachable => (vec![messages::DRAWING_REACHABLE.to_string()], "#1a7f37"),
-        Verdict::Refused { words, arms_at, .. } => {
-            (messages::drawing_refused(words, *arms_at), RED)
-        }
+        Verdict::Reachable => (vec![DRAWING_REACHABLE.to_string()], "#1a7f37"),
+        Verdict::Refused { words, arms_at, .. } => (drawing_refused(words, *arms_at), RED),
     };
     for (k, text) in verdict_lines.into_iter().enumerate() {
         scene.add(
@@ -363,7 +394,7 @@ fn panel(scene: &mut Scene, model: &Model, view: View, corner: [f64; 2], eye: f6
     scene.text(
         "view-title",
         [corner[0] + 10.0, corner[1] + 20.0],
-        messages::view_title(view),
+        view_title(view),
         14.0,
         Anchor::Start,
     );
@@ -537,85 +568,9 @@ fn panel(scene: &mut Scene, model: &Model, view: View, corner: [f64; 2], eye: f6
         scene.text(
             "scale-bar",
             [x0 + bar_mm * scale / 2.0, y - 5.0],
-            &messages::scale_bar(bar_mm),
+            &scale_bar(bar_mm),
             11.0,
             Anchor::Middle,
         );
     }
-}
-
-/// A pose typed as the firmware's `pose` command takes it (`x y z roll pitch yaw`, mm and
-/// degrees), read by the firmware's own parser; the board's words if it is not one.
-pub fn parse_pose(text: &str) -> Result<Pose, Problem> {
-    let line = format!("pose {text}");
-    match control::command::parse(&line.to_ascii_lowercase()) {
-        Ok(control::command::Command::Pose(pose)) => Ok(pose),
-        Ok(_) => Err(Problem::Pose {
-            pose: text.to_string(),
-            why: messages::NOT_A_POSE.to_string(),
-        }),
-        Err(e) => Err(Problem::Pose {
-            pose: text.to_string(),
-            why: messages::board_words(&control::Error::from(e)),
-        }),
-    }
-}
-
-/// The settings of a build file, or the defaults.
-pub fn settings_of(build: Option<&Path>) -> Result<Settings, Problem> {
-    match build {
-        Some(path) => Ok(read_build_file(path)?.settings),
-        None => Ok(Settings::default()),
-    }
-}
-
-/// Writes a scene as `stem.svg` and/or `stem.png`; the paths written.
-pub fn write_scene(
-    scene: &Scene,
-    stem: &Path,
-    svg: bool,
-    png: bool,
-) -> Result<Vec<String>, Problem> {
-    let text = scene.to_svg();
-    let mut written = Vec::new();
-    let file_problem = |path: &Path, error| Problem::File {
-        path: path.display().to_string(),
-        error,
-    };
-    if svg {
-        let path = stem.with_extension("svg");
-        std::fs::write(&path, &text).map_err(|e| file_problem(&path, e))?;
-        written.push(path.display().to_string());
-    }
-    if png {
-        let path = stem.with_extension("png");
-        let bytes =
-            picture::png(&text).map_err(|e| file_problem(&path, std::io::Error::other(e)))?;
-        std::fs::write(&path, bytes).map_err(|e| file_problem(&path, e))?;
-        written.push(path.display().to_string());
-    }
-    Ok(written)
-}
-
-/// `hexapod draw`.
-pub fn draw(
-    build: Option<&Path>,
-    pose_text: &str,
-    stem: &Path,
-    svg: bool,
-    png: bool,
-) -> Result<String, Problem> {
-    let settings = settings_of(build)?;
-    let pose = parse_pose(pose_text)?;
-    let shown: Vec<String> = pose_text.split_whitespace().map(str::to_string).collect();
-    let model = model(&settings, &pose).map_err(|why| Problem::Pose {
-        pose: pose_text.to_string(),
-        why,
-    })?;
-    let written = write_scene(&scene(&model, &shown.join(" ")), stem, svg, png)?;
-    let mut summary = messages::wrote_pictures(&written);
-    if let Verdict::Refused { words, .. } = &model.verdict {
-        summary = messages::drew_refused(&summary, words);
-    }
-    Ok(summary)
 }

@@ -1,5 +1,5 @@
-//! `hexapod uf2`: the firmware's UF2 file, and with `--settings build.toml` the settings
-//! sectors too, written exactly as the board's own `save` leaves them, so that one drag and
+//! What `hexapod uf2` writes besides the firmware's load segments: with `--settings build.toml`
+//! the settings sectors, written exactly as the board's own `save` leaves them, so that one drag and
 //! drop flashes firmware and calibration together.
 //!
 //! Where the sectors are is the firmware's: `memory.x` reserves them and names them
@@ -10,15 +10,12 @@
 //! sector by a previous `save` could otherwise be newer). The RP2040's bootloader erases each
 //! 4 KiB sector a file writes into, then programs the file's pages.
 
-use std::fs;
-use std::path::Path;
+use std::fmt;
 
 use control::settings::Settings;
 use control::store::{Store, PAGE_BYTES, SECTORS, SECTOR_BYTES, STORAGE_BYTES};
 
 use crate::elf::{self, Segment};
-use crate::messages::{self, Problem};
-use crate::{configure, uf2};
 
 /// The linker script's symbols for the settings storage.
 pub const SETTINGS_START: &str = "_settings_start";
@@ -37,6 +34,23 @@ pub enum StorageError {
         /// `_settings_end`.
         end: u32,
     },
+}
+
+impl fmt::Display for StorageError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            StorageError::NoSymbols => write!(
+                f,
+                "no {SETTINGS_START}/{SETTINGS_END} symbols: not a firmware with settings storage \
+                 (memory.x)"
+            ),
+            StorageError::BadStorage { start, end } => write!(
+                f,
+                "{SETTINGS_START}..{SETTINGS_END} = {start:#010x}..{end:#010x} is not two aligned \
+                 4 KiB sectors"
+            ),
+        }
+    }
 }
 
 /// The settings storage of a firmware ELF: its first address.
@@ -72,45 +86,6 @@ pub fn settings_segments(start: u32, settings: &Settings) -> Vec<Segment> {
             }
         })
         .collect()
-}
-
-/// `hexapod uf2 [ELF] [-o FILE] [--settings build.toml]`.
-pub fn write_uf2(
-    elf_path: &Path,
-    output: &Path,
-    settings: Option<&Path>,
-) -> Result<String, Problem> {
-    let elf_name = elf_path.display().to_string();
-    let elf_problem = |why: String| Problem::Elf {
-        path: elf_name.clone(),
-        why,
-    };
-    let file = fs::read(elf_path).map_err(|error| Problem::File {
-        path: elf_name.clone(),
-        error,
-    })?;
-    let mut segments = elf::load_segments(&file).map_err(|e| elf_problem(e.to_string()))?;
-    let firmware_bytes: usize = segments.iter().map(|s| s.bytes.len()).sum();
-    if let Some(path) = settings {
-        let build = configure::read_build_file(path)?;
-        let start = storage_start(&file)
-            .map_err(|e| elf_problem(e.to_string()))?
-            .map_err(|e| elf_problem(messages::storage_problem(&e)))?;
-        segments.extend(settings_segments(start, &build.settings));
-    }
-    let image = uf2::from_segments(&segments).map_err(|e| elf_problem(e.to_string()))?;
-    fs::write(output, &image).map_err(|error| Problem::File {
-        path: output.display().to_string(),
-        error,
-    })?;
-    let settings_name = settings.map(|p| p.display().to_string());
-    Ok(messages::wrote_uf2(
-        &output.display().to_string(),
-        image.len() / uf2::BLOCK_BYTES,
-        firmware_bytes.div_ceil(1024),
-        &elf_name,
-        settings_name.as_deref(),
-    ))
 }
 
 #[cfg(test)]

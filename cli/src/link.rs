@@ -21,7 +21,7 @@ use std::time::{Duration, Instant};
 
 use serialport::SerialPort;
 
-use crate::messages::{PortProblem, Problem};
+use crate::error::{Error, PortError};
 
 /// How long a read on the port blocks before the reader thread checks it is still wanted.
 const READ_POLL: Duration = Duration::from_millis(20);
@@ -110,18 +110,18 @@ pub struct Link {
 
 impl Link {
     /// Opens `port` at `baud` (8N1). Nothing is sent yet: see [`Link::start`].
-    pub fn open(port: &str, baud: u32, timeout: Duration) -> Result<Link, Problem> {
-        let problem = |why| Problem::Port {
+    pub fn open(port: &str, baud: u32, timeout: Duration) -> Result<Link, Error> {
+        let problem = |why| Error::Port {
             port: port.to_string(),
             why,
         };
         let writer = serialport::new(port, baud)
             .timeout(READ_POLL)
             .open()
-            .map_err(|e| problem(PortProblem::Open(e.to_string())))?;
+            .map_err(|e| problem(PortError::Open(e.to_string())))?;
         let reader = writer
             .try_clone()
-            .map_err(|e| problem(PortProblem::Open(e.to_string())))?;
+            .map_err(|e| problem(PortError::Open(e.to_string())))?;
         let (sender, lines) = mpsc::channel();
         let wanted = Arc::new(AtomicBool::new(true));
         let still_wanted = Arc::clone(&wanted);
@@ -140,8 +140,8 @@ impl Link {
         &self.port
     }
 
-    fn problem(&self, why: PortProblem) -> Problem {
-        Problem::Port {
+    fn problem(&self, why: PortError) -> Error {
+        Error::Port {
             port: self.port.clone(),
             why,
         }
@@ -149,7 +149,7 @@ impl Link {
 
     /// Makes the link a program's: abandons any partly typed line, lets what the board had to
     /// say go by, turns echo off and checks the board answers.
-    pub fn start(&mut self) -> Result<(), Problem> {
+    pub fn start(&mut self) -> Result<(), Error> {
         self.write(&[ABANDON_LINE])?;
         let until = Instant::now() + SETTLE;
         while self.next_line(until)?.is_some() {}
@@ -159,14 +159,14 @@ impl Link {
 
     /// Writes bytes as they are. (The port has no buffer of ours to flush; a serial port's
     /// `flush` would wait until the bytes have left, which is not this call's business.)
-    pub fn write(&mut self, bytes: &[u8]) -> Result<(), Problem> {
+    pub fn write(&mut self, bytes: &[u8]) -> Result<(), Error> {
         self.writer
             .write_all(bytes)
-            .map_err(|e| self.problem(PortProblem::Io(e.to_string())))
+            .map_err(|e| self.problem(PortError::Io(e.to_string())))
     }
 
     /// Sends one line (a line end is added).
-    pub fn send_line(&mut self, line: &str) -> Result<(), Problem> {
+    pub fn send_line(&mut self, line: &str) -> Result<(), Error> {
         let mut bytes = Vec::with_capacity(line.len() + 1);
         bytes.extend_from_slice(line.as_bytes());
         bytes.push(b'\n');
@@ -174,32 +174,32 @@ impl Link {
     }
 
     /// The next line received before `until`, or `None` if none came by then.
-    pub fn next_line(&mut self, until: Instant) -> Result<Option<Received>, Problem> {
+    pub fn next_line(&mut self, until: Instant) -> Result<Option<Received>, Error> {
         let wait = until.saturating_duration_since(Instant::now());
         match self.lines.recv_timeout(wait) {
             Ok(Ok(received)) => Ok(Some(received)),
-            Ok(Err(e)) => Err(self.problem(PortProblem::Io(e))),
+            Ok(Err(e)) => Err(self.problem(PortError::Io(e))),
             Err(RecvTimeoutError::Timeout) => Ok(None),
             Err(RecvTimeoutError::Disconnected) => {
-                Err(self.problem(PortProblem::Io("the port closed".to_string())))
+                Err(self.problem(PortError::Io("the port closed".to_string())))
             }
         }
     }
 
     /// A line received already, if any (does not wait).
-    pub fn try_line(&mut self) -> Result<Option<Received>, Problem> {
+    pub fn try_line(&mut self) -> Result<Option<Received>, Error> {
         self.next_line(Instant::now())
     }
 
     /// Sends a line and reads its reply (resynchronising after a `# warning:`, see the module
     /// documentation).
-    pub fn request(&mut self, line: &str) -> Result<Reply, Problem> {
+    pub fn request(&mut self, line: &str) -> Result<Reply, Error> {
         self.send_line(line)?;
         self.read_reply(line)
     }
 
     /// Reads the reply to `line`, just sent.
-    pub fn read_reply(&mut self, line: &str) -> Result<Reply, Problem> {
+    pub fn read_reply(&mut self, line: &str) -> Result<Reply, Error> {
         let until = Instant::now() + self.timeout;
         let mut reply = Reply {
             data: Vec::new(),
@@ -231,7 +231,7 @@ impl Link {
 
     /// After a warning: a line end, `status`, and its reply; the first final reply before it
     /// is `line`'s, if it got one.
-    fn resynchronise(&mut self, line: &str, mut reply: Reply) -> Result<Reply, Problem> {
+    fn resynchronise(&mut self, line: &str, mut reply: Reply) -> Result<Reply, Error> {
         self.send_line("")?;
         self.send_line("status")?;
         let until = Instant::now() + self.timeout;
@@ -263,19 +263,19 @@ impl Link {
                 reply.last = last;
                 Ok(reply)
             }
-            None => Err(self.problem(PortProblem::LineLost {
+            None => Err(self.problem(PortError::LineLost {
                 line: line.to_string(),
             })),
         }
     }
 
     /// [`Link::request`], and a refusal is an error (the board's words).
-    pub fn request_ok(&mut self, line: &str) -> Result<Reply, Problem> {
+    pub fn request_ok(&mut self, line: &str) -> Result<Reply, Error> {
         let reply = self.request(line)?;
         if reply.is_ok() {
             Ok(reply)
         } else {
-            Err(Problem::Refused {
+            Err(Error::Refused {
                 at: None,
                 port: self.port.clone(),
                 line: line.to_string(),
@@ -285,16 +285,16 @@ impl Link {
     }
 
     /// The error for a line that got no reply in time.
-    pub fn no_reply(&self, line: &str) -> Problem {
-        self.problem(PortProblem::NoReply {
+    pub fn no_reply(&self, line: &str) -> Error {
+        self.problem(PortError::NoReply {
             line: line.to_string(),
             waited_s: self.timeout.as_secs_f64(),
         })
     }
 
     /// The error for a reply that cannot be read.
-    pub fn unreadable(&self, line: &str, reply: &str) -> Problem {
-        self.problem(PortProblem::Unreadable {
+    pub fn unreadable(&self, line: &str, reply: &str) -> Error {
+        self.problem(PortError::Unreadable {
             line: line.to_string(),
             reply: reply.to_string(),
         })

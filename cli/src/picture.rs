@@ -2,9 +2,13 @@
 //! SVG by hand, and rendered to PNG by `resvg` with the DejaVu Sans font embedded in the tool
 //! (the `dejavu` crate ships it under its free licence), so PNG text never depends on the
 //! fonts a machine has. Every item may carry a class and `data-*` attributes (the millimetres
-//! it stands for), which is what the tests read back.
+//! it stands for), which is what the tests read back. [`write_scene`] writes a scene as the
+//! files a subcommand was asked for.
 
 use std::fmt::Write as _;
+use std::path::Path;
+
+use crate::error::Error;
 
 /// The font every text is set in (embedded for PNG).
 pub const FONT: &str = "DejaVu Sans";
@@ -301,6 +305,33 @@ pub fn png(svg: &str) -> Result<Vec<u8>, String> {
         &mut pixmap.as_mut(),
     );
     pixmap.encode_png().map_err(|e| e.to_string())
+}
+
+/// Writes a scene as `stem.svg` and/or `stem.png`; the paths written.
+pub fn write_scene(
+    scene: &Scene,
+    stem: &Path,
+    as_svg: bool,
+    as_png: bool,
+) -> Result<Vec<String>, Error> {
+    let text = scene.to_svg();
+    let mut written = Vec::new();
+    let file_problem = |path: &Path, error| Error::File {
+        path: path.display().to_string(),
+        error,
+    };
+    if as_svg {
+        let path = stem.with_extension("svg");
+        std::fs::write(&path, &text).map_err(|e| file_problem(&path, e))?;
+        written.push(path.display().to_string());
+    }
+    if as_png {
+        let path = stem.with_extension("png");
+        let bytes = png(&text).map_err(|e| file_problem(&path, std::io::Error::other(e)))?;
+        std::fs::write(&path, bytes).map_err(|e| file_problem(&path, e))?;
+        written.push(path.display().to_string());
+    }
+    Ok(written)
 }
 
 #[cfg(test)]

@@ -1,5 +1,5 @@
-//! `describe`, `workspace` and `torque`: a platform sized before it is built, with the
-//! kinematics toolkit (`kinematics-core`): the IK with the servo limits as the test of what is
+//! The numbers of `describe`, `workspace` and `torque`: a platform sized before it is built,
+//! with the kinematics toolkit (`kinematics-core`): the IK with the servo limits as the test of what is
 //! reachable, `workspace::Limits` for the reach along each axis, `statics` for stiffness and
 //! the holding torques of a payload, `dynamics::actuation` for the torques along a trajectory
 //! (inertia included). Nothing here re-derives the kinematics.
@@ -11,11 +11,14 @@
 //! over). Only the servos' stiffness is the host's (`[sizing]`).
 //!
 //! Units: mm, degrees for what users read (rad inside), s; torques in kgf cm
-//! (`statics::N_MM_PER_KGF_CM`), like servo ratings.
+//! (`statics::N_MM_PER_KGF_CM`), like servo ratings. The words both `describe` and `torque`
+//! write (a pose, the payload, the ratings' verdict) are at the end; the plots are
+//! `workspace_plot` and `torque_plot`, each subcommand's own text its `cmd/` file's.
 
 use std::path::Path;
 
 use control::payload::PayloadSettings;
+use control::report::kinematics_refusal;
 use control::settings::Settings;
 use kinematics_core::dynamics::{actuation, Acceleration};
 use kinematics_core::ik::{IkError, Solver};
@@ -26,13 +29,10 @@ use kinematics_core::statics::{self, N_MM_PER_KGF_CM};
 use kinematics_core::workspace::{self, Grid, Limit, Limits, Reach};
 use kinematics_core::{Libm, Pose, LEGS};
 
-use crate::configure::read_build_file;
-use crate::draw::write_scene;
-use crate::messages::{self, Problem};
-use crate::picture::{Anchor, Scene, Shape, Style};
-use crate::plot::{self, Axes, PALETTE};
+use crate::build_file::{self, DEFAULT_PLATFORM};
+use crate::error::{board_words, Error, KeyError};
 use crate::sizing::Sizing;
-use crate::trajectory::{self, Mode, Row};
+use crate::trajectory::Row;
 
 /// A platform to size: its settings (the board's, payload and ratings included) and sizing
 /// (the host's).
@@ -50,24 +50,24 @@ pub struct Platform {
 
 impl Platform {
     /// The platform of a build file, or the default platform.
-    pub fn load(build: Option<&Path>) -> Result<Platform, Problem> {
+    pub fn load(build: Option<&Path>) -> Result<Platform, Error> {
         let (source, settings, sizing) = match build {
             Some(path) => {
-                let file = read_build_file(path)?;
+                let file = build_file::read(path)?;
                 (path.display().to_string(), file.settings, file.sizing)
             }
             None => (
-                messages::DEFAULT_PLATFORM.to_string(),
+                DEFAULT_PLATFORM.to_string(),
                 Settings::default(),
                 Sizing::default(),
             ),
         };
         // A build file's settings are valid (checked as it was read); the defaults are.
-        let solver = settings.validate().map_err(|e| Problem::Key {
+        let solver = settings.validate().map_err(|e| Error::Key {
             file: source.clone(),
             line: 0,
             key: String::new(),
-            why: messages::KeyProblem::Refused(Box::new(e.into())),
+            why: KeyError::Refused(Box::new(e.into())),
         })?;
         Ok(Platform {
             source,
@@ -281,11 +281,6 @@ pub fn describe(platform: Platform) -> Description {
     }
 }
 
-/// `hexapod describe`.
-pub fn describe_command(build: Option<&Path>) -> Result<String, Problem> {
-    Ok(messages::description(&describe(Platform::load(build)?)))
-}
-
 // ----- workspace -----
 
 /// How far the platform reaches from `from` along a direction (unit, in pose coordinates: mm
@@ -378,205 +373,12 @@ pub fn travel_grid(
     cells
 }
 
-/// The three workspace plots in one picture.
-pub fn workspace_scene(platform: &Platform) -> Scene {
-    let mut scene = Scene::new(1560.0, 560.0);
-    scene.text(
-        "title",
-        [14.0, 26.0],
-        &messages::workspace_title(&platform.source),
-        17.0,
-        Anchor::Start,
-    );
-    let reach = reach_from_home(platform);
-    // 1. x-y sections at several heights.
-    let heights = [-10.0f32, -5.0, 0.0, 5.0, 10.0];
-    let limit = reach
-        .iter()
-        .filter(|r| !r.axis.is_angle())
-        .map(|r| r.distance)
-        .fold(10.0f32, f32::max)
-        * 1.2;
-    let sections: Vec<(f32, Option<Vec<[f64; 2]>>)> = heights
-        .iter()
-        .map(|&z| (z, section(platform, z, limit)))
-        .collect();
-    let extent = sections
-        .iter()
-        .filter_map(|(_, s)| s.as_ref())
-        .flatten()
-        .fold(5.0f64, |m, p| m.max(p[0].abs()).max(p[1].abs()));
-    let (lo, hi) = plot::nice_range(-extent, extent);
-    let axes = Axes {
-        left: 80.0,
-        top: 80.0,
-        width: 380.0,
-        height: 380.0,
-        x: (lo, hi),
-        y: (lo, hi),
-        y_ticks: true,
-    };
-    axes.draw(&mut scene, messages::SECTIONS_TITLE, "x (mm)", "y (mm)");
-    let mut entries = Vec::new();
-    for (k, (z, points)) in sections.iter().enumerate() {
-        let colour = PALETTE[k];
-        match points {
-            Some(points) => {
-                let mut closed = points.clone();
-                closed.push(points[0]);
-                axes.line(&mut scene, "section", &closed, Style::stroke(colour, 2.0));
-                entries.push((colour, messages::section_label(*z, true), false));
-            }
-            None => entries.push((colour, messages::section_label(*z, false), true)),
-        }
-    }
-    plot::legend(&mut scene, [axes.left + 10.0, axes.top + 14.0], &entries);
-
-    // 2. Vertical travel against roll and pitch.
-    let tilt = 20.0;
-    let count = 21;
-    let cells = travel_grid(platform, tilt, count, limit.max(20.0));
-    let most = cells.iter().map(|c| c.2).fold(1.0f32, f32::max);
-    let axes = Axes {
-        left: 600.0,
-        top: 80.0,
-        width: 380.0,
-        height: 380.0,
-        x: (-f64::from(tilt), f64::from(tilt)),
-        y: (-f64::from(tilt), f64::from(tilt)),
-        y_ticks: true,
-    };
-    let cell = 2.0 * f64::from(tilt) / (count - 1) as f64;
-    for &(roll, pitch, travel) in &cells {
-        let (r, p) = (f64::from(roll), f64::from(pitch));
-        let a = axes.px(
-            (r - cell / 2.0).max(axes.x.0),
-            (p - cell / 2.0).max(axes.y.0),
-        );
-        let b = axes.px(
-            (r + cell / 2.0).min(axes.x.1),
-            (p + cell / 2.0).min(axes.y.1),
-        );
-        let fill = if travel < 0.0 {
-            "#bbbbbb"
-        } else {
-            plot::colour_scale(f64::from(travel / most))
-        };
-        let item = scene.add(
-            "travel",
-            Shape::Path {
-                points: vec![[a[0], a[1]], [b[0], a[1]], [b[0], b[1]], [a[0], b[1]]],
-                closed: true,
-            },
-            Style::fill(fill),
-        );
-        item.data.extend([
-            ("roll-deg".to_string(), format!("{roll:.2}")),
-            ("pitch-deg".to_string(), format!("{pitch:.2}")),
-            ("travel-mm".to_string(), format!("{travel:.2}")),
-        ]);
-    }
-    axes.draw(
-        &mut scene,
-        messages::TRAVEL_TITLE,
-        "roll (degrees)",
-        "pitch (degrees)",
-    );
-    plot::colour_bar(
-        &mut scene,
-        [1000.0, 90.0],
-        360.0,
-        0.0,
-        f64::from(most),
-        messages::TRAVEL_UNIT,
-    );
-
-    // 3. Reach along each axis from home.
-    let farthest = reach
-        .iter()
-        .map(|r| f64::from(display(r)))
-        .fold(1.0, f64::max);
-    let axes = Axes {
-        left: 1180.0,
-        top: 80.0,
-        width: 340.0,
-        height: 380.0,
-        x: plot::nice_range(-farthest, farthest),
-        y: (0.0, 6.0),
-        y_ticks: false,
-    };
-    axes.draw(&mut scene, messages::REACH_TITLE, messages::REACH_UNIT, "");
-    for (k, axis) in Axis::ALL.into_iter().enumerate() {
-        let (minus, plus) = (&reach[2 * k], &reach[2 * k + 1]);
-        let y = 5.5 - k as f64;
-        let a = axes.px(-f64::from(display(minus)), y + 0.3);
-        let b = axes.px(f64::from(display(plus)), y - 0.3);
-        let item = scene.add(
-            "reach",
-            Shape::Path {
-                points: vec![[a[0], a[1]], [b[0], a[1]], [b[0], b[1]], [a[0], b[1]]],
-                closed: true,
-            },
-            Style::fill(PALETTE[if axis.is_angle() { 1 } else { 0 }]).opacity(0.8),
-        );
-        item.data.extend([
-            ("axis".to_string(), axis.name().to_string()),
-            ("min".to_string(), format!("{:.3}", -display(minus))),
-            ("max".to_string(), format!("{:.3}", display(plus))),
-        ]);
-        scene.text(
-            "reach-label",
-            [axes.left - 8.0, axes.px(0.0, y)[1] + 4.0],
-            &messages::axis_with_unit(axis),
-            12.0,
-            Anchor::End,
-        );
-        scene.text(
-            "reach-value",
-            [b[0] + 4.0, axes.px(0.0, y)[1] + 4.0],
-            &messages::reach_span(-display(minus), display(plus)),
-            10.0,
-            Anchor::Start,
-        );
-    }
-    plot::legend(
-        &mut scene,
-        [axes.left + 10.0, axes.top + axes.height + 48.0],
-        &[
-            (PALETTE[0], messages::TRANSLATIONS.to_string(), false),
-            (PALETTE[1], messages::ROTATIONS.to_string(), false),
-        ],
-    );
-    scene
-}
-
-/// A reach in the unit users read: mm or degrees.
-fn display(reach: &Reach<IkError>) -> f32 {
-    if reach.axis.is_angle() {
-        reach.distance.to_degrees()
-    } else {
-        reach.distance
-    }
-}
-
 /// What stops a reach, in the board's words.
 pub fn limit_words(limit: &Limit<IkError>) -> String {
     match limit {
-        Limit::Blocked(e) | Limit::Start(e) => messages::board_words(&(*e).into()),
-        Limit::Range => messages::SEARCH_RANGE.to_string(),
+        Limit::Blocked(e) | Limit::Start(e) => board_words(&(*e).into()),
+        Limit::Range => SEARCH_RANGE.to_string(),
     }
-}
-
-/// `hexapod workspace`.
-pub fn workspace_command(
-    build: Option<&Path>,
-    stem: &Path,
-    svg: bool,
-    png: bool,
-) -> Result<String, Problem> {
-    let platform = Platform::load(build)?;
-    let written = write_scene(&workspace_scene(&platform), stem, svg, png)?;
-    Ok(messages::wrote_pictures(&written))
 }
 
 // ----- torque -----
@@ -628,13 +430,13 @@ pub fn trajectory_torques(
                 &acceleration,
             )
             .map(|t| t.map(|nmm| nmm / N_MM_PER_KGF_CM))
-            .map_err(|e| (rows[i].line, messages::kinematics_words(&e)))
+            .map_err(|e| (rows[i].line, kinematics_refusal(&e).to_string()))
         })
         .collect()
 }
 
 /// Each servo's largest torque (by magnitude) along a trajectory.
-fn worst_along(rows: &[Row], torques: &[[f32; LEGS]]) -> [Option<Worst>; LEGS] {
+pub fn worst_along(rows: &[Row], torques: &[[f32; LEGS]]) -> [Option<Worst>; LEGS] {
     let mut worst: [Option<Worst>; LEGS] = [None; LEGS];
     for (row, t) in rows.iter().zip(torques) {
         for (i, &v) in t.iter().enumerate() {
@@ -650,55 +452,6 @@ fn worst_along(rows: &[Row], torques: &[[f32; LEGS]]) -> [Option<Worst>; LEGS] {
         }
     }
     worst
-}
-
-/// `hexapod torque`: over the sizing grid, or along a trajectory. Needs a payload
-/// (`payload_g` above 0): without one every torque is 0 and nothing is plotted.
-pub fn torque_command(
-    build: Option<&Path>,
-    trajectory_file: Option<&Path>,
-    stem: &Path,
-    svg: bool,
-    png: bool,
-) -> Result<String, Problem> {
-    let platform = Platform::load(build)?;
-    if !platform.payload().carried() {
-        return Err(Problem::NoPayload {
-            source: platform.source,
-        });
-    }
-    let (scene, report) = match trajectory_file {
-        None => {
-            let reach = reach_from_home(&platform);
-            let grid = sizing_grid(&reach);
-            let (worst, reached) = worst_per_servo(&platform, &grid);
-            let report = messages::grid_torque_report(&platform, &worst, reached, grid.len());
-            (grid_torque_scene(&platform, &worst), report)
-        }
-        Some(path) => {
-            let file = path.display().to_string();
-            let rows = trajectory::read(path)?;
-            // Every row within reach; the ratings are what this reports on, not a refusal.
-            let mut unrated = platform.settings;
-            unrated.payload.torque_kgcm = [0.0; LEGS];
-            trajectory::prepare(&file, &rows, &unrated, Mode::Text)?;
-            let torques =
-                trajectory_torques(&platform, &rows).map_err(|(line, why)| Problem::Row {
-                    file: file.clone(),
-                    line,
-                    field: None,
-                    why: messages::RowProblem::Refused(why),
-                })?;
-            let worst = worst_along(&rows, &torques);
-            let report = messages::trajectory_torque_report(&file, &platform, &worst, rows.len());
-            (
-                trajectory_torque_scene(&platform, &file, &rows, &torques),
-                report,
-            )
-        }
-    };
-    let written = write_scene(&scene, stem, svg, png)?;
-    Ok(format!("{report}\n{}", messages::wrote_pictures(&written)))
 }
 
 /// The servos that have a rating, grouped by rating (kgf cm), in servo order: each rating with
@@ -717,168 +470,101 @@ pub fn ratings(platform: &Platform) -> Vec<(f32, Vec<usize>)> {
     groups
 }
 
-/// Bars: each servo's worst holding torque over the grid, each against its own rating (a
-/// dashed mark over its bar; none where it has no rating).
-fn grid_torque_scene(platform: &Platform, worst: &[Option<Worst>; LEGS]) -> Scene {
-    let mut scene = Scene::new(860.0, 480.0);
-    let rated = platform.payload().torque_kgcm.map(f64::from);
-    let top = worst
-        .iter()
-        .flatten()
-        .map(|w| f64::from(w.torque_kgcm.abs()))
-        .chain(rated)
-        .fold(0.01, f64::max);
-    let axes = Axes {
-        left: 90.0,
-        top: 60.0,
-        width: 460.0,
-        height: 340.0,
-        x: (0.5, 6.5),
-        y: plot::nice_range(0.0, top * 1.1),
-        y_ticks: true,
-    };
-    axes.draw(
-        &mut scene,
-        &messages::grid_torque_title(&platform.source, platform.payload()),
-        messages::SERVO_AXIS,
-        messages::TORQUE_AXIS,
-    );
-    for (i, w) in worst.iter().enumerate() {
-        let x = i as f64 + 1.0;
-        let value = w.map_or(0.0, |w| w.torque_kgcm.abs());
-        let a = axes.px(x - 0.3, f64::from(value));
-        let b = axes.px(x + 0.3, 0.0);
-        let over = matches!(platform.verdict(i as u8 + 1, value), Verdict::Over { .. });
-        let item = scene.add(
-            "torque-bar",
-            Shape::Path {
-                points: vec![[a[0], a[1]], [b[0], a[1]], [b[0], b[1]], [a[0], b[1]]],
-                closed: true,
-            },
-            Style::fill(if over { "#d55e00" } else { PALETTE[0] }).opacity(0.85),
-        );
-        item.data.extend([
-            ("servo".to_string(), (i + 1).to_string()),
-            ("kgf-cm".to_string(), format!("{value:.4}")),
-        ]);
-        scene.text(
-            "bar-value",
-            [(a[0] + b[0]) / 2.0, a[1] - 5.0],
-            &format!("{value:.2}"),
-            11.0,
-            Anchor::Middle,
-        );
-        if rated[i] > 0.0 {
-            let left = axes.px(x - 0.45, rated[i]);
-            let right = axes.px(x + 0.45, rated[i]);
-            let item = scene.add(
-                "rating",
-                Shape::Line(left, right),
-                Style::stroke("#d00000", 2.0).dashed(),
-            );
-            item.data.extend([
-                ("servo".to_string(), (i + 1).to_string()),
-                ("kgf-cm".to_string(), format!("{:.2}", rated[i])),
-            ]);
-        }
-    }
-    let mut entries = vec![(PALETTE[0], messages::WORST_HOLDING.to_string(), false)];
-    let groups = ratings(platform);
-    if groups.is_empty() {
-        entries.push(("#bbbbbb", messages::NOT_RATED.to_string(), false));
-    } else {
-        entries.push(("#d55e00", messages::OVER_RATING.to_string(), false));
-        entries.extend(
-            groups
-                .into_iter()
-                .map(|(r, servos)| ("#d00000", messages::rating_label(r, &servos), true)),
-        );
-    }
-    plot::legend(
-        &mut scene,
-        [axes.left + axes.width + 20.0, axes.top + 10.0],
-        &entries,
-    );
-    scene
-}
-
-/// Lines: each servo's torque against time along a trajectory, and each rating either way.
-fn trajectory_torque_scene(
-    platform: &Platform,
-    file: &str,
-    rows: &[Row],
-    torques: &[[f32; LEGS]],
-) -> Scene {
-    let mut scene = Scene::new(990.0, 480.0);
-    let groups = ratings(platform);
-    let top = torques
-        .iter()
-        .flatten()
-        .map(|t| f64::from(t.abs()))
-        .chain(groups.iter().map(|(r, _)| f64::from(*r)))
-        .fold(0.01, f64::max)
-        * 1.1;
-    let (t0, t1) = (
-        rows[0].time_s,
-        rows[rows.len() - 1].time_s.max(rows[0].time_s + 1e-3),
-    );
-    let axes = Axes {
-        left: 90.0,
-        top: 60.0,
-        width: 600.0,
-        height: 340.0,
-        x: (t0, t1),
-        y: plot::nice_range(-top, top),
-        y_ticks: true,
-    };
-    axes.draw(
-        &mut scene,
-        &messages::trajectory_torque_title(file, platform.payload()),
-        messages::TIME_AXIS,
-        messages::TORQUE_AXIS,
-    );
-    let mut entries = Vec::new();
-    for i in 0..LEGS {
-        let points: Vec<[f64; 2]> = rows
-            .iter()
-            .zip(torques)
-            .map(|(r, t)| [r.time_s, f64::from(t[i])])
-            .collect();
-        axes.line(
-            &mut scene,
-            "torque",
-            &points,
-            Style::stroke(PALETTE[i], 1.6),
-        );
-        entries.push((PALETTE[i], messages::servo_label(i + 1), false));
-    }
-    for (rating, servos) in &groups {
-        for sign in [1.0, -1.0] {
-            let y = axes.px(0.0, sign * f64::from(*rating))[1];
-            let item = scene.add(
-                "rating",
-                Shape::Line([axes.left, y], [axes.left + axes.width, y]),
-                Style::stroke("#d00000", 1.5).dashed(),
-            );
-            item.data.push((
-                "kgf-cm".to_string(),
-                format!("{:.2}", sign * f64::from(*rating)),
-            ));
-        }
-        entries.push(("#d00000", messages::rating_label(*rating, servos), true));
-    }
-    if groups.is_empty() {
-        entries.push(("#bbbbbb", messages::NOT_RATED.to_string(), false));
-    }
-    plot::legend(
-        &mut scene,
-        [axes.left + axes.width + 20.0, axes.top + 10.0],
-        &entries,
-    );
-    scene
-}
-
 /// The platform's joints' height at home, for tests: h0, mm.
 pub fn home_height_mm(platform: &Platform) -> f32 {
     platform.solver.geometry().home_height_mm()
+}
+
+// ----- words shared by describe and torque -----
+
+/// What stops a search that found no limit.
+const SEARCH_RANGE: &str = "nothing within the search range (100 mm, 180 degrees)";
+
+/// A pose in words: mm and degrees, one decimal.
+pub fn pose_words(pose: &Pose) -> String {
+    let [x, y, z, roll, pitch, yaw] = pose.to_array();
+    format!(
+        "x={x:.1} y={y:.1} z={z:.1} mm, roll={:.1} pitch={:.1} yaw={:.1} degrees",
+        roll.to_degrees(),
+        pitch.to_degrees(),
+        yaw.to_degrees()
+    )
+}
+
+/// Servos `1, 2, 4` as words: `servo 2`, `servos 1, 2, 4`, `servos 1-6`.
+pub fn servo_list(servos: &[usize]) -> String {
+    match servos {
+        [one] => format!("servo {one}"),
+        [1, 2, 3, 4, 5, 6] => "servos 1-6".to_string(),
+        _ => {
+            let numbers: Vec<String> = servos.iter().map(ToString::to_string).collect();
+            format!("servos {}", numbers.join(", "))
+        }
+    }
+}
+
+/// The payload: its mass and centre of mass.
+pub fn payload_words(payload: &PayloadSettings) -> String {
+    let [x, y, z] = payload.com_mm;
+    format!(
+        "{} g at ({x}, {y}, {z}) mm in the platform frame",
+        payload.mass_g
+    )
+}
+
+/// Every servo's worst torque against its rating, in a line: which are over, or the one
+/// nearest its rating; the servos without one.
+pub fn ratings_summary(p: &Platform, per_servo: &[Option<Worst>; 6]) -> String {
+    let head = "ratings (servoN.torque_kgcm):";
+    let unrated: Vec<usize> = (1..=6)
+        .filter(|&n| p.verdict(n as u8, 0.0) == Verdict::NotRated)
+        .collect();
+    if unrated.len() == 6 {
+        return format!("{head} the servos are not rated: torques without a verdict");
+    }
+    let judged: Vec<(u8, f32, Verdict)> = per_servo
+        .iter()
+        .flatten()
+        .map(|w| {
+            let t = w.torque_kgcm.abs();
+            (w.servo, t, p.verdict(w.servo, t))
+        })
+        .collect();
+    let over: Vec<String> = judged
+        .iter()
+        .filter_map(|&(servo, t, v)| match v {
+            Verdict::Over {
+                rating_kgcm,
+                percent,
+            } => Some(format!(
+                "servo {servo} needs {t:.3} kgf cm, rated {rating_kgcm} ({percent:.0}%)"
+            )),
+            _ => None,
+        })
+        .collect();
+    let mut out = if !over.is_empty() {
+        format!("{head} OVER: {}", over.join("; "))
+    } else {
+        let nearest = judged
+            .iter()
+            .filter_map(|&(servo, t, v)| match v {
+                Verdict::Within {
+                    rating_kgcm,
+                    percent,
+                } => Some((servo, t, rating_kgcm, percent)),
+                _ => None,
+            })
+            .max_by(|a, b| a.3.total_cmp(&b.3));
+        match nearest {
+            Some((servo, t, rating, percent)) => format!(
+                "{head} all within: servo {servo} nearest its rating, {t:.3} of {rating} kgf cm \
+                 ({percent:.0}%)"
+            ),
+            None => format!("{head} no torque to judge (no reachable pose)"),
+        }
+    };
+    if !unrated.is_empty() {
+        out += &format!("; {} not rated", servo_list(&unrated));
+    }
+    out
 }

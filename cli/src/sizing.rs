@@ -10,13 +10,27 @@
 
 use control::settings::{ServoParam, ServoSel, SettingId};
 
-use crate::messages::SizingProblem;
+use crate::error::SizingError;
 
 /// The table's name with the dot of its keys.
 pub const SIZING_TABLE: &str = "sizing.";
 
 /// Its keys, in file order.
 pub const KEYS: [&str; 1] = ["servo_stiffness_nmm_rad"];
+
+/// The table's heading in a build file, with what it is for.
+pub const HEADER: &str = "\n\
+# Host-only: the servos' holding stiffness, for `describe` (the platform's stiffness, how far\n\
+# the payload's weight moves it). The board has no such setting: `apply` never sends it.\n\
+[sizing]\n";
+
+/// What a key is, for a build file's comments.
+pub fn meaning(key: &str) -> &'static str {
+    match key {
+        "servo_stiffness_nmm_rad" => "each servo's holding stiffness, N mm/rad",
+        _ => "",
+    }
+}
 
 /// The host-only numbers of a platform.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -50,16 +64,16 @@ pub fn moved(key: &str) -> Option<(SettingId, f32)> {
 impl Sizing {
     /// Sets one key (without `sizing.`) to a number, refusing unknown keys, keys that are the
     /// board's settings now, and values out of range.
-    pub fn set(&mut self, key: &str, value: Option<f32>) -> Result<(), SizingProblem> {
+    pub fn set(&mut self, key: &str, value: Option<f32>) -> Result<(), SizingError> {
         let (slot, min, max, unit) = match key {
             "servo_stiffness_nmm_rad" => (&mut self.servo_stiffness_nmm_rad, 1.0, 1e9, "N mm/rad"),
             _ => {
                 return Err(match moved(key) {
-                    Some((setting, factor)) => SizingProblem::Moved {
+                    Some((setting, factor)) => SizingError::Moved {
                         setting,
                         value: value.map(|v| v * factor),
                     },
-                    None => SizingProblem::Unknown,
+                    None => SizingError::Unknown { keys: &KEYS },
                 })
             }
         };
@@ -68,7 +82,7 @@ impl Sizing {
                 *slot = v;
                 Ok(())
             }
-            _ => Err(SizingProblem::Range { min, max, unit }),
+            _ => Err(SizingError::Range { min, max, unit }),
         }
     }
 

@@ -1,5 +1,6 @@
 //! `stream` (and `demo --port`): a trajectory sent to a board at its own timing, each row when
-//! its time comes (wall clock, from a start 100 ms after the last check).
+//! its time comes (wall clock, from a start 100 ms after the last check), after every row was
+//! checked against the board's own settings ([`stream_checked`]); the summary in words.
 //!
 //! - **Binary** (default): a compact stream frame per row (README, "Streaming from
 //!   motion-simulator software"). Frames get no reply, so their own latency cannot be seen from
@@ -20,9 +21,10 @@ use std::time::{Duration, Instant};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::board::{self, StreamCounters};
+use crate::error::Error;
 use crate::link::{is_final, is_notice, Link};
-use crate::messages::{self, Problem};
-use crate::trajectory::{Message, Mode, Row};
+use crate::messages;
+use crate::trajectory::{self, Message, Mode, Row};
 
 /// When the first row goes, after the checks.
 const START_DELAY: Duration = Duration::from_millis(100);
@@ -38,6 +40,14 @@ pub struct Options {
     pub late_after: Duration,
     /// Show a progress bar (on a terminal).
     pub progress: bool,
+}
+
+/// The progress bar of `stream` (indicatif's template).
+const PROGRESS_TEMPLATE: &str = "{bar:40} {pos}/{len} rows  {elapsed_precise}";
+
+/// A row the board refused during a stream.
+fn row_refused(line: u64, sent: &str, reply: &str) -> String {
+    format!("line {line}: the board refused '{sent}': {reply}")
 }
 
 /// A refused row: its line in the file and the board's reply.
@@ -83,6 +93,93 @@ impl Summary {
                 .counters
                 .is_some_and(|c| c.damaged > 0 || c.refused > 0 || c.frames != self.sent as u64)
     }
+
+    /// The summary in words: `file` streamed to `port`.
+    pub fn words(&self, file: &str, port: &str) -> String {
+        let s = self;
+        let mut out = String::new();
+        let how = match s.mode {
+            Mode::Binary => "binary frames",
+            Mode::Text => "pose lines",
+        };
+        out += &format!(
+            "{file}: {} rows sent to {port} as {how} in {:.2} s\n",
+            s.sent, s.duration_s
+        );
+        match (s.mode, &s.counters) {
+            (Mode::Binary, Some(c)) => {
+                out += &format!(
+                    "  frames sent: {}; the board counted frames={} applied={} damaged={} \
+                     clamped={} refused={}\n",
+                    s.sent, c.frames, c.applied, c.damaged, c.clamped, c.refused
+                );
+            }
+            _ => {
+                out += &format!(
+                    "  lines sent: {}, ok: {}, refused: {}\n",
+                    s.sent,
+                    s.sent - s.refusals.len(),
+                    s.refusals.len()
+                );
+            }
+        }
+        let what = match s.mode {
+            Mode::Binary => {
+                "status lines sent during the stream, line to reply; frames get no \
+                             reply, so their own latency cannot be seen from the host"
+            }
+            Mode::Text => "each pose line to its reply",
+        };
+        match min_median_max(&s.round_trips_ms) {
+            Some((min, median, max)) => {
+                out += &format!(
+                    "  round trip ({what}): {} samples, min {min:.2} ms, median {median:.2} ms, \
+                     max {max:.2} ms\n",
+                    s.round_trips_ms.len()
+                )
+            }
+            None => out += &format!("  round trip ({what}): no samples\n"),
+        }
+        out += &format!(
+            "  late rows (sent more than {:.1} ms after their time): {} (latest {:.2} ms)\n",
+            s.late_after_ms, s.late, s.worst_late_ms
+        );
+        let errors = s.refusals.len() + s.notices.len();
+        out += &format!("  errors: {errors}");
+        if let Some(first) = s.refusals.first() {
+            out += &format!(" (first: line {}: {})", first.line, first.reply);
+        } else if let Some(first) = s.notices.first() {
+            out += &format!(" (first: {first})");
+        }
+        out
+    }
+}
+
+/// Reads the board's settings (`config`), checks every row against them as the board will get
+/// it (`trajectory::prepare`), streams them; the summary, or, if the stream did not go through
+/// whole, the summary printed and an error.
+pub fn stream_checked(
+    link: &mut Link,
+    file: &str,
+    rows: &[Row],
+    options: &Options,
+) -> Result<String, Error> {
+    let settings = board::read_settings(link)?;
+    let to_send = trajectory::prepare(file, rows, &settings, options.mode)?;
+    let summary = run(link, rows, &to_send, options)?;
+    let text = summary.words(file, link.port());
+    if !summary.has_errors() {
+        return Ok(text);
+    }
+    messages::summary(&text);
+    let c = summary.counters.unwrap_or_default();
+    Err(Error::StreamTrouble {
+        file: file.to_string(),
+        refused: summary.refusals.len(),
+        notices: summary.notices.len(),
+        lost_frames: (summary.sent as u64).saturating_sub(c.frames) + c.damaged,
+        refused_frames: c.refused,
+    })
 }
 
 /// Sends `messages` (one per row of `rows`) at the rows' times. The link must be started.
@@ -91,14 +188,14 @@ pub fn run(
     rows: &[Row],
     messages: &[Message],
     options: &Options,
-) -> Result<Summary, Problem> {
+) -> Result<Summary, Error> {
     let before = match options.mode {
         Mode::Binary => Some(board::read_counters(link)?),
         Mode::Text => None,
     };
     let bar = if options.progress {
         let bar = ProgressBar::new(rows.len() as u64);
-        if let Ok(style) = ProgressStyle::with_template(messages::PROGRESS_TEMPLATE) {
+        if let Ok(style) = ProgressStyle::with_template(PROGRESS_TEMPLATE) {
             bar.set_style(style.progress_chars("=> "));
         }
         bar
@@ -161,9 +258,7 @@ pub fn run(
                     summary.notices.push(notice.clone());
                 }
                 if !reply.is_ok() {
-                    bar.suspend(|| {
-                        eprintln!("{}", messages::row_refused(row.line, line, &reply.last))
-                    });
+                    bar.suspend(|| eprintln!("{}", row_refused(row.line, line, &reply.last)));
                     summary.refusals.push(RowRefusal {
                         line: row.line,
                         reply: reply.last,

@@ -21,7 +21,7 @@ use kinematics_core::ik::Solver;
 use kinematics_core::pose::Axis;
 use kinematics_core::{Libm, Pose};
 
-use crate::messages::{board_words, Problem, RowProblem};
+use crate::error::{board_words, Error, RowError};
 
 /// The columns, in pose order after time.
 pub const COLUMNS: [&str; 7] = ["time", "x", "y", "z", "roll", "pitch", "yaw"];
@@ -56,15 +56,15 @@ pub enum Message {
 }
 
 /// Reads a trajectory file.
-pub fn read(path: &Path) -> Result<Vec<Row>, Problem> {
+pub fn read(path: &Path) -> Result<Vec<Row>, Error> {
     let file = path.display().to_string();
-    let text = crate::configure::read_text(path)?;
+    let text = crate::files::read_text(path)?;
     parse(&file, &text)
 }
 
 /// Reads a trajectory's text; `file` names it in errors.
-pub fn parse(file: &str, text: &str) -> Result<Vec<Row>, Problem> {
-    let problem = |line: u64, field: Option<&str>, why| Problem::Row {
+pub fn parse(file: &str, text: &str) -> Result<Vec<Row>, Error> {
+    let problem = |line: u64, field: Option<&str>, why| Error::Row {
         file: file.to_string(),
         line,
         field: field.map(str::to_string),
@@ -77,7 +77,7 @@ pub fn parse(file: &str, text: &str) -> Result<Vec<Row>, Problem> {
         .from_reader(text.as_bytes());
     let header = reader
         .headers()
-        .map_err(|e| problem(1, None, RowProblem::Unreadable(e.to_string())))?
+        .map_err(|e| problem(1, None, RowError::Unreadable(e.to_string())))?
         .clone();
     let header_line = header.position().map_or(1, |p| p.line());
     let names: Vec<String> = header.iter().map(str::to_ascii_lowercase).collect();
@@ -91,7 +91,7 @@ pub fn parse(file: &str, text: &str) -> Result<Vec<Row>, Problem> {
                 return Err(problem(
                     header_line,
                     None,
-                    RowProblem::Header {
+                    RowError::Header {
                         found: names.join(","),
                     },
                 ))
@@ -118,14 +118,14 @@ pub fn parse(file: &str, text: &str) -> Result<Vec<Row>, Problem> {
     for record in reader.records() {
         let record = record.map_err(|e| {
             let line = e.position().map_or(0, |p| line_at(p.byte()));
-            problem(line, None, RowProblem::Unreadable(e.to_string()))
+            problem(line, None, RowError::Unreadable(e.to_string()))
         })?;
         let line = record.position().map_or(0, |p| line_at(p.byte()));
         if record.len() != COLUMNS.len() {
             return Err(problem(
                 line,
                 None,
-                RowProblem::FieldCount {
+                RowError::FieldCount {
                     found: record.len(),
                 },
             ));
@@ -135,12 +135,12 @@ pub fn parse(file: &str, text: &str) -> Result<Vec<Row>, Problem> {
             let field = &record[i];
             let number: f64 = field
                 .parse()
-                .map_err(|_| problem(line, Some(column), RowProblem::NotANumber(field.into())))?;
+                .map_err(|_| problem(line, Some(column), RowError::NotANumber(field.into())))?;
             if !number.is_finite() {
                 return Err(problem(
                     line,
                     Some(column),
-                    RowProblem::NotFinite(field.into()),
+                    RowError::NotFinite(field.into()),
                 ));
             }
             *value = number;
@@ -151,7 +151,7 @@ pub fn parse(file: &str, text: &str) -> Result<Vec<Row>, Problem> {
                 return Err(problem(
                     line,
                     Some("time"),
-                    RowProblem::TimeNotIncreasing {
+                    RowError::TimeNotIncreasing {
                         time_s,
                         previous_s: previous.time_s,
                     },
@@ -161,7 +161,7 @@ pub fn parse(file: &str, text: &str) -> Result<Vec<Row>, Problem> {
         rows.push(Row { line, time_s, pose });
     }
     if rows.is_empty() {
-        return Err(problem(header_line, None, RowProblem::Empty));
+        return Err(problem(header_line, None, RowError::Empty));
     }
     Ok(rows)
 }
@@ -250,16 +250,16 @@ pub fn prepare(
     rows: &[Row],
     settings: &Settings,
     mode: Mode,
-) -> Result<Vec<Message>, Problem> {
-    let solver: Solver = settings.validate().map_err(|e| Problem::Row {
+) -> Result<Vec<Message>, Error> {
+    let solver: Solver = settings.validate().map_err(|e| Error::Row {
         file: file.to_string(),
         line: 0,
         field: None,
-        why: RowProblem::Refused(board_words(&control::Error::from(e))),
+        why: RowError::Refused(board_words(&control::Error::from(e))),
     })?;
     rows.iter()
         .map(|row| {
-            let problem = |field: Option<&str>, why| Problem::Row {
+            let problem = |field: Option<&str>, why| Error::Row {
                 file: file.to_string(),
                 line: row.line,
                 field: field.map(str::to_string),
@@ -271,7 +271,7 @@ pub fn prepare(
                     .map_err(|(axis, value, full_scale)| {
                         problem(
                             Some(axis.name()),
-                            RowProblem::BeyondFullScale {
+                            RowError::BeyondFullScale {
                                 value,
                                 setting: SettingId::StreamScale(axis).to_string(),
                                 full_scale,
@@ -281,7 +281,7 @@ pub fn prepare(
                 Mode::Text => Message::Line(pose_line(&row.pose)),
             };
             let pose = board_pose(settings, &message).unwrap_or(Pose::HOME);
-            let refused = |e: control::Error| problem(None, RowProblem::Refused(board_words(&e)));
+            let refused = |e: control::Error| problem(None, RowError::Refused(board_words(&e)));
             let solution = solver
                 .solve::<Libm>(&settings.servos, &pose)
                 .map_err(|e| refused(e.into()))?;

@@ -123,8 +123,8 @@ fn apply_stops_at_the_board_s_refusal_and_names_file_line_and_reply() {
     )
     .unwrap();
     let board = SimBoard::start();
-    // The platform held low (README: at `pose 0 0 -8 0 0 0`, `set servo1.max_us 1600` is a
-    // pose conflict): the file is valid, the board refuses.
+    // The platform held low (docs/error-codes.md: at `pose 0 0 -8 0 0 0`,
+    // `set servo1.max_us 1600` is a pose conflict): the file is valid, the board refuses.
     let send = hexapod(
         &dir,
         &[
@@ -187,7 +187,7 @@ fn pull_writes_the_board_s_config_as_a_build_file_that_applies_back() {
     assert_eq!(file.matches("\ntorque_kgcm = 3.0 ").count(), 5, "{file}");
     // A payload: no example of one.
     assert!(!file.contains("No payload"), "{file}");
-    let read = cli::build_file::parse("pulled.toml", &file).unwrap();
+    let read = hexapod::build_file::parse("pulled.toml", &file).unwrap();
     // `config` lists the rate with 3 decimals (509.296 for 1600/pi): the file has what the
     // board lists; everything else is exact.
     let mut listed = on_board;

@@ -1,13 +1,13 @@
 //! `hexapod draw` as a user runs it, its SVG read back: four views, six legs in each, every
 //! platform joint where "The Mathematics of the Stewart Platform" puts it (computed here in
-//! f64 from the README's geometry, not by the tool's code), every rod as long as the build
+//! f64 from the documented geometry, not by the tool's code), every rod as long as the build
 //! says, and an unreachable pose drawn with the failing leg marked.
 
 mod support;
 
 use support::{hexapod, scratch, text};
 
-/// The default geometry (README, "Geometry"; the paired layout of `kinematics-core`'s
+/// The default geometry (docs/geometry-and-calibration.md; the paired layout of `kinematics-core`'s
 /// geometry docs): platform joints on a 60 mm circle, joint `2k+1` at `120k - 60 + 20` and
 /// joint `2k+2` at `120k + 60 - 20` degrees (each rod crosses over to the next pair);
 /// h0 = 118.458 mm.

@@ -174,7 +174,7 @@ fn an_off_centre_payload_loads_the_servos_as_the_board_reports_it() {
     assert!(out.status.success(), "{stderr}");
     let described = numbers_on_line(&stdout, "holding torque at home, servos 1-6:");
     // The firmware's controller with the same settings: `check`'s torque_kgcm line at home.
-    let settings = cli::build_file::parse(
+    let settings = hexapod::build_file::parse(
         "b.toml",
         &std::fs::read_to_string(dir.join("b.toml")).unwrap(),
     )

@@ -200,7 +200,7 @@ fn a_row_a_rated_servo_cannot_hold_is_named_in_the_board_s_words_before_anything
 #[test]
 fn a_row_the_board_refuses_is_reported_and_the_rest_still_goes() {
     let dir = scratch("refused-row");
-    // README, "Error codes": from the first pose the straight path to the second leaves the
+    // docs/error-codes.md: from the first pose the straight path to the second leaves the
     // workspace (error:path-blocked); each pose alone is reachable.
     std::fs::write(
         dir.join("t.csv"),
@@ -280,7 +280,7 @@ fn demos_are_written_as_csv_that_streams_back() {
     assert!(demo.status.success(), "{:?}", text(&demo));
     let csv = std::fs::read_to_string(dir.join("eight.csv")).unwrap();
     assert_eq!(csv.lines().count(), 1 + 101);
-    let rows = cli::trajectory::parse("eight.csv", &csv).unwrap();
+    let rows = hexapod::trajectory::parse("eight.csv", &csv).unwrap();
     assert_eq!(rows.last().unwrap().time_s, 2.0);
     let nowhere = hexapod(&dir, &["demo", "circle"]);
     assert!(

@@ -8,19 +8,49 @@
 //!                              every word the user reads: report
 //! ```
 //!
-//! - [`session`]: one link's state: line assembly ([`protocol`]), echo, prompt, notices shown.
-//! - [`protocol`]: line assembly and line editing (like grbl's `protocol`/`serial`).
+//! This list is the crate's one map (ARCHITECTURE.md and `control/README.md` link here):
+//!
+//! - [`session`]: one serial link's state: line buffer ([`protocol`]), echo, prompt, notices
+//!   shown; a fresh start when the link opens again.
+//! - [`protocol`]: bytes -> lines (terminal line editing, like grbl's `protocol`/`serial`) and
+//!   stream frames among them; [`stream`]: the stream frames' grammar (binary, SimTools text),
+//!   `Frame`, and what their counts mean (the `stream.*` settings); a leaf `protocol` uses.
 //! - [`number`]: strict decimal parsing; [`word`]: quoting what the user typed.
-//! - [`command`]: one line -> one [`command::Command`] (like grbl's `gcode`).
-//! - [`settings`]: [`Settings`], names, ranges and defaults for `set`; [`record`]: their
-//!   binary form for flash; [`store`]: the two flash sectors used in turn (A/B), so a power cut
-//!   during a save never loses the last good one.
-//! - [`motion`]: straight-line moves at bounded speed, path checks.
-//! - [`payload`]: the payload carried, the servos' torque ratings, the holding torques.
+//! - [`command`]: one line -> one [`command::Command`] or a [`command::ParseError`] (like
+//!   grbl's `gcode`); [`command::Verb`] is the list of command words.
+//! - [`settings`]: [`Settings`] (the platform's) and [`settings::LinkSettings`] (`baud`,
+//!   `echo`): names, meanings, ranges and defaults for `set`, [`settings::SettingError`];
+//!   [`record`]: their binary form for flash (magic, version, sequence number, CRC-32);
+//!   [`store`]: the two flash sectors used in turn (A/B) over a small [`store::NorFlash`]
+//!   trait the board implements, so a power cut during a save never loses the last good one.
+//! - [`motion`]: straight-line moves at bounded speed and acceleration (trapezoid), path
+//!   checks; [`tracker`]: the stream tracker (per-axis speed and acceleration limits,
+//!   time-optimal, no overshoot).
+//! - [`payload`]: the payload carried and the servos' torque ratings: holding torques in
+//!   kgf cm from `kinematics_core::statics`, [`payload::TorqueError`].
+//! - [`safety`]: the e-stop input's and servo-power output's settings, the e-stop latch.
 //! - [`error`]: [`Error`], why a line is refused (each layer's error type gathered).
 //! - [`report`]: every reply, error code and message, data line and notice, worded once (the
-//!   output conventions are documented there).
-//! - [`controller`]: [`Controller`], the platform's state, which ties them together.
+//!   output conventions are documented there): `errors` (codes and messages, and the
+//!   generated list `docs/error-codes.md`), `format` (numbers, poses, values), `replies` (the
+//!   writers: status, config, help, notices, echo).
+//! - [`controller`]: [`Controller`], the platform's state, which ties them together. `mod.rs`
+//!   holds the state, the public API and the dispatch (a line to its command in `run`, a slice
+//!   to the job in progress in `work`, a frame to the motion in `on_frame`). The jobs done a
+//!   slice at a time are one state machine per file, each its own type with a `step`, knowing
+//!   nothing of the controller: `path` (a target's straight path checked), `stream_goal`
+//!   (what a stream follows; the clamp of a target out of reach), `locate` (`servo`'s forward
+//!   kinematics along a continuation), `rebuild` (new build numbers' geometry and IK), `save`
+//!   (the board's flash write), `listing` (a listing a line per slice; `status`' torques),
+//!   `limits`, sharing `pose_check` (whether a pose can be taken). What the controller does
+//!   with them is one `impl Controller` file per job: `moves`, `streaming`, `servo`,
+//!   `settings_change`, `link_loss`, `estop`, `status`, `notices`.
+//!
+//! Each layer returns an error enum with the payload (which field, leg, servo, limit) and words
+//! nothing; [`report`] words everything, and host programs print the board's own words through
+//! it ([`report::refusal`]). `examples/repl.rs` talks to the controller on the host
+//! (`cargo run -p control --example repl`); `examples/documents.rs` writes the generated
+//! documents.
 //!
 //! The board keeps one [`Session`] per serial link and uses it like this, in a main loop whose
 //! every pass does little (a command's long work is done a slice per pass):

@@ -29,7 +29,7 @@
 
 use heapless::Vec;
 
-use crate::stream::{self, BinaryFeed, BinaryFrame, Counts};
+use crate::stream::{self, BinaryFeed, BinaryFrame, Frame};
 
 /// Longest line kept, in characters (excluding the line end).
 pub const MAX_LINE: usize = 128;
@@ -88,16 +88,6 @@ pub enum Feed {
     Frame(Frame),
     /// Bytes that began a stream frame turned out not to be one (dropped, to be counted).
     DamagedFrame,
-}
-
-/// A stream frame's counts, by the format it came in (their meaning differs: see the
-/// settings).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Frame {
-    /// A binary frame: 16-bit counts, axes in the order x y z roll pitch yaw.
-    Binary(Counts),
-    /// A text frame: counts of the configured bit depth, axes in the configured order.
-    Text(Counts),
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

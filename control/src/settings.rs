@@ -12,35 +12,13 @@
 //! a host keeps its connection; `save` does not keep them (see [`crate::record`]), so every
 //! power-up starts at 115200 baud with echo on, where a terminal finds the board.
 //!
-//! # Names (as `config` lists them and `set` takes them)
+//! # Names, meanings, values
 //!
-//! | name | value | default |
-//! | --- | --- | --- |
-//! | `frame_hz` | servo frame rate, whole number 50..=333 Hz | 50 |
-//! | `baud` | UART0: one of [`BAUD_RATES`] | 115200 |
-//! | `echo` | this link: `on` / `off` (echo and prompt, for terminals) | on |
-//! | `speed_mm_s` | linear speed limit 0.1..=1000 mm/s, `0`/`off` = jump | 50 |
-//! | `speed_deg_s` | angular speed limit 0.1..=3600 deg/s, `0`/`off` = jump | 60 |
-//! | `accel_mm_s2` | linear acceleration limit 1..=100000 mm/s^2, `0`/`off` = none | off |
-//! | `accel_deg_s2` | angular acceleration limit 1..=1000000 deg/s^2, `0`/`off` = none | off |
-//! | `link_timeout_s` | home after this long without a command, 0.1..=3600 s, `0`/`off` | off |
-//! | `base_radius_mm`, `platform_radius_mm` | joint circle radii, 1..=1000 mm | 75, 60 |
-//! | `base_half_angle_deg`, `platform_half_angle_deg` | half a pair's angle, 0..=60 deg | 20, 20 |
-//! | `arm_mm`, `rod_mm` | servo arm `a` 1..=500 mm, rod `s` 1..=2000 mm | 20, 120 |
-//! | `servoN.trim_us` | home pulse `W0` of servo N (1..=6), 400..=2600 us | 1500 |
-//! | `servoN.rate_us_rad` | servo rate `r`, 100..=5000 us/rad | 1600/pi |
-//! | `servoN.dir` | `normal` (even servos, eq. 13) / `reversed` (odd servos, eq. 14) | by parity |
-//! | `servoN.min_us`, `servoN.max_us` | pulse limits, 400..=2600 us | 1100, 1900 |
-//! | `stream.x_mm`, `stream.y_mm`, `stream.z_mm` | stream full scale, -500..=500 mm | 25, 25, 15 |
-//! | `stream.roll_deg`, `stream.pitch_deg`, `stream.yaw_deg` | stream full scale, -90..=90 deg | 15, 15, 20 |
-//! | `stream.bits` | bits of a text frame's counts, 8..=16 | 8 |
-//! | `stream.axisN` | axis of a text frame's count N (1..=6): `x` `y` `z` `roll` `pitch` `yaw` `none` | x y z roll pitch yaw |
-//! | `estop_pin` | emergency-stop input GPIO (active low, pull-up), or `off` | off |
-//! | `estop_action` | `freeze` or `home` when the e-stop input opens | freeze |
-//! | `power_pin` | servo-power enable output GPIO (high = on), or `off` | off |
-//! | `payload_g` | mass the platform carries, 0..=100000 g (0: none) | 0 |
-//! | `payload_com_x_mm`, `payload_com_y_mm`, `payload_com_z_mm` | its centre of mass, platform frame, -1000..=1000 mm | 0 |
-//! | `servoN.torque_kgcm` | rated torque of servo N, 0.01..=600 kgf cm (hundredths), `0`/`off` = not rated | off |
+//! Each setting's name (as `config` lists it and `set` takes it: [`SettingId`]'s `Display`),
+//! its meaning in a few words ([`SettingId::meaning`]) and the form and range of its value
+//! ([`SettingId::kind`]) are written once, here; defaults are [`Settings::default`]'s. The
+//! user's table of them is `docs/settings.md`, checked against these by
+//! `control/tests/documents.rs`.
 //!
 //! The stream settings are [`crate::stream`]'s, the pins and the e-stop [`crate::safety`]'s,
 //! the payload and the torque ratings [`crate::payload`]'s.
@@ -682,6 +660,50 @@ impl SettingId {
                     off_allowed: true,
                     decimals: 2,
                 },
+            },
+        }
+    }
+
+    /// What this setting is, in a few words: the one wording of its meaning, which the host
+    /// tool writes beside each key of a build file and `docs/settings.md` shows (its table's
+    /// meaning column is checked against this by `control/tests/documents.rs`).
+    pub const fn meaning(self) -> &'static str {
+        match self {
+            SettingId::FrameHz => "servo frame rate",
+            SettingId::Baud => "UART0 baud rate",
+            SettingId::Echo => "echo and prompt on the link",
+            SettingId::SpeedMmS => "linear speed limit",
+            SettingId::SpeedDegS => "angular speed limit",
+            SettingId::AccelMmS2 => "linear acceleration limit",
+            SettingId::AccelDegS2 => "angular acceleration limit",
+            SettingId::LinkTimeoutS => "return home after this long without a command",
+            SettingId::Layout(p) => match p {
+                LayoutParam::BaseRadiusMm => "servo shaft circle radius",
+                LayoutParam::BaseHalfAngleDeg => "half the angle between a servo pair",
+                LayoutParam::PlatformRadiusMm => "platform joint circle radius",
+                LayoutParam::PlatformHalfAngleDeg => "half the angle between a joint pair",
+                LayoutParam::ArmMm => "servo arm (horn) length a",
+                LayoutParam::RodMm => "rod length s",
+            },
+            SettingId::Servo(_, p) => match p {
+                ServoParam::TrimUs => "home pulse W0",
+                ServoParam::RateUsRad => "servo rate r",
+                ServoParam::Dir => "direction",
+                ServoParam::MinUs => "lowest pulse",
+                ServoParam::MaxUs => "highest pulse",
+                ServoParam::TorqueKgcm => "rated torque",
+            },
+            SettingId::StreamScale(_) => "stream full scale of the axis",
+            SettingId::StreamBits => "bits of a text frame's counts",
+            SettingId::StreamAxis(_) => "the axis this text-frame count drives",
+            SettingId::EstopPin => "emergency-stop input",
+            SettingId::EstopAction => "what an open e-stop does",
+            SettingId::PowerPin => "servo-power enable output",
+            SettingId::PayloadG => "mass the platform carries (0: none)",
+            SettingId::PayloadCom(k) => match k {
+                0 => "payload centre of mass, platform frame x",
+                1 => "payload centre of mass, platform frame y",
+                _ => "payload centre of mass, platform frame z (up)",
             },
         }
     }

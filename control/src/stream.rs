@@ -23,8 +23,6 @@
 use kinematics_core::pose::Axis;
 use kinematics_core::Pose;
 
-pub use crate::protocol::Frame;
-
 /// Bytes in a binary frame.
 pub const BINARY_FRAME_LEN: usize = 16;
 /// The binary frame's first byte (not ASCII: no command line contains it).
@@ -38,6 +36,16 @@ pub const COUNTS: usize = 6;
 
 /// The six counts of a frame, in the order they came.
 pub type Counts = [u32; COUNTS];
+
+/// A stream frame's counts, by the format it came in (their meaning differs: see the
+/// settings).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Frame {
+    /// A binary frame: 16-bit counts, axes in the order x y z roll pitch yaw.
+    Binary(Counts),
+    /// A text frame: counts of the configured bit depth, axes in the configured order.
+    Text(Counts),
+}
 
 /// Bits of a binary frame's counts.
 pub const BINARY_BITS: u8 = 16;

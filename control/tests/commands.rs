@@ -3,7 +3,6 @@
 mod common;
 
 use common::{code_of, is_final, pose_values, six, Host};
-use control::report::Code;
 use control::settings::SettingId;
 use control::store::{RamFlash, SaveError, Store};
 use control::Settings;
@@ -594,34 +593,6 @@ fn rx_overflow_warns_at_once_and_refuses_the_line() {
     assert_eq!(code_of(out.trim_end()), "rx-overflow");
     assert!(!s.ctl.is_moving());
     s.ok("status");
-}
-
-#[test]
-fn every_error_code_is_documented_in_the_readme() {
-    let readme = include_str!("../../README.md");
-    for code in Code::ALL {
-        assert!(
-            readme.contains(&format!("error:{}", code.as_str())),
-            "README does not document error:{code}"
-        );
-    }
-    for verb in control::command::Verb::ALL {
-        let name = verb.name();
-        assert!(
-            readme.contains(&format!("| `{name}")),
-            "README's command reference does not document {name}"
-        );
-    }
-    for id in control::settings::SettingId::GLOBAL {
-        assert!(
-            readme.contains(&format!("`{id}`")),
-            "README does not document setting {id}"
-        );
-    }
-    for field in control::settings::ServoParam::ALL {
-        let name = format!("`servoN.{}`", field.name());
-        assert!(readme.contains(&name), "README does not document {name}");
-    }
 }
 
 #[test]

@@ -394,13 +394,13 @@ fn limits_name_the_reach_of_every_axis_direction_and_what_stops_it() {
 }
 
 #[test]
-fn the_readme_shows_limits_from_home_as_they_are() {
-    let readme = include_str!("../../README.md");
-    let start = readme
+fn the_command_reference_shows_limits_from_home_as_they_are() {
+    let doc = include_str!("../../docs/commands.md");
+    let start = doc
         .find("```text\nlimits\n")
-        .expect("README shows limits")
+        .expect("docs/commands.md shows limits")
         + 8;
-    let block = &readme[start..];
+    let block = &doc[start..];
     let block = &block[..block.find("```").unwrap()];
     let mut s = Host::quiet();
     let out = s.feed(b"limits\n");

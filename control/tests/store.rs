@@ -3,9 +3,9 @@
 //! power-up loads the settings saved before or the settings being saved, never garbage, and
 //! never nothing when a good copy existed. Then the saves go on as before.
 //!
-//! The expectations come from the documented policy (control/src/store.rs, README "Saving the
-//! settings"): saves alternate between the two sectors, a save never touches the sector holding
-//! the newest good record, a record cut short does not decode.
+//! The expectations come from the documented policy (control/src/store.rs, docs/settings.md
+//! "Saving the settings"): saves alternate between the two sectors, a save never touches the
+//! sector holding the newest good record, a record cut short does not decode.
 
 use control::record::{self, DecodeError, Record, ENCODED_LEN};
 use control::store::{

@@ -4,8 +4,8 @@
 // gets at most one final reply (exactly one where one is due), and the next good command
 // works. Bytes the firmware cannot take in time are reported, never lost silently.
 //
-// Expected replies come from the documented protocol and error codes (README.md, "Command
-// reference" and "Error codes");
+// Expected replies come from the documented protocol and error codes (docs/commands.md and
+// docs/error-codes.md);
 // expected pulse widths come from measurement: the pins before the abuse, or a separate
 // reference board that was only ever sent the good command.
 
@@ -397,7 +397,7 @@ test('after a UART overrun, a lone line end closes the cut line and a resync wor
   // The warning says what the UART can know: at least one byte.
   const warning = board.waitForLine(/^# warning: /, { timeoutMs: 100 });
   assert.match(warning, /^# warning: UART receive error, input lost \(at least \d+ bytes?\)$/);
-  // The README's resync: a lone line end to close the cut line (it is the first byte into the
+  // The documented resync: a lone line end to close the cut line (it is the first byte into the
   // FIFO after the loss, so it carries the PL011's overrun flag, and it is good), then
   // `status`, reading until its final reply.
   const cut = board.request('');

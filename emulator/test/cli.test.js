@@ -61,12 +61,16 @@ function referenceSettings() {
 
 /** The tool's binary, built once (the path cargo reports). */
 function buildTool() {
-  const output = execFileSync('cargo', ['build', '--quiet', '-p', 'cli', '--message-format=json'], {
-    cwd: REPO,
-    encoding: 'utf8',
-    maxBuffer: 64 * 1024 * 1024,
-    stdio: ['ignore', 'pipe', 'inherit'],
-  });
+  const output = execFileSync(
+    'cargo',
+    ['build', '--quiet', '-p', 'hexapod', '--message-format=json'],
+    {
+      cwd: REPO,
+      encoding: 'utf8',
+      maxBuffer: 64 * 1024 * 1024,
+      stdio: ['ignore', 'pipe', 'inherit'],
+    },
+  );
   for (const line of output.split('\n')) {
     if (line.startsWith('{')) {
       const message = JSON.parse(line);
@@ -270,7 +274,7 @@ test("a 10-second binary stream arrives whole; the pins end at the host IK's pul
 
 test('a text stream: a row the board refuses is reported, the rows after it still go', async () => {
   // With speed limits (the board checks the straight path of each move): from the first pose
-  // the path to the second leaves the workspace (README, "Error codes", path-blocked); each pose
+  // the path to the second leaves the workspace (docs/error-codes.md, path-blocked); each pose
   // alone is reachable, so the host's check passes them and the board refuses the second.
   const limits = await hexapod(['send', ...onPort(), 'set speed_mm_s 50', 'set speed_deg_s 60']);
   assert.equal(limits.status, 0, limits.stderr);

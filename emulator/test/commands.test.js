@@ -1,6 +1,6 @@
 // Every command through the real firmware binary, over UART0 and over the USB port: the exact
 // reply shape, the data lines, and the servo pins. Expected pulses come from the host build of
-// kinematics-core (src/test-support/host-reference.js), expected formats and defaults from README.md.
+// kinematics-core (src/test-support/host-reference.js), expected formats and defaults from docs/.
 
 import assert from 'node:assert/strict';
 import { readFileSync } from 'node:fs';
@@ -64,7 +64,7 @@ test('banner names the firmware version and says to type help', () => {
   assert.match(banner, /^# /, 'not a reply: the banner is a # line');
   assert.ok(banner.includes(version), `banner '${banner}' lacks version ${version}`);
   assert.match(banner, /\bhelp\b/);
-  // A new board has nothing saved in flash, and says so (README, "Saving the settings").
+  // A new board has nothing saved in flash, and says so (docs/settings.md, "Saving the settings").
   const warning = board.waitForLine(/^#/);
   assert.equal(warning, '# warning: no settings saved in flash; using the defaults');
   // Echo is on by default: a prompt follows.
@@ -272,7 +272,7 @@ linkTest(
 );
 
 /**
- * The default paired layout (README.md: three pairs of servos 120 degrees apart;
+ * The default paired layout (docs/geometry-and-calibration.md: three pairs of servos 120 apart;
  * kinematics-core PairedLayout), computed here in f64: servo 2k+1 at 120k - 20 deg, 2k+2 at
  * 120k + 20 deg on r = 75 mm, their joints at 120k - 60 + 20 and 120k + 60 - 20 deg on
  * r = 60 mm, arms tangential pointing away from the pair centre (beta = angle -+ 90 deg);
@@ -306,7 +306,7 @@ linkTest(
     const board = link.quiet(bootrom);
     const data = ok(board, 'geometry');
     const expected = documentedGeometry();
-    // The documented figures (README): h0 118.458 mm, alpha0 -0.252 deg.
+    // The documented figures (docs/geometry-and-calibration.md): h0 118.458 mm, alpha0 -0.252 deg.
     assert.equal(expected[0].h0.toFixed(3), '118.458');
     assert.equal(expected[0].alpha0Deg.toFixed(3), '-0.252');
 

@@ -1,7 +1,7 @@
 // `servo`, `limits` and the payload's holding torques through the real firmware binary: the
 // pins, the pose the pulses correspond to, the reach of each axis and the torques, compared
 // with the host build of kinematics-core (src/test-support/host-reference.js: its forward kinematics, IK,
-// workspace search and statics), formats and rules from README.md. Refusals (torque-limit,
+// workspace search and statics), formats and rules from docs/. Refusals (torque-limit,
 // no-pose, servo-limit, ...) are in errors.test.js.
 
 import assert from 'node:assert/strict';

@@ -4,7 +4,7 @@
 // once. Each case asserts that the watchdog never fires (the board fails the run if it does),
 // that no servo frame is missed (the firmware writes new compare values in every frame period),
 // that every line gets its reply in order, and that the longest main-loop pass stays under the
-// bound the README states:
+// bound the documents state (docs/testing.md):
 // 1 ms (125,000 cycles at 125 MHz), a third of a frame at the highest frame rate (333 Hz).
 // The one pass allowed to be longer is a `save`'s flash write (a sector erase keeps the core in
 // the boot ROM with interrupts masked, 45 ms in the emulator's typical W25Q080 timing): the
@@ -319,7 +319,7 @@ test('a save is the one pass over 1 ms: its erase and program; the pins hold mea
   board.runMs(500);
   measure(board);
   const before = board.pulseWidthsUs();
-  // Each reply awaited: no input is read during a save's write (README).
+  // Each reply awaited: no input is read during a save's write (docs/settings.md).
   for (const line of ['save', 'status', 'config', 'check 20 0 0 0 0 0', 'save', 'help', 'save']) {
     ok(board, line);
   }

@@ -1,7 +1,7 @@
 // Smooth motion measured on the pins of the real firmware: straight lines in pose space at the
 // configured speeds, one IK per servo frame, no glitches, and paths that leave the workspace
 // refused before anything moves. Frame counts are computed here from the documented rule
-// (README.md "Motion"); per-frame pulses come from the host core (src/test-support/host-reference.js).
+// (docs/commands.md "Motion"); per-frame pulses come from the host core (src/test-support/host-reference.js).
 
 import assert from 'node:assert/strict';
 import { before, test } from 'node:test';
@@ -126,7 +126,7 @@ test('at 200 Hz a move takes its duration in 5 ms frames, IK on every frame', ()
 });
 
 /**
- * Two reachable poses whose straight line is not (README.md's example), verified with
+ * Two reachable poses whose straight line is not (docs/error-codes.md's example), verified with
  * the host core: both ends solve, some pose between them does not. Returns the first failing
  * fraction of a dense sampling and the core's error there.
  */
@@ -226,8 +226,8 @@ test('with accel_mm_s2 a move ramps its speed up and down along the line, within
   const pulses = capture(board, () => ok(board, 'pose 0 0 8 0 0 0'), 45);
   const zs = heaveTrace(pulses, read);
   assertWithinLimits(zs, { hz: 50, speed: 40, accel: 200, top: 8, label: 'ramped move' });
-  // README: 8 mm at 40 mm/s with 200 mm/s2 ramps takes 8/40 + 40/200 = 0.4 s (20 frames);
-  // the first steps are small (speeding up), and it lands on the target.
+  // docs/commands.md: 8 mm at 40 mm/s with 200 mm/s2 ramps takes 8/40 + 40/200 = 0.4 s
+  // (20 frames); the first steps are small (speeding up), and it lands on the target.
   const started = zs.findIndex((z) => z > 0.01);
   const arrived = zs.findIndex((z) => Math.abs(z - 8) < 0.02);
   assert.ok(arrived - started >= 19 && arrived - started <= 21, `${arrived - started} frames`);

@@ -2,8 +2,8 @@
 // src/gaps/flash.js: the boot ROM's erase and program as the W25Q080 does them, its rules
 // enforced): `save`, power cycles (a fresh chip, the same flash), power cuts at every step of a
 // save, a damaged copy, a thousand saves, and what the firmware does meanwhile (the pins hold,
-// the watchdog stays quiet). What to expect comes from README.md ("Saving the settings") and
-// the record layout documented in control/src/record.rs, read here by an independent decoder.
+// the watchdog stays quiet). What to expect comes from docs/settings.md ("Saving the settings")
+// and the record layout documented in control/src/record.rs, read here by an independent decoder.
 
 import assert from 'node:assert/strict';
 import { before, test } from 'node:test';
@@ -142,8 +142,8 @@ test('save keeps the settings across a power cycle; the pins start at the saved 
     saved.settings.map((l) => (l.startsWith('baud: ') ? 'baud: 115200' : l)),
   );
   assert.ok(Math.abs(board.baud - 115200) / 115200 < 0.01, `UART0 at ${board.baud} baud`);
-  // At power-up every servo gets its home pulse: its saved trim (README, Calibration), at the
-  // saved frame rate.
+  // At power-up every servo gets its home pulse: its saved trim
+  // (docs/geometry-and-calibration.md, "Calibration"), at the saved frame rate.
   runFrames(board, 5, 100);
   assertPins(board, [1520, 1500, 1500, 1480.64, 1500, 1500].map(quantisedUs));
   assert.ok(
@@ -372,8 +372,8 @@ test('the watchdog has time for a flash slower than its datasheet, and 500 ms ag
 
 test('lines sent during a save without waiting for its ok are lost, and said so', () => {
   // No input is read while the flash is written (interrupts masked): what arrives beyond the
-  // UART's 32-byte FIFO is lost. The README asks hosts to wait for save's ok; a host that does
-  // not hears of the loss at once, and no line runs with bytes missing.
+  // UART's 32-byte FIFO is lost. docs/settings.md asks hosts to wait for save's ok; a host that
+  // does not hears of the loss at once, and no line runs with bytes missing.
   const board = freshBoard();
   const from = board.lines.length;
   board.sendBytes(`save\n${'status\n'.repeat(20)}`);
@@ -401,7 +401,8 @@ test('lines sent during a save without waiting for its ok are lost, and said so'
 
 test('over USB, lines sent during a save wait in the host: none lost, every one answered', () => {
   // The USB interrupt is masked during the write too: the USB controller refuses the host's
-  // packets (NAK) and the host sends them again afterwards (README, "Saving the settings").
+  // packets (NAK) and the host sends them again afterwards (docs/settings.md, "Saving the
+  // settings").
   const board = bootQuietUsb(bootrom); // over USB; board.uart is UART0
   const from = board.lines.length;
   board.loop.reset();

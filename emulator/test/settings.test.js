@@ -102,7 +102,7 @@ test('set changes exactly the named setting, as config lists it (units and decim
     ['payload_g 1250', 'payload_g', '1250.0'],
     ['payload_com_y_mm -12.5', 'payload_com_y_mm', '-12.500'],
     ['payload_com_z_mm 40', 'payload_com_z_mm', '40.000'],
-    // Ratings are kept to hundredths of a kgf cm (README).
+    // Ratings are kept to hundredths of a kgf cm (docs/settings.md).
     ['servo4.torque_kgcm 12.345', 'servo4.torque_kgcm', '12.35'],
     ['servo4.torque_kgcm off', 'servo4.torque_kgcm', 'off'],
   ];

@@ -1,9 +1,9 @@
 // Stream frames through the real firmware, as motion-simulator software sends them: the
 // pulses on the pins, read back into poses with the host core's IK, must follow the
-// documented tracker limits (README.md "Streaming": per-axis speed and acceleration limits, no
+// documented tracker limits (docs/streaming.md: per-axis speed and acceleration limits, no
 // overshoot), clamp unreachable targets, survive garbage, and stop for the e-stop. Expected
-// values come from the README's frame format and the host core, never from the firmware. The
-// last tests stream over the USB port (README "Serial links"): the same frames, beside
+// values come from the documented frame format and the host core, never from the firmware. The
+// last tests stream over the USB port (docs/commands.md "Serial links"): the same frames, beside
 // commands on UART0, and keeping the link alive.
 
 import assert from 'node:assert/strict';
@@ -35,7 +35,10 @@ before(() => {
   reference = new HostReference();
 });
 
-/** The 16-bit count for a value on an axis of full scale `scale` (README: c = 32768 + v/scale*32768). */
+/**
+ * The 16-bit count for a value on an axis of full scale `scale` (docs/streaming.md:
+ * c = 32768 + v/scale*32768).
+ */
 function count(value, scale) {
   return Math.round(32768 + (value / scale) * 32768);
 }
@@ -330,7 +333,7 @@ test('over USB: a frame with LF and CR bytes in its counts, then a line, in one 
   ok(board, 'set speed_mm_s off');
   ok(board, 'set speed_deg_s off');
   // Every count's low byte is LF (0x0A) or CR (0x0D): the frame's bytes hold line ends that
-  // are not line ends (README: binary frames are `A5 5A`, six counts, `0D 0A`).
+  // are not line ends (docs/streaming.md: binary frames are `A5 5A`, six counts, `0D 0A`).
   const counts = [0x800a, 0x7f0d, 0x8a0a, 0x800d, 0x7f0a, 0x8a0d];
   const pose = counts.map((c, i) => ((c - 32768) / 32768) * SCALES[i]);
   const from = board.lines.length;

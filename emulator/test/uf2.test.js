@@ -30,7 +30,7 @@ before(() => {
   bootrom = firmwareBootrom();
   dir = mkdtempSync(join(tmpdir(), 'hexapod-uf2-'));
   const file = join(dir, 'hexapod-fw.uf2');
-  execFileSync('cargo', ['run', '-q', '-p', 'cli', '--', 'uf2', DEFAULT_ELF, '-o', file], {
+  execFileSync('cargo', ['run', '-q', '-p', 'hexapod', '--', 'uf2', DEFAULT_ELF, '-o', file], {
     cwd: REPO,
     stdio: ['ignore', 'ignore', 'inherit'],
   });

@@ -1,4 +1,4 @@
-// The Pico's USB port as a serial port (README.md, "Serial links"), through the real firmware ELF
+// The Pico's USB port as a serial port (docs/commands.md), through the real firmware ELF
 // and a USB host on the emulated chip's USB controller (src/gaps/usb.js, gaps 9-12): it
 // enumerates as a CDC ACM device, speaks the protocol of UART0 beside UART0 (each link its own
 // line, echo and prompt; replies to the asking link, notices to every open link), never loses
@@ -23,7 +23,7 @@ import { HostReference } from '../src/test-support/host-reference.js';
 
 /** The documented bound on a main-loop pass: 1 ms at 125 MHz (main-loop.test.js). */
 const PASS_BOUND_CYCLES = 125_000;
-/** The firmware's USB receive queue holds fewer bytes than this (README.md, "Serial links"). */
+/** The firmware's USB receive queue holds fewer bytes than this (docs/commands.md). */
 const RX_QUEUE_BYTES = 1024;
 /** A UART framing error on a received byte (PL011 UARTDR bit 8; src/gaps/uart.js, gap 2). */
 const UART_FRAMING_ERROR = 1 << 8;
@@ -147,7 +147,7 @@ test('opening the port shows the banner and a prompt, echo on; UART0 is not told
   board.usb.waitUntilOpen();
   board.runMs(5);
   // The banner, then the notices this link has not been shown: a new board's flash holds no
-  // settings, which power-up told UART0 (README, "Saving the settings").
+  // settings, which power-up told UART0 (docs/settings.md, "Saving the settings").
   assert.deepEqual(board.usb.lines.slice(1), [
     '# warning: no settings saved in flash; using the defaults',
   ]);

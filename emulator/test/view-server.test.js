@@ -1,7 +1,7 @@
 // The view's plumbing without a browser: reading the board's listings out of its real output,
 // two hosts sharing one UART (the shell terminal's keystrokes, the page's whole lines), and the
 // view server's stream, typed lines and refusals, against the real firmware in emulated time.
-// Expected values come from the README (defaults, line editing), not from the code under test.
+// Expected values come from docs/ (defaults, line editing), not from the code under test.
 
 import assert from 'node:assert/strict';
 import { request } from 'node:http';
@@ -23,13 +23,13 @@ function read(lines, reader = new ListingReader()) {
   return lines.map((line) => reader.line(line)).filter(Boolean);
 }
 
-test("the board's geometry and config listings are read as the README documents them", () => {
+test("the board's geometry and config listings are read as docs/ documents them", () => {
   const board = bootedBoard(bootrom);
   const { lines } = board.request('geometry', { timeoutMs: 2000 });
   const [geometry] = read(lines);
   assert.equal(geometry.kind, 'geometry');
   const g = geometry.geometry;
-  // README, "Geometry": a = 20, s = 120, h0 = 118.458 mm, alpha0 = -0.252 degrees.
+  // docs/geometry-and-calibration.md: a = 20, s = 120, h0 = 118.458 mm, alpha0 = -0.252 degrees.
   assert.equal(g.armMm, 20);
   assert.equal(g.rodMm, 120);
   assert.equal(g.homeHeightMm, 118.458);
@@ -47,7 +47,7 @@ test("the board's geometry and config listings are read as the README documents 
   const [config] = read(board.request('config', { timeoutMs: 2000 }).lines);
   assert.equal(config.kind, 'config');
   assert.equal(config.config.settings.frame_hz, '50');
-  // README, "Settings": trim 1500 us, 509.296 us/rad, even normal, odd reversed, 1100..1900,
+  // docs/settings.md: trim 1500 us, 509.296 us/rad, even normal, odd reversed, 1100..1900,
   // not rated.
   config.config.servos.forEach((servo, i) => {
     assert.deepEqual(servo, {
@@ -246,7 +246,7 @@ test(
     assert.deepEqual((await stream.next('asking', { board })).listings, ['geometry']);
     assert.equal((await stream.next('geometry', { board })).rodMm, 125);
 
-    // Pins follow a move (heave up: odd servos' pulses shrink, README golden table).
+    // Pins follow a move (heave up: odd servos' pulses shrink, the golden table of docs/geometry-and-calibration.md).
     await http(view.port, {
       method: 'POST',
       path: '/uart',

@@ -1,5 +1,5 @@
 // The 3D picture (three.js): base, servos, arms at the measured angles, rods, platform at the
-// pose the forward kinematics found, leg numbers. Base frame as in the README's Geometry: origin
+// pose the forward kinematics found, leg numbers. Base frame as in the documented geometry: origin
 // at the centre of the servo shafts' plane, z up, lengths in mm; the platform frame is placed by
 // the pose (x, y, h0 + z; R = Rz(yaw) Ry(pitch) Rx(roll), eq. 1). It draws only what it is given
 // (kinematics.js computes every point) and renders on demand: after new data or a camera move.

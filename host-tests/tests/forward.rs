@@ -12,7 +12,7 @@ use host_tests::reference::RefPose;
 use kinematics_core::forward::{
     approximate, arm_angles_for_pulses, arms, struts, Closure, Newton, Options,
 };
-use kinematics_core::legs::Actuators;
+use kinematics_core::jacobian::Actuators;
 use kinematics_core::{ik, KinematicsError, Libm, Pose, ServoSet, Vec3, LEGS};
 
 /// The round trip's bound (the issue's): 1e-3 mm and 1e-4 rad.
@@ -287,7 +287,7 @@ fn no_solution_is_an_error_within_the_iterations_allowed() {
         Err(KinematicsError::NotConverged { iterations: 1, .. })
     ));
     let solver = ik::Solver::new(cases()[0].geometry.clone()).unwrap();
-    let home = solver.alpha0s_rad();
+    let home: [f32; LEGS] = core::array::from_fn(|i| solver.alpha0_rad(i));
     assert!(matches!(
         arms::<Libm>(&solver, &home, &far, one),
         Err(KinematicsError::NotConverged { iterations: 1, .. })

@@ -10,7 +10,7 @@ use host_tests::fixtures::{cases, solver_about, strut_cases, Rng, CENTRES_MM};
 use host_tests::platform::{fd_jacobian, moved, RefAnchors, RefArms, M6};
 use host_tests::reference::{mat_mul, transpose, RefPose};
 use kinematics_core::jacobian::Jacobian;
-use kinematics_core::legs::{Actuators, ArmState};
+use kinematics_core::legs::ArmState;
 use kinematics_core::linalg::Vec6;
 use kinematics_core::rates::{joint_rates, twist_from_joint_rates, Twist};
 use kinematics_core::{ik, KinematicsError, Libm, Pose, Vec3, LEGS};

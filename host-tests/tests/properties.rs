@@ -13,7 +13,7 @@ use host_tests::reference::{
 use kinematics_core::geometry::PairedLayout;
 use kinematics_core::pose::Axis;
 use kinematics_core::servo::{Direction, ServoConfig};
-use kinematics_core::{ik, Geometry, IkError, Libm, Pose, ServoSet, LEGS};
+use kinematics_core::{ik, Geometry, IkError, Libm, Pose, ServoSet, Vec3, LEGS};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngSeed};
 
@@ -405,10 +405,15 @@ fn platform_joints_and_legs_match_eq_2_and_3() {
     let mut rng = Rng::new(43);
     for case in cases() {
         let reference = RefGeometry::from_core(&case.geometry);
+        // The joints as the kinematics place them (`Anchors::place`, rotation centre at the
+        // platform frame's origin as in eq. 2), the legs from the solver's base joints.
+        let anchors = ik::Solver::new(case.geometry.clone())
+            .expect("a valid geometry")
+            .anchors();
         for _ in 0..300 {
             let pose = rng.pose(&case.range.map(|r| 2.0 * r));
-            let q = ik::platform_joints::<Libm>(&case.geometry, &pose);
-            let l = ik::leg_vectors::<Libm>(&case.geometry, &pose);
+            let q = anchors.place::<Libm>(&pose).joints_mm;
+            let l: [Vec3; LEGS] = core::array::from_fn(|i| q[i] - anchors.base_mm[i]);
             let q_ref = reference.platform_joints(&RefPose::from_core(&pose));
             for i in 0..LEGS {
                 for c in 0..3 {

@@ -9,7 +9,7 @@ use host_tests::fixtures::{cases, solver_about, strut_cases, Rng, CENTRES_MM};
 use host_tests::platform::{RefAnchors, RefArms};
 use host_tests::reference::{solve_leg, RefPose};
 use kinematics_core::configuration::ConfigurationError;
-use kinematics_core::legs::Actuators;
+use kinematics_core::jacobian::Actuators;
 use kinematics_core::{ik, IkError, Libm, ServoSet, Vec3, LEGS};
 
 /// Arm angles, as the joint displacement the angle error is equivalent to

@@ -15,7 +15,7 @@ use host_tests::reference::{RefPose, V3};
 use kinematics_core::configuration::CubicConfiguration;
 use kinematics_core::dynamics::{actuation, arm_motions, strut_motions, Acceleration};
 use kinematics_core::jacobian::Jacobian;
-use kinematics_core::legs::{Actuators, Struts};
+use kinematics_core::legs::Struts;
 use kinematics_core::rates::Twist;
 use kinematics_core::statics::{
     compliance, displacement_under_central_force, holding_loads, joint_forces,

@@ -9,7 +9,6 @@
 use host_tests::fixtures::{cases, solver_about, strut_cases, Rng};
 use host_tests::platform::{RefAnchors, RefArms};
 use host_tests::reference::{pulse_us, RefPose};
-use kinematics_core::legs::Actuators;
 use kinematics_core::workspace::{axis_directions, Grid, Limit, Limits, Options, Reach};
 use kinematics_core::{ik, IkError, Libm, Pose, ServoSet, Vec3, LEGS};
 

@@ -29,7 +29,7 @@ use core::fmt;
 
 use crate::math::{add, is_zero, mul_mat_vec, sub, Libm, Math, Real};
 use crate::pose::Pose;
-use crate::{Mat3, Vec3, LEGS};
+use crate::types::{Mat3, Vec3, LEGS};
 
 /// Farthest a rotation centre may be from the platform frame's origin, mm (10 m): beyond,
 /// it is a typing mistake, and the kinematics keep their magnitudes bounded.

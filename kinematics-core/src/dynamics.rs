@@ -30,13 +30,13 @@
 use crate::configuration::Placement;
 use crate::error::{Input, KinematicsError};
 use crate::ik::Solver;
-use crate::jacobian::DEAD_CENTRE_TOLERANCE;
-use crate::legs::{Actuators, ArmState, Struts};
+use crate::jacobian::{Actuators, DEAD_CENTRE_TOLERANCE};
+use crate::legs::{ArmState, Struts};
 use crate::math::{lt, mul_mat_vec, Math};
 use crate::pose::Pose;
 use crate::rates::Twist;
 use crate::statics::{joint_forces_for, Payload, Wrench, GRAVITY_MM_S2};
-use crate::{Vec3, LEGS};
+use crate::types::{Vec3, LEGS};
 
 /// The platform's acceleration: of the rotation centre, and angular, base axes.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -250,8 +250,9 @@ pub fn actuation<M: Math, A: Actuators>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::geometry::Geometry;
+    use crate::math::Libm;
     use crate::statics::holding_loads;
-    use crate::{Geometry, Libm};
 
     #[test]
     fn at_rest_the_actuation_is_the_holding_load() {

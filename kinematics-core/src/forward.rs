@@ -44,13 +44,13 @@ use core::f32::consts::PI;
 use crate::configuration::Anchors;
 use crate::error::{Input, KinematicsError};
 use crate::ik::Solver;
-use crate::jacobian::euler_rates_from_rotation;
-use crate::legs::{arm_tips, Actuators, Struts, MIN_LENGTH_MM};
+use crate::jacobian::{euler_rates_from_rotation, Actuators};
+use crate::legs::{arm_tips, Struts, MIN_LENGTH_MM};
 use crate::linalg::{Lu6, Mat6, Vec6};
 use crate::math::{abs_bits, cross, dot, lt, sub, Math, Real};
 use crate::pose::Pose;
 use crate::servo::ServoSet;
-use crate::{Mat3, Vec3, LEGS};
+use crate::types::{Mat3, Vec3, LEGS};
 
 /// How [`Newton`] iterates.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -591,7 +591,8 @@ pub fn arm_angles_for_pulses(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{Geometry, Libm};
+    use crate::geometry::Geometry;
+    use crate::math::Libm;
 
     #[test]
     fn euler_angles_invert_eq_1() {

@@ -26,7 +26,7 @@
 use core::fmt;
 
 use crate::math::{Libm, Math};
-use crate::{Vec3, LEGS};
+use crate::types::{Vec3, LEGS};
 
 /// Largest disagreement between the legs' home heights (eq. 10) that a geometry may have, mm.
 /// Below it, `h0` is their mean (and the IK computes each leg's `alpha0` exactly for that

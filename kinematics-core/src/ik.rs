@@ -46,10 +46,10 @@ use crate::fixed::{
     MAX_ROTATION_ENTRY, MM_FRAC, ROT_FRAC,
 };
 use crate::geometry::{Geometry, GeometryError};
-use crate::math::{Libm, Math, Real};
+use crate::math::{is_zero, Libm, Math, Real};
 use crate::pose::{Axis, Pose};
 use crate::servo::{ServoConfig, ServoSet};
-use crate::{Vec3, LEGS};
+use crate::types::{Vec3, LEGS};
 
 /// Largest rotation accepted about any axis, rad (180 degrees). Larger angles describe the same
 /// orientation as a smaller one and would only hide typing mistakes.
@@ -138,19 +138,6 @@ pub fn check_pose(pose: &Pose) -> Result<(), IkError> {
     Ok(())
 }
 
-/// Platform joints `q_i` in the base frame for a pose (eq. 2), mm. The pose must be finite.
-pub fn platform_joints<M: Math>(geometry: &Geometry, pose: &Pose) -> [Vec3; LEGS] {
-    let r = pose.rotation::<M>();
-    let t = Vec3::new(pose.x_mm, pose.y_mm, geometry.home_height_mm() + pose.z_mm);
-    core::array::from_fn(|i| t + r * geometry.leg(i).platform_mm)
-}
-
-/// Leg vectors `l_i = q_i - b_i` for a pose (eq. 3), mm. The pose must be finite.
-pub fn leg_vectors<M: Math>(geometry: &Geometry, pose: &Pose) -> [Vec3; LEGS] {
-    let q = platform_joints::<M>(geometry, pose);
-    core::array::from_fn(|i| q[i] - geometry.leg(i).base_mm)
-}
-
 /// Bound on `|l|^2`, `|M|` and `|N|` (mm^2): no build reaches that far, and below it no later
 /// product or sum of the hot loop can overflow, whatever the [`Math`] does on overflow.
 const MAX_TERM_MM2: f32 = 1e18;
@@ -192,71 +179,90 @@ fn wrap_angle_rad<M: Math>(a: f32) -> f32 {
     }
 }
 
-/// One leg's constants for the hot loop.
+/// One leg's constants for the float path (mm, rad).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
-struct LegConstants {
+struct FloatLeg {
     /// `p_i`, mm.
     platform_mm: [f32; 3],
     /// `(0, 0, h0) - b_i`: the leg vector is `l_i = R p_i + (x, y, z) + offset`, mm.
     offset_mm: [f32; 3],
+    /// `(cos(beta_i), sin(beta_i))` with the `M` of [`Solver::new_with`]: the direction of arm
+    /// `i`'s plane (also for the arm tip of eq. 4-6 outside the IK).
+    plane: [f32; 2],
     /// `2a cos(beta)`, `2a sin(beta)`: `N = n_x l_x + n_y l_y` (eq. 9), mm.
-    n_x_mm: f32,
-    n_y_mm: f32,
-    /// Home arm angle alpha0 (eq. 12), rad: the fixed-point path's (below) where the geometry
-    /// takes it, else the float path's.
+    n_mm: [f32; 2],
+    /// Home arm angle alpha0 (eq. 12) as this path finds it, rad: home stays exact on it.
     alpha0_rad: f32,
-    /// alpha0 as the float path finds it, rad (for the poses that take that path: home stays
-    /// exact there too).
-    alpha0_float_rad: f32,
-    /// alpha0 as the fixed-point path finds it, in steps of 2^-28 rad (`fixed::ARM_FRAC`), and
-    /// wrapped into `(-pi, pi]`.
-    alpha0_q: i32,
-    alpha0_wrapped_q: i32,
-    /// `p_i` (x, y) and `offset` in fixed point, 2^-20 mm (`fixed::MM_FRAC`).
-    platform_q: [i32; 2],
-    offset_q: [i32; 3],
-    /// `n_x`, `n_y` in fixed point, 2^-20 mm.
-    n_q: [i32; 2],
 }
 
-/// The IK of one geometry: the geometry, its home arm angles, the per-leg constants the IK
-/// needs on every pose, computed once by [`Solver::new`], the rotation centre
-/// ([`Solver::set_rotation_centre_mm`], the platform frame's origin by default), and the
-/// solving itself ([`Solver::solve`], [`Solver::arm_angles`]).
-#[derive(Debug, Clone, PartialEq)]
-pub struct Solver {
-    geometry: Geometry,
+/// The float path's constants: `f32` arithmetic through `M`, for every build (the only path of
+/// a build beyond the fixed-point bounds; on the others, for poses beyond them).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct FloatTable {
     /// `s^2 - a^2`, mm^2 (the constant in `L` of eq. 9).
     rod_sq_minus_arm_sq: f32,
     /// `2a`, mm (the factor in `M` and `N` of eq. 9).
     two_arm_mm: f32,
-    /// `s^2 - a^2` in fixed point, 2^-36 mm^2 (`fixed::SQ_FRAC`), from the lengths in `f64`.
-    rod_term_q: i64,
-    /// `2a` in fixed point, 2^-20 mm (`fixed::MM_FRAC`).
-    two_arm_q: i32,
-    constants: [LegConstants; LEGS],
     /// Every platform joint has `z = 0` (true of every circular layout): `R p` skips a column.
     planar_platform: bool,
     /// Every base joint has the same `z` (true of every circular layout): the `z` of
     /// `(x, y, z) + offset` is the same for all legs, so the IK adds it once.
     flat_base: bool,
-    /// Planar, every `p_i` and offset coordinate within `fixed::MAX_FIXED_MM`, `2a` and
-    /// `s^2 - a^2` within their bounds: the IK may compute `l`, `L`, `M`, `N` in fixed point.
-    fixed_point: bool,
+    legs: [FloatLeg; LEGS],
+}
+
+/// One leg's constants for the fixed-point path (module `fixed`).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+struct FixedLeg {
+    /// `p_i` (x, y; `z = 0`), 2^-20 mm (`fixed::MM_FRAC`).
+    platform_q: [i32; 2],
+    /// `(0, 0, h0) - b_i`, 2^-20 mm.
+    offset_q: [i32; 3],
+    /// `2a cos(beta)`, `2a sin(beta)`, 2^-20 mm.
+    n_q: [i32; 2],
+    /// Home arm angle alpha0 (eq. 12) as this path finds it, in steps of 2^-28 rad
+    /// (`fixed::ARM_FRAC`): home stays exact on it.
+    alpha0_q: i32,
+}
+
+/// Where the rotation centre `c` is, for the fixed-point path.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum FixedCentre {
+    /// `c = 0`: nothing to add to the pose's translation.
+    Origin,
+    /// `c` in steps of 2^-20 mm (every coordinate within `fixed::MAX_FIXED_MM`): the IK adds
+    /// `c - R c` to the pose's translation (one rotation of `c` per pose).
+    At([i32; 3]),
+    /// A coordinate beyond `fixed::MAX_FIXED_MM`: every pose takes the float path.
+    Beyond,
+}
+
+/// The fixed-point path's constants (module `fixed`): a planar build whose every `p_i` and
+/// offset coordinate is within `fixed::MAX_FIXED_MM`, `2a` and `s^2 - a^2` within their bounds,
+/// has one, and then every pose within the bounds takes this path.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct FixedTable {
+    /// `s^2 - a^2`, 2^-36 mm^2 (`fixed::SQ_FRAC`), from the lengths in `f64`.
+    rod_term_q: i64,
+    /// `2a`, 2^-20 mm (`fixed::MM_FRAC`).
+    two_arm_q: i32,
+    centre: FixedCentre,
+    legs: [FixedLeg; LEGS],
+}
+
+/// The IK of one geometry: the geometry, the rotation centre
+/// ([`Solver::set_rotation_centre_mm`], the platform frame's origin by default), the per-leg
+/// constants and home arm angles of the float path and, where the build allows, of the
+/// fixed-point path, computed once by [`Solver::new`], and the solving itself
+/// ([`Solver::solve`], [`Solver::arm_angles`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Solver {
+    geometry: Geometry,
     /// The rotation centre `c`, platform frame, mm (module `configuration`): the platform turns
     /// about it and a pose's `(x, y, z)` is how far it moved from home.
     centre_mm: [f32; 3],
-    /// `c != 0`: the IK adds `c - R c` to the pose's translation (one rotation of `c` per
-    /// pose); with `c = 0` it does nothing more than before.
-    centred: bool,
-    /// `c` in fixed point, 2^-20 mm, when every coordinate is within `fixed::MAX_FIXED_MM`
-    /// (else the fixed-point path is not taken with this centre).
-    centre_q: Option<[i32; 3]>,
-    /// The IK needs `R`'s third column: the platform is not planar or `c` has a `z`.
-    full_rotation: bool,
-    /// `(cos(beta_i), sin(beta_i))` with the `M` of [`Solver::new_with`]: the direction of arm
-    /// `i`'s plane (for the arm tip of eq. 4-6 outside the hot loop).
-    arm_planes: [[f32; 2]; LEGS],
+    float: FloatTable,
+    fixed: Option<FixedTable>,
 }
 
 /// The pose's part of eq. 2, 3 in fixed point: the first two columns of `R` (`fixed::ROT_FRAC`
@@ -264,27 +270,6 @@ pub struct Solver {
 struct FixedPose {
     rows: [[i32; 2]; 3],
     position: [i32; 3],
-}
-
-/// Eq. 9's arm angles of all six legs, from either path.
-#[cfg(test)]
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) enum Angles {
-    /// The fixed-point path's: rad, in steps of 2^-28 (`fixed::ARM_FRAC`).
-    Fixed([i32; LEGS]),
-    /// The float path's, rad.
-    Float([f32; LEGS]),
-}
-
-#[cfg(test)]
-impl Angles {
-    /// The angles in rad.
-    pub(crate) fn rad(&self) -> [f32; LEGS] {
-        match *self {
-            Angles::Fixed(a) => a.map(|a| from_fixed(i64::from(a), ARM_FRAC)),
-            Angles::Float(a) => a,
-        }
-    }
 }
 
 /// `pi` and `2 pi` in steps of 2^-28 rad (`fixed::ARM_FRAC`), rounded.
@@ -388,96 +373,104 @@ impl Solver {
     }
 
     /// The IK of `geometry`: its per-leg constants (with `M`'s sine and cosine of `beta_i`),
-    /// whether the fixed-point path applies, and the home arm angles `alpha0` (eq. 12) computed
-    /// by this very solver with `M`, so the home pose gives exactly the home pulses. Refused
-    /// ([`GeometryError::HomeUnreachable`]) if an arm cannot reach its rod at the home pose.
+    /// the fixed-point path's where the build allows, and the home arm angles `alpha0`
+    /// (eq. 12) computed by this very solver with `M`, on each path, so the home pose gives
+    /// exactly the home pulses. Refused ([`GeometryError::HomeUnreachable`]) if an arm cannot
+    /// reach its rod at the home pose.
     pub fn new_with<M: Math>(geometry: Geometry) -> Result<Solver, GeometryError> {
         let legs = *geometry.legs();
         let (arm_mm, rod_mm) = (geometry.arm_mm(), geometry.rod_mm());
         let home_height_mm = geometry.home_height_mm();
-        let mut solver = Solver {
-            geometry,
+        let two_arm_mm = 2.0 * arm_mm;
+        let float_legs = legs.map(|leg| {
+            let (sin_beta, cos_beta) = M::sin_cos(leg.beta_rad);
+            FloatLeg {
+                platform_mm: leg.platform_mm.into(),
+                offset_mm: [
+                    -leg.base_mm.x,
+                    -leg.base_mm.y,
+                    home_height_mm - leg.base_mm.z,
+                ],
+                plane: [cos_beta, sin_beta],
+                n_mm: [two_arm_mm * cos_beta, two_arm_mm * sin_beta],
+                alpha0_rad: 0.0,
+            }
+        });
+        let float = FloatTable {
             rod_sq_minus_arm_sq: rod_mm * rod_mm - arm_mm * arm_mm,
-            two_arm_mm: 2.0 * arm_mm,
-            rod_term_q: 0,
-            two_arm_q: 0,
-            constants: [LegConstants::default(); LEGS],
+            two_arm_mm,
             planar_platform: legs.iter().all(|leg| leg.platform_mm.z == 0.0),
             flat_base: legs.iter().all(|leg| leg.base_mm.z == legs[0].base_mm.z),
-            fixed_point: false,
-            centre_mm: [0.0; 3],
-            centred: false,
-            centre_q: Some([0; 3]),
-            full_rotation: false,
-            arm_planes: [[1.0, 0.0]; LEGS],
+            legs: float_legs,
         };
-        solver.full_rotation = !solver.planar_platform;
-        let two_arm_mm = solver.two_arm_mm;
         let rod_term_mm2 =
             f64::from(rod_mm) * f64::from(rod_mm) - f64::from(arm_mm) * f64::from(arm_mm);
-        let fixed_lengths = two_arm_mm < MAX_FIXED_TWO_ARM_MM
-            && libm::fabs(rod_term_mm2) < f64::from(MAX_FIXED_ROD_TERM_MM2);
-        if fixed_lengths {
-            solver.two_arm_q = to_fixed(two_arm_mm, MM_FRAC);
-            solver.rod_term_q = to_fixed_sq(rod_term_mm2);
-        }
-        for ((c, leg), plane) in solver
-            .constants
-            .iter_mut()
-            .zip(legs.iter())
-            .zip(solver.arm_planes.iter_mut())
-        {
-            let (sin_beta, cos_beta) = M::sin_cos(leg.beta_rad);
-            *plane = [cos_beta, sin_beta];
-            c.platform_mm = leg.platform_mm.into();
-            c.offset_mm = [
-                -leg.base_mm.x,
-                -leg.base_mm.y,
-                home_height_mm - leg.base_mm.z,
-            ];
-            c.n_x_mm = two_arm_mm * cos_beta;
-            c.n_y_mm = two_arm_mm * sin_beta;
-            c.platform_q = [0, 1].map(|k| to_fixed(c.platform_mm[k], MM_FRAC));
-            c.offset_q = [0, 1, 2].map(|k| to_fixed(c.offset_mm[k], MM_FRAC));
-            if fixed_lengths {
-                // 2a (cos(beta), sin(beta)) from `M`'s fixed-point sine and cosine, exactly
-                // rounded to 2^-20 mm (|n| <= 2a: within range): the same bits on every
-                // machine, like the rest of the fixed-point path.
-                let (sin_q, cos_q) = M::sin_cos_fixed(leg.beta_rad);
-                let round = |v: i64| ((v + (1 << (ROT_FRAC - 1))) >> ROT_FRAC) as i32;
-                c.n_q = [
-                    round(wide_mul(solver.two_arm_q, cos_q)),
-                    round(wide_mul(solver.two_arm_q, sin_q)),
-                ];
-            }
-        }
-        solver.fixed_point = solver.planar_platform
-            && fixed_lengths
-            && solver.constants.iter().all(|c| {
+        let fixed_point = float.planar_platform
+            && two_arm_mm < MAX_FIXED_TWO_ARM_MM
+            && libm::fabs(rod_term_mm2) < f64::from(MAX_FIXED_ROD_TERM_MM2)
+            && float.legs.iter().all(|c| {
                 c.platform_mm
                     .iter()
                     .chain(c.offset_mm.iter())
                     .all(|v| v.abs() < MAX_FIXED_MM)
             });
+        let fixed = fixed_point.then(|| {
+            let two_arm_q = to_fixed(two_arm_mm, MM_FRAC);
+            FixedTable {
+                rod_term_q: to_fixed_sq(rod_term_mm2),
+                two_arm_q,
+                centre: FixedCentre::Origin,
+                legs: core::array::from_fn(|i| {
+                    let (leg, c) = (&legs[i], &float.legs[i]);
+                    // 2a (cos(beta), sin(beta)) from `M`'s fixed-point sine and cosine, exactly
+                    // rounded to 2^-20 mm (|n| <= 2a: within range): the same bits on every
+                    // machine, like the rest of the fixed-point path.
+                    let (sin_q, cos_q) = M::sin_cos_fixed(leg.beta_rad);
+                    let round = |v: i64| ((v + (1 << (ROT_FRAC - 1))) >> ROT_FRAC) as i32;
+                    FixedLeg {
+                        platform_q: [0, 1].map(|k| to_fixed(c.platform_mm[k], MM_FRAC)),
+                        offset_q: [0, 1, 2].map(|k| to_fixed(c.offset_mm[k], MM_FRAC)),
+                        n_q: [
+                            round(wide_mul(two_arm_q, cos_q)),
+                            round(wide_mul(two_arm_q, sin_q)),
+                        ],
+                        alpha0_q: 0,
+                    }
+                }),
+            }
+        });
+        let mut solver = Solver {
+            geometry,
+            centre_mm: [0.0; 3],
+            float,
+            fixed,
+        };
         // Eq. 12 is eq. 9 at the home pose (with eq. 9's naming: M0 = 2a(h0 + z_p - z_b),
         // N0 = 2a[cos(beta)(x_p - x_b) + sin(beta)(y_p - y_b)], L0 = 2a^2 when the legs agree
         // exactly). Evaluating eq. 9 itself at home gives the exact alpha0 of every leg: with
-        // each path (fixed point, float), so that each gives exactly the home pulses at home.
+        // each path (float, fixed point), so that each gives exactly the home pulses at home.
         let unreachable = |leg| GeometryError::HomeUnreachable { leg };
         let float_home = solver
-            .float_arm_angles::<M>(&Pose::HOME)
+            .float
+            .arm_angles::<M>(&solver.centre_mm, &Pose::HOME)
             .map_err(unreachable)?;
-        for (c, alpha0) in solver.constants.iter_mut().zip(float_home) {
-            c.alpha0_float_rad = alpha0;
+        for (c, alpha0) in solver.float.legs.iter_mut().zip(float_home) {
             c.alpha0_rad = alpha0;
         }
-        if let Some(fixed) = solver.fixed_pose::<M>(&Pose::HOME) {
-            let home = solver.fixed_arm_angles::<M>(&fixed).map_err(unreachable)?;
-            for (c, alpha0) in solver.constants.iter_mut().zip(home) {
-                c.alpha0_q = alpha0;
-                c.alpha0_wrapped_q = wrap_fixed(alpha0);
-                c.alpha0_rad = from_fixed(i64::from(alpha0), ARM_FRAC);
-            }
+        if let Some(table) = solver.fixed {
+            // (No pose at home only for a `Math` whose sines break the bounds of `fixed` there:
+            // then no fixed-point path.)
+            solver.fixed = match table.pose::<M>(&Pose::HOME) {
+                Some(home) => {
+                    let alpha0 = table.arm_angles::<M>(&home).map_err(unreachable)?;
+                    let mut table = table;
+                    for (c, alpha0) in table.legs.iter_mut().zip(alpha0) {
+                        c.alpha0_q = alpha0;
+                    }
+                    Some(table)
+                }
+                None => None,
+            };
         }
         Ok(solver)
     }
@@ -487,19 +480,18 @@ impl Solver {
         &self.geometry
     }
 
-    /// Home arm angle `alpha0` (eq. 12) of leg `index` (0..=5), rad, above horizontal.
+    /// Home arm angle `alpha0` (eq. 12) of leg `index` (0..=5), rad, above horizontal: the
+    /// fixed-point path's where the build has one, else the float path's.
     pub fn alpha0_rad(&self, index: usize) -> f32 {
-        self.constants[index].alpha0_rad
-    }
-
-    /// The home arm angles `alpha0` (eq. 12) of all legs, rad.
-    pub fn alpha0s_rad(&self) -> [f32; LEGS] {
-        core::array::from_fn(|i| self.constants[i].alpha0_rad)
+        match &self.fixed {
+            Some(table) => from_fixed(i64::from(table.legs[index].alpha0_q), ARM_FRAC),
+            None => self.float.legs[index].alpha0_rad,
+        }
     }
 
     /// `(cos(beta_i), sin(beta_i))` of leg `index` (0..=5): the direction of its arm's plane.
     pub fn arm_plane(&self, index: usize) -> [f32; 2] {
-        self.arm_planes[index]
+        self.float.legs[index].plane
     }
 
     /// The rotation centre `c`, platform frame, mm (see [`crate::configuration`]).
@@ -514,13 +506,15 @@ impl Solver {
     pub fn set_rotation_centre_mm(&mut self, centre_mm: Vec3) -> Result<(), ConfigurationError> {
         let c = check_centre(centre_mm)?;
         self.centre_mm = c.into();
-        self.centred = c != Vec3::zeros();
-        self.centre_q = self
-            .centre_mm
-            .iter()
-            .all(|v| below(v.abs(), MAX_FIXED_MM))
-            .then(|| self.centre_mm.map(|v| to_fixed(v, MM_FRAC)));
-        self.full_rotation = !self.planar_platform || c.z != 0.0;
+        if let Some(table) = &mut self.fixed {
+            table.centre = if c == Vec3::zeros() {
+                FixedCentre::Origin
+            } else if self.centre_mm.iter().all(|v| below(v.abs(), MAX_FIXED_MM)) {
+                FixedCentre::At(self.centre_mm.map(|v| to_fixed(v, MM_FRAC)))
+            } else {
+                FixedCentre::Beyond
+            };
+        }
         Ok(())
     }
 
@@ -545,34 +539,116 @@ impl Solver {
         }
     }
 
+    /// Arm angles `alpha_i` for a pose (eq. 9), rad, each within `(-pi, pi]` of its `alpha0`.
+    pub fn arm_angles<M: Math>(&self, pose: &Pose) -> Result<[f32; LEGS], IkError> {
+        check_pose(pose)?;
+        let unreachable = |leg| IkError::Unreachable { leg };
+        if let Some((table, fixed)) = self.fixed_pose::<M>(pose) {
+            let alpha = table.arm_angles::<M>(&fixed).map_err(unreachable)?;
+            return Ok(core::array::from_fn(|i| {
+                let alpha0 = table.legs[i].alpha0_q;
+                arm_rad_fixed(alpha0, offset_fixed(alpha[i], wrap_fixed(alpha0)))
+            }));
+        }
+        let mut alpha = self
+            .float
+            .arm_angles::<M>(&self.centre_mm, pose)
+            .map_err(unreachable)?;
+        for (a, c) in alpha.iter_mut().zip(&self.float.legs) {
+            let alpha0 = Real::<M>::new(c.alpha0_rad);
+            let offset = wrap_angle_rad::<M>((Real::new(*a) - alpha0).0);
+            *a = (alpha0 + Real::new(offset)).0;
+        }
+        Ok(alpha)
+    }
+
+    /// Arm angles and pulse widths for a pose (eq. 9, 13, 14): all six or an error naming the
+    /// first leg or servo that cannot follow. The pulses come from each arm's offset from home,
+    /// `alpha_i - alpha0_i` wrapped into `(-pi, pi]` (eq. 13, 14 use it), not from the angles,
+    /// which saves a subtraction per servo. On the fixed-point path they are computed in fixed
+    /// point too (`ServoConfig::pulse_us_for_fixed_offset`), each pulse and angle rounded once to
+    /// `f32`: no float operation at all (each is a library call on the RP2040).
+    pub fn solve<M: Math>(&self, servos: &ServoSet, pose: &Pose) -> Result<Solution, IkError> {
+        check_pose(pose)?;
+        let unreachable = |leg| IkError::Unreachable { leg };
+        let limit = |i: usize, servo: &ServoConfig, pulse_us: f32| IkError::ServoLimit {
+            servo: i as u8 + 1,
+            pulse_us,
+            min_us: servo.min_us,
+            max_us: servo.max_us,
+        };
+        let mut arm_rad = [0.0f32; LEGS];
+        let mut pulse_us = [0.0f32; LEGS];
+        if let Some((table, fixed)) = self.fixed_pose::<M>(pose) {
+            let alpha = table.arm_angles::<M>(&fixed).map_err(unreachable)?;
+            for (i, servo) in servos.0.iter().enumerate() {
+                let alpha0 = table.legs[i].alpha0_q;
+                let offset = offset_fixed(alpha[i], wrap_fixed(alpha0));
+                let pulse = servo.pulse_us_for_fixed_offset::<M>(offset);
+                if !servo.allows(pulse) {
+                    return Err(limit(i, servo, pulse));
+                }
+                pulse_us[i] = pulse;
+                arm_rad[i] = arm_rad_fixed(alpha0, offset);
+            }
+        } else {
+            let alpha = self
+                .float
+                .arm_angles::<M>(&self.centre_mm, pose)
+                .map_err(unreachable)?;
+            for (i, servo) in servos.0.iter().enumerate() {
+                let alpha0 = Real::<M>::new(self.float.legs[i].alpha0_rad);
+                let offset = wrap_angle_rad::<M>((Real::new(alpha[i]) - alpha0).0);
+                let pulse = servo.pulse_us_for_offset::<M>(offset);
+                if !servo.allows(pulse) {
+                    return Err(limit(i, servo, pulse));
+                }
+                pulse_us[i] = pulse;
+                arm_rad[i] = (alpha0 + Real::new(offset)).0;
+            }
+        }
+        Ok(Solution { arm_rad, pulse_us })
+    }
+
+    /// The fixed-point path's table and the pose's part of eq. 2, 3 on it, where this build
+    /// and pose take that path (every usual build and pose).
+    #[inline(always)]
+    fn fixed_pose<M: Math>(&self, pose: &Pose) -> Option<(&FixedTable, FixedPose)> {
+        let table = self.fixed.as_ref()?;
+        Some((table, table.pose::<M>(pose)?))
+    }
+}
+
+impl FixedTable {
     /// The pose's part of eq. 2, 3 in fixed point, or `None` where the float path must run: a
-    /// geometry that is not planar or too large ([`Solver::fixed_point`]), a position beyond
-    /// `fixed::MAX_FIXED_MM`, a rotation centre beyond it, or a translation with `c - R c`
-    /// beyond it. `R` (eq. 1) comes from `M`'s fixed-point sines and cosines
+    /// position beyond `fixed::MAX_FIXED_MM`, a rotation centre beyond it, or a translation
+    /// with `c - R c` beyond it. `R` (eq. 1) comes from `M`'s fixed-point sines and cosines
     /// ([`Pose::rotation_fixed`]); the pose must be finite.
     #[inline(always)]
-    fn fixed_pose<M: Math>(&self, pose: &Pose) -> Option<FixedPose> {
-        if !self.fixed_point {
-            return None;
-        }
+    fn pose<M: Math>(&self, pose: &Pose) -> Option<FixedPose> {
         let position = [pose.x_mm, pose.y_mm, pose.z_mm];
         if !position.iter().all(|v| below(v.abs(), MAX_FIXED_MM)) {
             return None;
         }
-        let r = pose.rotation_fixed::<M>(self.full_rotation);
+        let centre = match self.centre {
+            FixedCentre::Origin => None,
+            FixedCentre::At(c) => Some(c),
+            FixedCentre::Beyond => return None,
+        };
+        // The platform is planar: `R`'s third column only turns the centre's `z`.
+        let r = pose.rotation_fixed::<M>(centre.is_some_and(|c| c[2] != 0));
         // (A check against the `Math` in use, whatever its sines: the bounds of `fixed` hold.)
-        if !r
-            .iter()
-            .flatten()
-            .all(|v| v.unsigned_abs() < MAX_ROTATION_ENTRY as u32)
-        {
+        let bounded = |row: &[i32; 3]| {
+            row.iter()
+                .all(|v| v.unsigned_abs() < MAX_ROTATION_ENTRY as u32)
+        };
+        if !(bounded(&r[0]) && bounded(&r[1]) && bounded(&r[2])) {
             return None;
         }
         let mut position = position.map(|v| to_fixed(v, MM_FRAC));
-        if self.centred {
+        if let Some(c) = centre {
             // About the rotation centre c: q = T + c + R (p - c) = (T + c - R c) + R p, with
             // R c exact and rounded once to 2^-20 mm (|c_k| < 384 mm: no overflow).
-            let c = self.centre_q?;
             for (k, t) in position.iter_mut().enumerate() {
                 let rc =
                     wide_mul(r[k][0], c[0]) + wide_mul(r[k][1], c[1]) + wide_mul(r[k][2], c[2]);
@@ -589,17 +665,6 @@ impl Solver {
         })
     }
 
-    /// Eq. 9 for all legs without the pose checks; `Err(leg number)` if a leg cannot reach.
-    /// The fixed-point path where [`Solver::fixed_pose`] allows it (every usual build and
-    /// pose), else the float path (the steps [`Solver::solve`] takes, for the tests).
-    #[cfg(test)]
-    pub(crate) fn arm_angles_raw<M: Math>(&self, pose: &Pose) -> Result<Angles, u8> {
-        match self.fixed_pose::<M>(pose) {
-            Some(fixed) => self.fixed_arm_angles::<M>(&fixed).map(Angles::Fixed),
-            None => self.float_arm_angles::<M>(pose).map(Angles::Float),
-        }
-    }
-
     /// The firmware's hot loop: eq. 2, 3 and 9 for all legs in fixed point (module
     /// [`crate::fixed`]), arm angles in steps of 2^-28 rad; `Err(leg number)` if a leg cannot
     /// reach.
@@ -614,9 +679,9 @@ impl Solver {
     /// what the chip runs). No float arithmetic at all: on the RP2040 each float operation is a
     /// library call.
     #[inline(always)]
-    fn fixed_arm_angles<M: Math>(&self, fixed: &FixedPose) -> Result<[i32; LEGS], u8> {
+    fn arm_angles<M: Math>(&self, fixed: &FixedPose) -> Result<[i32; LEGS], u8> {
         let mut alpha = [0i32; LEGS];
-        for (i, c) in self.constants.iter().enumerate() {
+        for (i, c) in self.legs.iter().enumerate() {
             // l (eq. 2, 3) in 2^-20 mm: R p rounded to nearest (halves up), then the
             // translation, exactly.
             let (rows, position) = (&fixed.rows, &fixed.position);
@@ -647,20 +712,23 @@ impl Solver {
         }
         Ok(alpha)
     }
+}
 
+impl FloatTable {
     /// The float path of eq. 2, 3 and 9, for builds and poses beyond the fixed-point bounds:
     /// per leg, `l = R p + (x, y, z) + ((0, 0, h0) - b)`, then `L`, `M`, `N` and the half-angle
     /// root, float arithmetic through `M` ([`Real`]). With `L - N` and `L + N` at hand, the
     /// discriminant is `D = M^2 - (L - N)(L + N)`. `Err(leg number)` if a leg cannot reach.
-    pub(crate) fn float_arm_angles<M: Math>(&self, pose: &Pose) -> Result<[f32; LEGS], u8> {
-        let r = pose.rotation_columns::<M>(self.full_rotation);
+    fn arm_angles<M: Math>(&self, centre_mm: &[f32; 3], pose: &Pose) -> Result<[f32; LEGS], u8> {
+        // `R`'s third column turns the platform joints' and the centre's `z`.
+        let r = pose.rotation_columns::<M>(!self.planar_platform || !is_zero(centre_mm[2]));
         let real = Real::<M>::new;
         let row = |i: usize| [real(r[(i, 0)]), real(r[(i, 1)]), real(r[(i, 2)])];
         let rows = [row(0), row(1), row(2)];
         let mut translation = [pose.x_mm, pose.y_mm, pose.z_mm];
-        if self.centred {
+        if !centre_mm.iter().all(|v| is_zero(*v)) {
             // About the rotation centre c: q = T + c + R (p - c) = (T + c - R c) + R p.
-            let c = self.centre_mm.map(real);
+            let c = centre_mm.map(real);
             for (k, t) in translation.iter_mut().enumerate() {
                 let rc = rows[k][0] * c[0] + rows[k][1] * c[1] + rows[k][2] * c[2];
                 *t = (real(*t) + (c[k] - rc)).0;
@@ -671,9 +739,9 @@ impl Solver {
         let two_arm = real(self.two_arm_mm);
         // With a flat base every leg has the same z offset: `z + offset_z` once for all legs
         // (the same sum each leg would compute).
-        let shared_z = position[2] + real(self.constants[0].offset_mm[2]);
+        let shared_z = position[2] + real(self.legs[0].offset_mm[2]);
         let mut alpha = [0.0f32; LEGS];
-        for (i, c) in self.constants.iter().enumerate() {
+        for (i, c) in self.legs.iter().enumerate() {
             // `M`, `L - N` and `L + N` of eq. 9, mm^2.
             let p = c.platform_mm.map(real);
             let l: [Real<M>; 3] = core::array::from_fn(|k| {
@@ -691,7 +759,7 @@ impl Solver {
             });
             let leg_sq = l[0] * l[0] + l[1] * l[1] + l[2] * l[2];
             let big_m = two_arm * l[2];
-            let big_n = real(c.n_x_mm) * l[0] + real(c.n_y_mm) * l[1];
+            let big_n = real(c.n_mm[0]) * l[0] + real(c.n_mm[1]) * l[1];
             let bounded = below(leg_sq.0, MAX_TERM_MM2)
                 && below(big_m.0.abs(), MAX_TERM_MM2)
                 && below(big_n.0.abs(), MAX_TERM_MM2);
@@ -720,71 +788,6 @@ impl Solver {
         }
         Ok(alpha)
     }
-
-    /// Arm angles `alpha_i` for a pose (eq. 9), rad, each within `(-pi, pi]` of its `alpha0`.
-    pub fn arm_angles<M: Math>(&self, pose: &Pose) -> Result<[f32; LEGS], IkError> {
-        check_pose(pose)?;
-        let unreachable = |leg| IkError::Unreachable { leg };
-        if let Some(fixed) = self.fixed_pose::<M>(pose) {
-            let alpha = self.fixed_arm_angles::<M>(&fixed).map_err(unreachable)?;
-            return Ok(core::array::from_fn(|i| {
-                let c = &self.constants[i];
-                arm_rad_fixed(c.alpha0_q, offset_fixed(alpha[i], c.alpha0_wrapped_q))
-            }));
-        }
-        let mut alpha = self.float_arm_angles::<M>(pose).map_err(unreachable)?;
-        for (i, a) in alpha.iter_mut().enumerate() {
-            let alpha0 = Real::<M>::new(self.constants[i].alpha0_float_rad);
-            let offset = wrap_angle_rad::<M>((Real::new(*a) - alpha0).0);
-            *a = (alpha0 + Real::new(offset)).0;
-        }
-        Ok(alpha)
-    }
-
-    /// Arm angles and pulse widths for a pose (eq. 9, 13, 14): all six or an error naming the
-    /// first leg or servo that cannot follow. The pulses come from each arm's offset from home,
-    /// `alpha_i - alpha0_i` wrapped into `(-pi, pi]` (eq. 13, 14 use it), not from the angles,
-    /// which saves a subtraction per servo. On the fixed-point path they are computed in fixed
-    /// point too (`ServoConfig::pulse_us_for_fixed_offset`), each pulse and angle rounded once to
-    /// `f32`: no float operation at all (each is a library call on the RP2040).
-    pub fn solve<M: Math>(&self, servos: &ServoSet, pose: &Pose) -> Result<Solution, IkError> {
-        check_pose(pose)?;
-        let unreachable = |leg| IkError::Unreachable { leg };
-        let limit = |i: usize, servo: &ServoConfig, pulse_us: f32| IkError::ServoLimit {
-            servo: i as u8 + 1,
-            pulse_us,
-            min_us: servo.min_us,
-            max_us: servo.max_us,
-        };
-        let mut arm_rad = [0.0f32; LEGS];
-        let mut pulse_us = [0.0f32; LEGS];
-        if let Some(fixed) = self.fixed_pose::<M>(pose) {
-            let alpha = self.fixed_arm_angles::<M>(&fixed).map_err(unreachable)?;
-            for (i, servo) in servos.0.iter().enumerate() {
-                let c = &self.constants[i];
-                let offset = offset_fixed(alpha[i], c.alpha0_wrapped_q);
-                let pulse = servo.pulse_us_for_fixed_offset::<M>(offset);
-                if !servo.allows(pulse) {
-                    return Err(limit(i, servo, pulse));
-                }
-                pulse_us[i] = pulse;
-                arm_rad[i] = arm_rad_fixed(c.alpha0_q, offset);
-            }
-        } else {
-            let alpha = self.float_arm_angles::<M>(pose).map_err(unreachable)?;
-            for (i, servo) in servos.0.iter().enumerate() {
-                let alpha0 = Real::<M>::new(self.constants[i].alpha0_float_rad);
-                let offset = wrap_angle_rad::<M>((Real::new(alpha[i]) - alpha0).0);
-                let pulse = servo.pulse_us_for_offset::<M>(offset);
-                if !servo.allows(pulse) {
-                    return Err(limit(i, servo, pulse));
-                }
-                pulse_us[i] = pulse;
-                arm_rad[i] = (alpha0 + Real::new(offset)).0;
-            }
-        }
-        Ok(Solution { arm_rad, pulse_us })
-    }
 }
 
 #[cfg(test)]
@@ -793,7 +796,39 @@ mod tests {
     use crate::geometry::Leg;
     use crate::test_support::xorshift;
 
-    /// Eq. 9 (half-angle form, as in [`Solver::arm_angles_raw`]) for one leg in `f64`, rad.
+    /// Eq. 9's arm angles of all six legs, from either path.
+    #[derive(Debug, Clone, Copy, PartialEq)]
+    enum Angles {
+        /// The fixed-point path's: rad, in steps of 2^-28 (`fixed::ARM_FRAC`).
+        Fixed([i32; LEGS]),
+        /// The float path's, rad.
+        Float([f32; LEGS]),
+    }
+
+    impl Angles {
+        /// The angles in rad.
+        fn rad(&self) -> [f32; LEGS] {
+            match *self {
+                Angles::Fixed(a) => a.map(|a| from_fixed(i64::from(a), ARM_FRAC)),
+                Angles::Float(a) => a,
+            }
+        }
+    }
+
+    /// Eq. 9 for all legs without the pose checks; `Err(leg number)` if a leg cannot reach.
+    /// The fixed-point path where the solver takes it (every usual build and pose), else the
+    /// float path (the steps [`Solver::solve`] takes).
+    fn arm_angles_raw<M: Math>(solver: &Solver, pose: &Pose) -> Result<Angles, u8> {
+        match solver.fixed_pose::<M>(pose) {
+            Some((table, fixed)) => table.arm_angles::<M>(&fixed).map(Angles::Fixed),
+            None => solver
+                .float
+                .arm_angles::<M>(&solver.centre_mm, pose)
+                .map(Angles::Float),
+        }
+    }
+
+    /// Eq. 9 (half-angle form, as in [`Solver::solve`]) for one leg in `f64`, rad.
     fn arm_angle_f64(g: &Geometry, pose: &Pose, leg: usize) -> f64 {
         let (sr, cr) = libm::sincos(f64::from(pose.roll_rad));
         let (sp, cp) = libm::sincos(f64::from(pose.pitch_rad));
@@ -836,9 +871,9 @@ mod tests {
     fn fixed_point_path_is_more_accurate_than_float() {
         let g = Geometry::default();
         let solver = Solver::new(g.clone()).expect("a valid geometry");
-        assert!(solver.fixed_point);
+        assert!(solver.fixed.is_some());
         let mut float = solver.clone();
-        float.fixed_point = false;
+        float.fixed = None;
         let (mut worst_fixed, mut worst_float) = (0.0f64, 0.0f64);
         for i in 0..2000 {
             let t = i as f32 * 0.01;
@@ -851,8 +886,8 @@ mod tests {
                 15.0 * libm::sinf(0.5 * t),
             );
             match (
-                solver.arm_angles_raw::<Libm>(&pose),
-                float.arm_angles_raw::<Libm>(&pose),
+                arm_angles_raw::<Libm>(&solver, &pose),
+                arm_angles_raw::<Libm>(&float, &pose),
             ) {
                 (Ok(a), Ok(b)) => {
                     assert!(matches!((a, b), (Angles::Fixed(_), Angles::Float(_))));
@@ -907,7 +942,7 @@ mod tests {
         for build in builds {
             let g = build.build().unwrap();
             let solver = Solver::new(g.clone()).expect("a valid geometry");
-            assert!(solver.fixed_point, "{build:?}");
+            assert!(solver.fixed.is_some(), "{build:?}");
             let (mut ok, mut worst) = (0, 0.0f64);
             for i in 0..4000 {
                 // Half the poses small, half out to the fixed-point limits.
@@ -924,7 +959,7 @@ mod tests {
                     next(deg),
                     next(deg),
                 );
-                if let Ok(alpha) = solver.arm_angles_raw::<Libm>(&pose) {
+                if let Ok(alpha) = arm_angles_raw::<Libm>(&solver, &pose) {
                     ok += 1;
                     for (leg, a) in alpha.rad().iter().enumerate() {
                         let d = (f64::from(*a) - arm_angle_f64(&g, &pose, leg)).abs();
@@ -940,11 +975,10 @@ mod tests {
             arm_mm: 385.0,
             ..builds[1]
         };
-        assert!(
-            !Solver::new(past.build().unwrap())
-                .expect("a valid geometry")
-                .fixed_point
-        );
+        assert!(Solver::new(past.build().unwrap())
+            .expect("a valid geometry")
+            .fixed
+            .is_none());
     }
 
     #[test]

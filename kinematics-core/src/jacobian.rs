@@ -20,6 +20,9 @@
 //!   leg's workspace boundary, where eq. 9's discriminant vanishes): refused
 //!   ([`KinematicsError::DeadCentre`]).
 //!
+//! [`Actuators`] is what the kinematics beyond the IK (forward kinematics, rates, statics,
+//! dynamics) need of either kind of leg: joint values and this Jacobian at a pose.
+//!
 //! Near-singular poses, where nothing divides by zero:
 //! - where the platform gains a freedom the legs cannot resist (a parallel singularity, e.g.
 //!   struts lying flat), [`Jacobian::condition_number`] grows without bound and
@@ -28,13 +31,15 @@
 //!   without bound (refused at [`DEAD_CENTRE_TOLERANCE`]); that scales the row and need not
 //!   show in the condition number: [`crate::legs::ArmState::transmission`] measures it.
 
+use crate::configuration::{Anchors, Placement};
 use crate::error::KinematicsError;
 use crate::geometry::Geometry;
-use crate::legs::{Actuators, ArmState, StrutState};
+use crate::ik::Solver;
+use crate::legs::{ArmState, StrutState, Struts};
 use crate::linalg::{condition_number, Lu6, Mat6, Vec6};
 use crate::math::{cross, dot, lt, Math, Real};
 use crate::pose::Pose;
-use crate::{Mat3, Vec3, LEGS};
+use crate::types::{Mat3, Vec3, LEGS};
 
 /// `|d . t|` below this fraction of `|d| |t| = s a` is dead centre: the arm's rate would be
 /// more than 1e5 times its rate at right angles, and `d . t` is within a few hundred `f32`
@@ -141,6 +146,72 @@ impl Jacobian {
     }
 }
 
+/// What the kinematics beyond the IK need of a platform's six actuators: their joint values at
+/// a pose (strut lengths in mm, or servo arm angles in rad) and the Jacobian there.
+///
+/// Implemented here for [`Struts`] (linear actuators) and [`Solver`] (RC servos). The forward
+/// kinematics, rates, statics and dynamics work with either.
+pub trait Actuators {
+    /// The anchors, home height and rotation centre.
+    fn anchors(&self) -> Anchors;
+
+    /// The joint values at `pose` (strut lengths, mm, or arm angles, rad), whatever the
+    /// actuators' limits (stroke, servo pulses).
+    fn joint_values<M: Math>(&self, pose: &Pose) -> Result<[f32; LEGS], KinematicsError>;
+
+    /// The joint values and the Jacobian at `pose` (computed together, sharing the work).
+    fn linearise<M: Math>(&self, pose: &Pose) -> Result<Linearisation, KinematicsError>;
+}
+
+/// The joint values at a pose and the Jacobian there.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Linearisation {
+    /// Strut lengths (mm) or arm angles (rad).
+    pub joint_values: [f32; LEGS],
+    /// `d joint / d twist` (see [`Jacobian`]).
+    pub jacobian: Jacobian,
+    /// Where the platform is.
+    pub placement: Placement,
+}
+
+impl Actuators for Struts {
+    fn anchors(&self) -> Anchors {
+        Struts::anchors(self)
+    }
+
+    fn joint_values<M: Math>(&self, pose: &Pose) -> Result<[f32; LEGS], KinematicsError> {
+        Ok(self.state::<M>(pose)?.lengths_mm)
+    }
+
+    fn linearise<M: Math>(&self, pose: &Pose) -> Result<Linearisation, KinematicsError> {
+        let state = self.state::<M>(pose)?;
+        Ok(Linearisation {
+            joint_values: state.lengths_mm,
+            jacobian: Jacobian::of_struts::<M>(&state),
+            placement: state.placement,
+        })
+    }
+}
+
+impl Actuators for Solver {
+    fn anchors(&self) -> Anchors {
+        Solver::anchors(self)
+    }
+
+    fn joint_values<M: Math>(&self, pose: &Pose) -> Result<[f32; LEGS], KinematicsError> {
+        Ok(self.arm_angles::<M>(pose)?)
+    }
+
+    fn linearise<M: Math>(&self, pose: &Pose) -> Result<Linearisation, KinematicsError> {
+        let state = ArmState::new::<M>(self, pose)?;
+        Ok(Linearisation {
+            joint_values: state.arm_rad,
+            jacobian: Jacobian::of_arms::<M>(&state, self.geometry())?,
+            placement: state.placement,
+        })
+    }
+}
+
 fn set_row(matrix: &mut Mat6, i: usize, linear: Vec3, angular: Vec3) {
     for k in 0..3 {
         matrix[(i, k)] = linear[k];
@@ -223,8 +294,8 @@ pub fn euler_rates_from_rotation<M: Math>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::ik::Solver;
-    use crate::{Geometry, Libm};
+    use crate::geometry::Geometry;
+    use crate::math::Libm;
 
     #[test]
     fn euler_rates_invert_the_rate_matrix() {

@@ -1,5 +1,5 @@
-//! The legs at a pose, for both kinds of platform, and [`Actuators`], what the kinematics
-//! beyond the IK need of either.
+//! The legs at a pose, for both kinds of platform (what the kinematics beyond the IK need of
+//! either, [`crate::jacobian::Actuators`], is implemented with them in [`crate::jacobian`]).
 //!
 //! - Linear struts ([`Struts`]): leg `i` runs from its base joint `b_i` to its platform joint
 //!   `q_i`; its vector is `l_i = q_i - b_i` (eq. 3 of "The Mathematics of the Stewart
@@ -21,42 +21,13 @@ use crate::configuration::{
 };
 use crate::error::KinematicsError;
 use crate::ik::{check_pose, Solver};
-use crate::jacobian::Jacobian;
 use crate::math::{dot, lt, sub, Math, Real};
 use crate::pose::Pose;
-use crate::{Vec3, LEGS};
+use crate::types::{Vec3, LEGS};
 
 /// Struts shorter than this are refused as [`KinematicsError::ZeroLength`], mm: their
 /// direction is lost in `f32` rounding.
 pub const MIN_LENGTH_MM: f32 = 1e-3;
-
-/// What the kinematics beyond the IK need of a platform's six actuators: their joint values at
-/// a pose (strut lengths in mm, or servo arm angles in rad) and the Jacobian there.
-///
-/// Implemented by [`Struts`] (linear actuators) and [`ik::Solver`] (RC servos). The forward
-/// kinematics, rates, statics and dynamics work with either.
-pub trait Actuators {
-    /// The anchors, home height and rotation centre.
-    fn anchors(&self) -> Anchors;
-
-    /// The joint values at `pose` (strut lengths, mm, or arm angles, rad), whatever the
-    /// actuators' limits (stroke, servo pulses).
-    fn joint_values<M: Math>(&self, pose: &Pose) -> Result<[f32; LEGS], KinematicsError>;
-
-    /// The joint values and the Jacobian at `pose` (computed together, sharing the work).
-    fn linearise<M: Math>(&self, pose: &Pose) -> Result<Linearisation, KinematicsError>;
-}
-
-/// The joint values at a pose and the Jacobian there.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Linearisation {
-    /// Strut lengths (mm) or arm angles (rad).
-    pub joint_values: [f32; LEGS],
-    /// `d joint / d twist` (see [`Jacobian`]).
-    pub jacobian: Jacobian,
-    /// Where the platform is.
-    pub placement: Placement,
-}
 
 /// The lengths a strut can take, mm.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -126,7 +97,7 @@ impl Struts {
             rotation_centre_mm: Vec3::zeros(),
         };
         let home = Pose::HOME;
-        let placement = anchors.place::<crate::Libm>(&home);
+        let placement = anchors.place::<crate::math::Libm>(&home);
         let mut home_lengths_mm = [0.0; LEGS];
         for (i, length) in home_lengths_mm.iter_mut().enumerate() {
             *length = (placement.joints_mm[i] - base_mm[i]).norm();
@@ -155,6 +126,11 @@ impl Struts {
     pub fn from_cubic(config: &CubicConfiguration) -> Result<Struts, ConfigurationError> {
         let (base, platform) = config.anchors()?;
         Struts::new(base, platform, config.home_height_mm)
+    }
+
+    /// The anchors, home height and rotation centre.
+    pub fn anchors(&self) -> Anchors {
+        self.anchors
     }
 
     /// Sets the rotation centre (platform frame, mm; see [`crate::configuration`]).
@@ -221,25 +197,6 @@ impl Struts {
             }
         }
         Ok(state)
-    }
-}
-
-impl Actuators for Struts {
-    fn anchors(&self) -> Anchors {
-        self.anchors
-    }
-
-    fn joint_values<M: Math>(&self, pose: &Pose) -> Result<[f32; LEGS], KinematicsError> {
-        Ok(self.state::<M>(pose)?.lengths_mm)
-    }
-
-    fn linearise<M: Math>(&self, pose: &Pose) -> Result<Linearisation, KinematicsError> {
-        let state = self.state::<M>(pose)?;
-        Ok(Linearisation {
-            joint_values: state.lengths_mm,
-            jacobian: Jacobian::of_struts::<M>(&state),
-            placement: state.placement,
-        })
     }
 }
 
@@ -317,29 +274,11 @@ pub fn arm_tips<M: Math>(solver: &Solver, arm_rad: &[f32; LEGS]) -> ([Vec3; LEGS
     (tips_mm, rates_mm)
 }
 
-impl Actuators for Solver {
-    fn anchors(&self) -> Anchors {
-        Solver::anchors(self)
-    }
-
-    fn joint_values<M: Math>(&self, pose: &Pose) -> Result<[f32; LEGS], KinematicsError> {
-        Ok(self.arm_angles::<M>(pose)?)
-    }
-
-    fn linearise<M: Math>(&self, pose: &Pose) -> Result<Linearisation, KinematicsError> {
-        let state = ArmState::new::<M>(self, pose)?;
-        Ok(Linearisation {
-            joint_values: state.arm_rad,
-            jacobian: Jacobian::of_arms::<M>(&state, self.geometry())?,
-            placement: state.placement,
-        })
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{Geometry, Libm};
+    use crate::geometry::Geometry;
+    use crate::math::Libm;
 
     #[test]
     fn strut_lengths_at_home_and_stroke_errors() {

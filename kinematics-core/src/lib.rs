@@ -19,16 +19,22 @@
 //! - [`servo`]: per-servo pulse mapping (home pulse, rate, direction, limits).
 //! - [`ik`]: pose -> arm angles -> pulse widths, all-or-nothing with errors naming the leg/servo;
 //!   an [`ik::Solver`] is the IK of one geometry: it owns it (and its rotation centre), derives
-//!   the home arm angles `alpha0` (eq. 12) and holds what it computes once per geometry.
+//!   the home arm angles `alpha0` (eq. 12) and holds what it computes once per geometry: a
+//!   float table for every build, and a fixed-point table exactly where the build takes that
+//!   path (`Option`).
 //! - [`legs`]: the legs at a pose: linear [`legs::Struts`] (lengths, unit vectors, strokes) and
-//!   servo arms ([`legs::ArmState`]); the [`legs::Actuators`] trait both implement.
-//! - [`jacobian`]: joint rates per unit twist, condition number, Euler-angle rates.
+//!   servo arms ([`legs::ArmState`]).
+//! - [`jacobian`]: joint rates per unit twist, condition number, Euler-angle rates; the
+//!   [`jacobian::Actuators`] trait both kinds of leg implement (joint values and Jacobian),
+//!   which the modules below take.
 //! - [`rates`]: joint rates from a twist and back, servo speed limits.
 //! - [`statics`]: joint forces for a wrench, holding torques of a payload, stiffness, compliance.
 //! - [`dynamics`]: link and arm motions along a trajectory, actuation with inertia.
 //! - [`forward`]: forward kinematics, approximate and by Newton's method, a step at a time.
 //! - [`workspace`]: the reach along each axis, a test at a time, and sampled grids.
 //! - [`linalg`]: the 6x6 linear algebra; [`error`]: [`KinematicsError`].
+//! - [`types`]: [`LEGS`], [`Vec3`], [`Mat3`]: a leaf every module imports (this root only
+//!   re-exports; no module imports it).
 //! - [`math`]: the few transcendental functions the kinematics need, behind a trait so the
 //!   firmware can supply the RP2040 boot ROM's fast routines while the host uses `libm`; and
 //!   their fixed-point forms for the IK's hot loop (by default [`fixed`]'s, the same bits
@@ -58,6 +64,7 @@ pub mod pose;
 pub mod rates;
 pub mod servo;
 pub mod statics;
+pub mod types;
 pub mod workspace;
 
 pub use error::KinematicsError;
@@ -66,14 +73,7 @@ pub use ik::{IkError, Solution, Solver};
 pub use math::{FloatRoutines, Libm, Math};
 pub use pose::Pose;
 pub use servo::{Direction, ServoConfig, ServoError, ServoSet};
-
-/// Number of legs (and servos) of a Stewart platform.
-pub const LEGS: usize = 6;
-
-/// A 3-vector in millimetres (base or platform frame, as the name of the value says).
-pub type Vec3 = nalgebra::Vector3<f32>;
-/// A 3x3 rotation matrix.
-pub type Mat3 = nalgebra::Matrix3<f32>;
+pub use types::{Mat3, Vec3, LEGS};
 
 /// Helpers shared by the unit tests.
 #[cfg(test)]

@@ -21,7 +21,7 @@ use core::marker::PhantomData;
 use core::ops::{Add, Mul, Neg, Sub};
 
 use crate::fixed::{self, to_fixed, ANGLE_FRAC, ROT_FRAC};
-use crate::{Mat3, Vec3};
+use crate::types::{Mat3, Vec3};
 
 /// Scalar functions used by the kinematics. Implementations must return NaN (never panic) for
 /// inputs outside their domain; callers check results for finiteness.
@@ -54,26 +54,26 @@ pub trait Math {
     }
 
     /// `(sin x, cos x)` in steps of 2^-30 (the IK's rotation entries) for `|x| < 4` rad: the
-    /// pose's angles in the IK's fixed-point path. By default [`fixed::sin_cos`]: integer
+    /// pose's angles in the IK's fixed-point path. By default [`fixed::sin_cos::sin_cos`]: integer
     /// instructions, within 2^-29.
     #[inline]
     fn sin_cos_fixed(x_rad: f32) -> (i32, i32) {
-        fixed::sin_cos(x_rad)
+        fixed::sin_cos::sin_cos(x_rad)
     }
 
     /// `sqrt(d)` within 1: the root of eq. 9's discriminant in the IK's fixed-point path (`d`
-    /// below 2^60 there). By default [`fixed::sqrt`]: integer instructions.
+    /// below 2^60 there). By default [`fixed::sqrt::sqrt`]: integer instructions.
     #[inline]
     fn sqrt_fixed(d: u64) -> u32 {
-        fixed::sqrt(d)
+        fixed::sqrt::sqrt(d)
     }
 
     /// `atan2(y, x)` in steps of 2^-29 rad within `(-pi, pi]` (0 for `(0, 0)`): the half-angle
     /// of eq. 9 in the IK's fixed-point path (`|y|, |x| < 2^31` there). By default
-    /// [`fixed::atan2`]: integer instructions, within 2^-29 rad.
+    /// [`fixed::atan2::atan2`]: integer instructions, within 2^-29 rad.
     #[inline]
     fn atan2_fixed(y: i32, x: i32) -> i32 {
-        fixed::atan2(y, x)
+        fixed::atan2::atan2(y, x)
     }
 }
 
@@ -213,6 +213,21 @@ pub fn lt(a: f32, b: f32) -> bool {
     not_nan(a_bits) && not_nan(b_bits) && !le(b, a)
 }
 
+/// IEEE `lo <= x && x <= hi` in integer instructions, as [`le`] twice but with `x`'s order key
+/// and NaN check computed once (the IK asks it of every pulse).
+#[inline]
+pub fn within(x: f32, lo: f32, hi: f32) -> bool {
+    let (x, lo, hi) = (x.to_bits(), lo.to_bits(), hi.to_bits());
+    let not_nan = |v: u32| v & 0x7fff_ffff <= 0x7f80_0000;
+    let key = |v: u32| (v ^ ((v as i32 >> 31) as u32 >> 1)) as i32;
+    let key_x = key(x);
+    not_nan(x)
+        && not_nan(lo)
+        && not_nan(hi)
+        && (key(lo) <= key_x || (lo | x) << 1 == 0)
+        && (key_x <= key(hi) || (x | hi) << 1 == 0)
+}
+
 /// `u . v` with `M`'s arithmetic.
 pub(crate) fn dot<M: Math>(u: Vec3, v: Vec3) -> f32 {
     let r = Real::<M>::new;
@@ -327,6 +342,9 @@ mod tests {
             for b in values {
                 assert_eq!(le(a, b), a <= b, "{a} <= {b}");
                 assert_eq!(lt(a, b), a < b, "{a} < {b}");
+                for x in values {
+                    assert_eq!(within(x, a, b), a <= x && x <= b, "{a} <= {x} <= {b}");
+                }
             }
         }
     }

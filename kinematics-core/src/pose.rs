@@ -6,7 +6,7 @@
 
 use crate::fixed::wide_mul;
 use crate::math::{Math, Real};
-use crate::Mat3;
+use crate::types::Mat3;
 
 /// A platform pose relative to home.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -229,7 +229,7 @@ impl Pose {
 mod tests {
     use super::*;
     use crate::math::Libm;
-    use crate::Vec3;
+    use crate::types::Vec3;
 
     fn rx(a: f32) -> Mat3 {
         Mat3::new(1.0, 0.0, 0.0, 0.0, a.cos(), -a.sin(), 0.0, a.sin(), a.cos())

@@ -11,12 +11,11 @@
 //! down so that no joint moves faster than it can.
 
 use crate::error::{Input, KinematicsError};
-use crate::jacobian::{euler_rate_matrix, euler_rates};
-use crate::legs::Actuators;
+use crate::jacobian::{euler_rate_matrix, euler_rates, Actuators};
 use crate::linalg::Vec6;
 use crate::math::Math;
 use crate::pose::Pose;
-use crate::{Vec3, LEGS};
+use crate::types::{Vec3, LEGS};
 
 /// A platform twist: the velocity of the rotation centre and the angular velocity, base axes.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]

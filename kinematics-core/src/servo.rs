@@ -11,7 +11,7 @@ use core::fmt;
 
 use crate::fixed::{from_fixed, from_fixed32, to_fixed, wide_mul, ARM_FRAC};
 use crate::math::{abs_bits, Libm, Math, Real};
-use crate::LEGS;
+use crate::types::LEGS;
 
 /// Default home pulse `W0`, us ("nominally 1500 us" in "The Mathematics of the Stewart
 /// Platform").
@@ -154,7 +154,7 @@ impl ServoConfig {
     #[inline]
     pub fn allows(&self, pulse_us: f32) -> bool {
         // Integer comparisons, exactly IEEE's (float ones are library calls on the chip).
-        crate::math::le(self.min_us, pulse_us) && crate::math::le(pulse_us, self.max_us)
+        crate::math::within(pulse_us, self.min_us, self.max_us)
     }
 
     /// Checks this servo's numbers; `servo` (1..=6) names it in the error.

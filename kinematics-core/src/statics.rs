@@ -21,12 +21,12 @@
 use crate::configuration::Placement;
 use crate::error::{Input, KinematicsError};
 use crate::ik::Solver;
-use crate::jacobian::Jacobian;
-use crate::legs::{Actuators, ArmState};
+use crate::jacobian::{Actuators, Jacobian};
+use crate::legs::ArmState;
 use crate::linalg::{Lu6, Mat6, Vec6};
 use crate::math::{cross, mul_mat_vec, Math};
 use crate::pose::Pose;
-use crate::{Mat3, Vec3, LEGS};
+use crate::types::{Mat3, Vec3, LEGS};
 
 /// Standard gravity, mm/s^2, along -z of the base frame.
 pub const GRAVITY_MM_S2: f32 = 9_806.65;

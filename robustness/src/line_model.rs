@@ -1,5 +1,5 @@
 //! A reference model of the documented line protocol (`control::protocol` module docs and
-//! `control/README.md`), written independently of its implementation: it says, for every
+//! `docs/commands.md`), written independently of its implementation: it says, for every
 //! received byte, whether a line ends there and what that line is, so the checkers can demand
 //! exactly one final reply where one is due and none elsewhere.
 //!

@@ -438,7 +438,7 @@ pub fn script(data: &[u8]) {
 /// and keep to the speed limit on every frame and to the acceleration limit on every frame
 /// but a hard stop on a target that jumped back.
 pub fn stream(data: &[u8]) {
-    use control::protocol::Frame;
+    use control::stream::Frame;
     use control::tracker::{TrackLimits, Tracker};
     use kinematics_core::{Libm, Pose};
 

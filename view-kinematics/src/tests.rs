@@ -1,6 +1,7 @@
 //! The view's kinematics against numbers from outside the code: the firmware's `geometry` and
 //! `config` listings for the default build (as the page receives them, rounded to 0.001 mm),
-//! and the README's golden pulses (computed by an independent f64 script) for known poses.
+//! and the golden pulses of `docs/geometry-and-calibration.md` (computed by an independent f64
+//! script) for known poses.
 
 use super::*;
 use core::f32::consts::PI;
@@ -52,7 +53,8 @@ fn default_view() -> View {
     view
 }
 
-/// `(x, y, z, roll, pitch, yaw)` in mm and degrees, and the README's golden pulses for it.
+/// `(x, y, z, roll, pitch, yaw)` in mm and degrees, and its golden pulses
+/// (`docs/geometry-and-calibration.md`).
 const GOLDEN: [([f32; 6], [f32; LEGS]); 5] = [
     ([0.0; 6], [1500.0; LEGS]),
     (

@@ -153,6 +153,112 @@ impl Code {
             Code::NoPose => "no-pose",
         }
     }
+
+    /// What the code means, in Markdown: the meaning column of `docs/error-codes.md`.
+    pub const fn meaning(self) -> &'static str {
+        match self {
+            Code::LineTooLong => "more than 128 characters; the line was discarded to its end",
+            Code::RxOverflow => "input arrived on UART0 faster than it could be handled and bytes were lost (a `# warning:` line says so at once; the error answers the line they fell into and says how many, \"at least\" where the UART lost them); never on USB",
+            Code::BadCharacter => "a non-ASCII byte (0x80-0xFF) in the line; other control bytes are ignored",
+            Code::UnknownCommand => "the first word is not a command",
+            Code::MissingField => "a value is missing (names it)",
+            Code::ExtraField => "more words than the command takes",
+            Code::BadNumber => "not a decimal number (also `0x10`, `1_000`)",
+            Code::NotFinite => "`nan` / `inf`",
+            Code::NumberTooLarge => "does not fit a 32-bit float",
+            Code::UnknownAxis => "not one of x y z roll pitch yaw",
+            Code::DuplicateAxis => "an axis named twice",
+            Code::BadAssignment => "not `axis=value`",
+            Code::UnknownSetting => "not a setting name",
+            Code::BadValue => "wrong form for the setting, or not a servo number",
+            Code::OutOfRange => "outside the setting's range (names the range)",
+            Code::BadServoConfig => "the resulting servo set is inconsistent",
+            Code::BadGeometry => "the resulting geometry cannot be built",
+            Code::Unreachable => "a leg cannot reach the target (names the leg)",
+            Code::ServoLimit => "the target needs a pulse outside a servo's limits (names servo, pulse, limits); or `servo` asks for one",
+            Code::AngleTooLarge => "a rotation beyond +-180 degrees",
+            Code::PoseNotFinite => "a computed target coordinate is not finite (cannot happen from typed numbers; kept for completeness)",
+            Code::PathBlocked => "the straight path leaves the workspace, a servo limit or a torque rating (says where and why)",
+            Code::PoseConflict => "with the new setting the held pose could not be driven (or held: torque ratings)",
+            Code::Busy => "frame rate, geometry, servo or payload settings, `defaults`, `save` or `servo` while moving",
+            Code::SettingConflict => "two settings that must differ would be equal (an axis on two stream counts, one GPIO for both pins)",
+            Code::Estop => "a move while the emergency stop is open or latched (says which: close the input, then `reset`)",
+            Code::SaveFailed => "the flash did not keep what `save` wrote (it read back differently) or refused the write; the settings saved before are kept",
+            Code::TorqueLimit => "with a payload and torque ratings, a servo could not hold the target (names the servo, the torque it would need and its rating)",
+            Code::NoPose => "the pulses set with `servo` correspond to no pose of the platform, so a move (or `check`, `limits`) has no pose to start from: drive the servos back with `servo`",
+        }
+    }
+
+    /// A line that gets this code (with what must hold first, where something must), in
+    /// Markdown: the example column of `docs/error-codes.md`; the end-to-end tests
+    /// (`emulator/test/errors.test.js`) make the real firmware produce each code.
+    pub const fn example(self) -> &'static str {
+        match self {
+            Code::LineTooLong => "a 129-character line",
+            Code::RxOverflow => "a long burst of lines without waiting for replies",
+            Code::BadCharacter => "`pose 0 0 1 0 0 0°`",
+            Code::UnknownCommand => "`fly`",
+            Code::MissingField => "`pose 1 2 3`",
+            Code::ExtraField => "`home now`",
+            Code::BadNumber => "`pose 1 2 three 4 5 6`",
+            Code::NotFinite => "`pose 1 2 3 nan 5 6`",
+            Code::NumberTooLarge => "`pose 1e39 0 0 0 0 0`",
+            Code::UnknownAxis => "`move q=1`",
+            Code::DuplicateAxis => "`move z=1 z=2`",
+            Code::BadAssignment => "`move z 10`",
+            Code::UnknownSetting => "`set colour red`",
+            Code::BadValue => "`set echo sometimes`, `set baud 100000`, `servo 7 1500`",
+            Code::OutOfRange => "`set frame_hz 20`",
+            Code::BadServoConfig => "`set servo1.trim_us 1950`",
+            Code::BadGeometry => "`set rod_mm 15`",
+            Code::Unreachable => "`pose 0 0 80 0 0 0`",
+            Code::ServoLimit => "`pose 0 0 -15 0 0 0`, `servo 2 2000`",
+            Code::AngleTooLarge => "`pose 0 0 0 181 0 0`",
+            Code::PoseNotFinite => "-",
+            Code::PathBlocked => "from `pose -28 19 -2.5 11 2 -20`: `pose 30 -12 -13.5 5 -13 28`",
+            Code::PoseConflict => "at `pose 0 0 -8 0 0 0`: `set servo1.max_us 1600`",
+            Code::Busy => "`set frame_hz 100` during a move",
+            Code::SettingConflict => "`set stream.axis2 x` with `stream.axis1` at `x`",
+            Code::Estop => "`home` with the e-stop input open",
+            Code::SaveFailed => "`save` on a worn-out flash",
+            Code::TorqueLimit => {
+                "`pose 10 0 0 0 0 0` with `payload_g 2000` and `servos.torque_kgcm 1`"
+            }
+            Code::NoPose => "`home` after `servo 1 1900`, `servo 2 1900`",
+        }
+    }
+}
+
+/// Writes `docs/error-codes.md`: every code of [`Code::ALL`] with its meaning and an example.
+/// `cargo run -p control --example documents` writes the file with it, and
+/// `control/tests/documents.rs` fails when the file differs, so the list is never kept in step
+/// by hand (`emulator/test/errors.test.js` reads its codes from the file).
+pub fn write_error_codes_doc(out: &mut impl fmt::Write) -> fmt::Result {
+    out.write_str(
+        "# Error codes\n\
+         \n\
+         <!-- Written by `cargo run -p control --example documents` from `Code::ALL`\n\
+         (control/src/report/errors.rs); do not edit: control/tests/documents.rs fails when\n\
+         this file is out of date. -->\n\
+         \n\
+         Every refusal is `error:<code> <message>`: the message names the field, leg, servo or\n\
+         limit at fault. Nothing changes and the platform holds its pose. Programs match on the\n\
+         code; the message is for people. (The replies and the rest of the protocol:\n\
+         [commands.md](commands.md).)\n\
+         \n\
+         | code | meaning | example |\n\
+         | --- | --- | --- |\n",
+    )?;
+    for code in Code::ALL {
+        writeln!(
+            out,
+            "| `error:{}` | {} | {} |",
+            code.as_str(),
+            code.meaning(),
+            code.example()
+        )?;
+    }
+    Ok(())
 }
 
 impl Display for Code {

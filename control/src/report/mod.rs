@@ -32,12 +32,12 @@ mod errors;
 mod format;
 mod replies;
 
-pub use errors::{usage, Code};
+pub use errors::{usage, write_error_codes_doc, Code};
 pub use format::{degrees, Fixed, PoseText, Six, ValueText, Vector};
 pub use replies::{
-    board_id_digits, refusal, write_banner, write_echo, write_error, write_notice, write_ok,
-    write_prompt, Fault, Listing, MotionReport, Notice, Saved, StatusReport, StreamCounts, EOL,
-    HELP, PROMPT, USB_MANUFACTURER, USB_PRODUCT, VERSION,
+    board_id_digits, kinematics_refusal, refusal, write_banner, write_echo, write_error,
+    write_notice, write_ok, write_prompt, Fault, Listing, MotionReport, Notice, Saved,
+    StatusReport, StreamCounts, EOL, HELP, PROMPT, USB_MANUFACTURER, USB_PRODUCT, VERSION,
 };
 
 #[cfg(test)]
@@ -228,6 +228,32 @@ mod tests {
             );
             assert!(s.is_ascii(), "{s}");
             assert_eq!(s, std::format!("{}\r\n", refusal(&e)));
+        }
+    }
+
+    #[test]
+    fn a_kinematics_refusal_is_the_board_s_for_the_ik_and_names_the_leg_or_the_cause() {
+        // The IK's refusal reads as the board's reply, code and all.
+        let ik = IkError::Unreachable { leg: 2 };
+        assert_eq!(
+            std::format!("{}", kinematics_refusal(&KinematicsError::Ik(ik))),
+            std::format!("{}", refusal(&Error::from(ik)))
+        );
+        let words = |e: KinematicsError| std::format!("{}", kinematics_refusal(&e));
+        assert!(words(KinematicsError::DeadCentre { leg: 5 }).starts_with("leg 5's arm"));
+        assert!(words(KinematicsError::Singular { pivot_ratio: 0.0 }).contains("singular pose"));
+        assert!(words(KinematicsError::GimbalLock { pitch_rad: 1.5 }).contains("+-90"));
+        // One line each, never empty.
+        for e in [
+            KinematicsError::ZeroLength { leg: 1 },
+            KinematicsError::NotConverged {
+                iterations: 3,
+                residual: 0.5,
+            },
+            KinematicsError::DeadCentre { leg: 5 },
+        ] {
+            let w = words(e);
+            assert!(!w.is_empty() && !w.contains('\n'), "{w:?}");
         }
     }
 

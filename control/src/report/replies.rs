@@ -49,6 +49,36 @@ pub fn refusal(error: &Error) -> impl Display + '_ {
     Refusal(error)
 }
 
+/// Why the kinematics give no answer at a pose, as host programs word it where the board has no
+/// command of its own (the servo torques of carrying a payload along a trajectory): the IK's
+/// refusal exactly as the board writes it ([`refusal`], with its code); a servo arm at dead
+/// centre, a singular pose and gimbal lock said for a platform carrying a load; anything the
+/// servo platform's kinematics never give there in the kinematics' own line.
+pub fn kinematics_refusal(error: &KinematicsError) -> impl Display + '_ {
+    struct Words<'a>(&'a KinematicsError);
+    impl Display for Words<'_> {
+        fn fmt(&self, f: &mut Formatter<'_>) -> fmt::Result {
+            match *self.0 {
+                KinematicsError::Ik(e) => refusal(&Error::from(e)).fmt(f),
+                KinematicsError::DeadCentre { leg } => {
+                    write!(
+                        f,
+                        "leg {leg}'s arm is at dead centre (it cannot move its rod)"
+                    )
+                }
+                KinematicsError::Singular { .. } => {
+                    f.write_str("the platform is at a singular pose (it cannot hold a load there)")
+                }
+                KinematicsError::GimbalLock { .. } => {
+                    f.write_str("pitch at +-90 degrees: roll and yaw rates are undefined")
+                }
+                ref other => other.fmt(f),
+            }
+        }
+    }
+    Words(error)
+}
+
 /// Writes `error:<code> <message>` (the failure reply).
 pub fn write_error(out: &mut impl Write, error: &Error) {
     let _ = write!(out, "{}{EOL}", refusal(error));

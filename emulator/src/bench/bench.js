@@ -496,8 +496,8 @@ servo frame instead (up to one frame later), so that no frame moves more than th
 
 ## Stream frames
 
-Binary frames (\`A5 5A\`, six 16-bit counts, \`0D 0A\`; README "Streaming from
-motion-simulator software"), echo off, all speed and acceleration limits off (pass-through):
+Binary frames (\`A5 5A\`, six 16-bit counts, \`0D 0A\`; docs/streaming.md), echo off, all
+speed and acceleration limits off (pass-through):
 from the frame's last byte entering the UART to all six new compare values written.
 
 | binary frames | latency mean | min | max |
@@ -659,8 +659,8 @@ ${saves
 In both runs the save's pass was the only one over 1 ms${saves.every((s) => s.longPasses === 1) ? '' : ` (NOT SO here: ${saves.map((s) => s.longPasses).join(' and ')} passes)`};
 \`emulator/test/main-loop.test.js\` checks that every pass over 1 ms is a save's. The
 firmware's part is the page built and read back and fast XIP restored by boot2 from RAM. No
-input is read during the write: a host waits for \`save\`'s \`ok\` (README, "Saving the
-settings").
+input is read during the write: a host waits for \`save\`'s \`ok\` (docs/settings.md,
+"Saving the settings").
 
 ## Firmware size
 

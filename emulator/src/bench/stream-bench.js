@@ -1,8 +1,7 @@
 // Streaming benchmarks of the real firmware in the emulator (emulated time): binary stream
 // frames' latency to the PWM registers, the highest frame rate at which every frame is
 // applied, and the CPU the stream pipeline takes at 333 Hz with the tracker on and every
-// target clamped. The frame format and settings are README.md's ("Streaming from
-// motion-simulator software").
+// target clamped. The frame format and settings are docs/streaming.md's.
 
 import { binaryFrame, measureFrameLatency, streamingBoard } from './firmware-bench.js';
 

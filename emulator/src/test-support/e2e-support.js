@@ -1,6 +1,6 @@
 // Shared helpers for the end-to-end tests (kept out of test/ so `node --test test/` does not
 // run this file as a test). Everything the firmware should do is restated here from the
-// documentation (README.md), never read back from the firmware.
+// documentation (docs/), never read back from the firmware.
 
 import assert from 'node:assert/strict';
 import { existsSync } from 'node:fs';
@@ -45,7 +45,7 @@ export const COUNTS_PER_SECOND = 3_125_000;
 /** The six servos. */
 export const SERVOS = [1, 2, 3, 4, 5, 6];
 
-/** The documented default settings (README.md "Settings"), in `set` names and units. */
+/** The documented default settings (docs/settings.md), in `set` names and units. */
 export function defaultSettings() {
   return {
     frame_hz: 50,
@@ -95,7 +95,7 @@ export function quantisedUs(us) {
 }
 
 /**
- * Frames a straight move takes (README.md "Motion"): the larger of linear distance /
+ * Frames a straight move takes (docs/commands.md "Motion"): the larger of linear distance /
  * speed_mm_s and angular distance / speed_deg_s (Euclidean, mm and degrees), times the frame
  * rate, rounded up, at least 1. A speed of 0 / 'off' does not constrain.
  */

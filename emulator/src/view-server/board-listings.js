@@ -3,7 +3,7 @@
 // and platform joint p in mm, the arm-plane angle beta and home arm angle alpha0 in degrees)
 // and `config` (every `# name: value` setting; per servo trim, rate in us/rad, direction,
 // limits in us and torque rating in kgf cm). The 3D view draws from these, so it shows the
-// build the firmware uses, not the README's defaults. Whoever asked for the listing (a user,
+// build the firmware uses, not the documented defaults. Whoever asked for the listing (a user,
 // the view), it is read the same way; a listing counts only once its final `ok` has arrived,
 // so a refused or cut one changes nothing.
 

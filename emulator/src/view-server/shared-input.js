@@ -48,7 +48,7 @@ export class SharedInput {
 
   /**
    * The terminal's (or pty's) bytes, passed on at once. Tracks its line as the firmware edits
-   * it (README, "Command reference"): printable characters add, backspace erases, Ctrl-U
+   * it (docs/commands.md, the protocol): printable characters add, backspace erases, Ctrl-U
    * clears, Ctrl-C / Ctrl-X abandon, CR or LF end it; escape sequences are skipped whole.
    */
   typed(bytes) {

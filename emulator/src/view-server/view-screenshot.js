@@ -1,6 +1,6 @@
 #!/usr/bin/env node
 // Takes the README's picture of the live 3D view: starts `./dev run`, opens the page in headless
-// Chromium (1280 x 800 px), types a pose from the README's golden table into the page's
+// Chromium (1280 x 800 px), types a pose from the golden table into the page's
 // terminal line, waits for the readout to show it and saves a PNG of the whole page.
 // Usage: node emulator/src/view-server/view-screenshot.js [out.png]  (default emulator/view/screenshot.png)
 
@@ -19,7 +19,7 @@ import {
 const out =
   process.argv[2] ??
   join(dirname(fileURLToPath(import.meta.url)), '..', '..', 'view', 'screenshot.png');
-/** "combined" in the README's golden table: x y z (mm), roll pitch yaw (deg). */
+/** "combined" in docs/geometry-and-calibration.md's golden table: x y z (mm), roll pitch yaw. */
 const POSE = [4, -6, 5, 3, -4, 6];
 
 if (!haveChromium()) {

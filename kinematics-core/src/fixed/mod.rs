@@ -15,16 +15,13 @@
 //!
 //! The functions the IK needs, each in its own module with its method, its source and its
 //! error bound: [`sin_cos`] (the pose's rotation, eq. 1), [`sqrt`] and [`atan2`] (the arm
-//! angle, eq. 9). They are the default of [`crate::Math`]'s fixed-point functions.
+//! angle, eq. 9). They are the default of [`crate::math::Math`]'s fixed-point functions.
+//! They build on this module's formats, products and conversions, which import none of them.
 
 pub mod atan2;
 pub mod sin_cos;
 pub mod sqrt;
 mod table;
-
-pub use atan2::atan2;
-pub use sin_cos::sin_cos;
-pub use sqrt::sqrt;
 
 /// Fraction bits of the rotation entries `R_kj` (eq. 1 of "The Mathematics of the Stewart
 /// Platform") in fixed point.
@@ -54,7 +51,7 @@ pub(crate) const ANGLE_FRAC: u32 = 29;
 /// half-angle in steps of 2^-[`ANGLE_FRAC`].
 pub(crate) const ARM_FRAC: u32 = ANGLE_FRAC - 1;
 /// Bound (exclusive) on `|R_kj|` for the fixed-point part, in steps of 2^-[`ROT_FRAC`]: 1 plus
-/// far more than any rounding (even a coarse library's sines, see [`crate::FloatRoutines`]).
+/// far more than any rounding (even a coarse library's sines, see [`crate::math::FloatRoutines`]).
 pub(crate) const MAX_ROTATION_ENTRY: i32 = (1 << ROT_FRAC) + (1 << (ROT_FRAC - 4));
 
 /// `x * 2^frac` rounded to the nearest integer (halves away from zero), in integer

@@ -1,0 +1,140 @@
+//! `hexapod describe`: a platform in words: its geometry, its reach from home along each axis,
+//! its stiffness at home, and with a payload the holding torques against the servos' ratings
+//! (the numbers are `crate::size`'s).
+
+use std::path::PathBuf;
+
+use clap::Args;
+use kinematics_core::pose::Axis;
+use kinematics_core::Vec3;
+
+use crate::error::Error;
+use crate::size::{
+    self, limit_words, overall, payload_words, pose_words, ratings_summary, Description, Holding,
+    Platform,
+};
+
+// The options (the subcommand's help is its line in `main.rs`).
+#[derive(Args)]
+pub struct Cmd {
+    /// The platform (a build file: payload_g, payload_com_*_mm, torque_kgcm and the rest,
+    /// the servos' stiffness in [sizing]); the default platform (no payload) without it
+    #[arg(long)]
+    settings: Option<PathBuf>,
+}
+
+impl Cmd {
+    /// The description.
+    pub fn run(self) -> Result<String, Error> {
+        let platform = Platform::load(self.settings.as_deref())?;
+        Ok(description(&size::describe(platform)))
+    }
+}
+
+/// `describe`'s text.
+fn description(d: &Description) -> String {
+    let p = &d.platform;
+    let l = &p.settings.layout;
+    let g = p.solver.geometry();
+    let mut out = format!("Platform: {}\n", p.source);
+    out += &format!(
+        "  base: servo shafts on a {:.3} mm circle, pairs {:.3} degrees either side of 0, 120 and \
+         240 degrees\n  platform: joints on a {:.3} mm circle, {:.3} degrees either side of 60, \
+         180 and 300 degrees\n",
+        l.base_radius_mm, l.base_half_angle_deg, l.platform_radius_mm, l.platform_half_angle_deg
+    );
+    out += &format!(
+        "  arm a = {:.3} mm, rod s = {:.3} mm; home height h0 = {:.3} mm (eq. 10)\n",
+        g.arm_mm(),
+        g.rod_mm(),
+        g.home_height_mm()
+    );
+    out += concat!(
+        "  leg  shaft b (mm)                 joint p (mm, platform frame)  beta (deg)",
+        "  alpha0 (deg)  shaft to joint at home (mm)\n"
+    );
+    for i in 0..6 {
+        let leg = g.leg(i);
+        let v = |v: Vec3| format!("({:8.3} {:8.3} {:6.3})", v.x, v.y, v.z);
+        out += &format!(
+            "  {}    {}  {}    {:9.3}  {:12.3}  {:10.3}\n",
+            i + 1,
+            v(leg.base_mm),
+            v(leg.platform_mm),
+            leg.beta_rad.to_degrees(),
+            p.solver.alpha0_rad(i).to_degrees(),
+            d.leg_lengths_mm[i]
+        );
+    }
+    out += "Reach from home, one axis at a time, within the servo limits:\n";
+    for (k, axis) in Axis::ALL.into_iter().enumerate() {
+        let (minus, plus) = (&d.reach[2 * k], &d.reach[2 * k + 1]);
+        let (unit, f): (&str, fn(f32) -> f32) = if axis.is_angle() {
+            ("degrees", f32::to_degrees)
+        } else {
+            ("mm", |v| v)
+        };
+        out += &format!(
+            "  {:<5} {:8.3} .. {:7.3} {unit}   (- {}; + {})\n",
+            axis.name(),
+            -f(minus.distance),
+            f(plus.distance),
+            limit_words(&minus.limit),
+            limit_words(&plus.limit)
+        );
+    }
+    let k = p.sizing.servo_stiffness_nmm_rad;
+    match d.stiffness_diagonal {
+        Some(s) => {
+            out += &format!(
+                "Stiffness at home, servos holding {k} N mm/rad each (K = J^T diag(k) J, \
+                 diagonal):\n  x {:.2}, y {:.2}, z {:.2} N/mm; roll {:.0}, pitch {:.0}, yaw {:.0} \
+                 N mm/rad\n",
+                s[0], s[1], s[2], s[3], s[4], s[5]
+            );
+        }
+        None => out += "Stiffness at home: none (a singular pose)\n",
+    }
+    match &d.holding {
+        None => {
+            out += "Payload: none (payload_g = 0): no holding torques; give payload_g and \
+                        payload_com_x_mm, payload_com_y_mm, payload_com_z_mm to size the servos"
+        }
+        Some(h) => out += &holding_words(p, h),
+    }
+    out
+}
+
+/// `describe`'s payload section.
+fn holding_words(p: &Platform, h: &Holding) -> String {
+    let mut out = format!("Payload {}:\n", payload_words(p.payload()));
+    if let Some(sag) = &h.sag {
+        out += &format!(
+            "  its weight moves the platform at home by {:.3} mm down ({:.4} degrees of tilt)\n",
+            -sag.translation_mm.z,
+            sag.rotation_rad.norm().to_degrees()
+        );
+    }
+    if let Some(t) = h.home_kgcm {
+        let list: Vec<String> = t.iter().map(|v| format!("{v:.3}")).collect();
+        out += &format!(
+            "  holding torque at home, servos 1-6: {} kgf cm\n",
+            list.join(" ")
+        );
+    }
+    let (reached, total) = h.grid_reached;
+    match overall(&h.per_servo) {
+        Some(w) => {
+            out += &format!(
+                "  worst over the workspace ({reached} reachable poses of a {total}-pose grid): \
+                 servo {} {:.3} kgf cm at {}\n",
+                w.servo,
+                w.torque_kgcm.abs(),
+                pose_words(&w.pose)
+            );
+        }
+        None => out += "  worst over the workspace: no reachable pose in the grid\n",
+    }
+    out += &format!("  {}", ratings_summary(p, &h.per_servo));
+    out
+}

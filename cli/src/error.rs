@@ -1,0 +1,418 @@
+//! [`Error`]: why a subcommand could not do its job, one type for the whole tool, each variant
+//! worded in its `Display` (the tool prints `hexapod: ` and that line). Each names where the
+//! trouble is: the file and line (and key or field), or the port; units are written out (mm,
+//! degrees, s, ms, g, kgf cm).
+//!
+//! The board's words are not reworded here: a refusal is quoted as the board wrote it, or, for
+//! what the tool checks before sending (a build file, a trajectory), worded by
+//! `control::report` exactly as the board would word it ([`board_words`]). A leaf: it uses
+//! nothing of the tool's own modules.
+use std::fmt::{self, Display, Formatter};
+use std::io;
+
+use control::report::refusal;
+
+/// The board's own words for a refusal: `error:<code> <message>` as the firmware writes it.
+pub fn board_words(error: &control::Error) -> String {
+    refusal(error).to_string()
+}
+
+/// Why a subcommand could not do its job. Each names where the trouble is: the file and line
+/// (and key or field), or the port.
+#[derive(Debug)]
+pub enum Error {
+    /// A file could not be read or written.
+    File {
+        /// The file.
+        path: String,
+        /// What the system said.
+        error: io::Error,
+    },
+    /// A build file that is not TOML at all.
+    Toml {
+        /// The file.
+        file: String,
+        /// Line, from 1.
+        line: usize,
+        /// The TOML parser's description (its own words).
+        message: String,
+    },
+    /// A key of a build file.
+    Key {
+        /// The file.
+        file: String,
+        /// Line, from 1.
+        line: usize,
+        /// The key as a `set` name.
+        key: String,
+        /// What is wrong with it.
+        why: KeyError,
+    },
+    /// The serial port or the board behind it.
+    Port {
+        /// The port's name.
+        port: String,
+        /// What went wrong.
+        why: PortError,
+    },
+    /// The board refused a line: the line and the board's reply.
+    Refused {
+        /// Where the line came from (`build.toml:4`), if from a file.
+        at: Option<String>,
+        /// The port.
+        port: String,
+        /// The line sent.
+        line: String,
+        /// The board's final reply (`error:...`).
+        reply: String,
+    },
+    /// A row (or the header) of a trajectory file.
+    Row {
+        /// The file.
+        file: String,
+        /// Line, from 1.
+        line: u64,
+        /// The column at fault, if one is.
+        field: Option<String>,
+        /// What is wrong.
+        why: RowError,
+    },
+    /// An ELF file the UF2 writer cannot use.
+    Elf {
+        /// The file.
+        path: String,
+        /// Why (the reader's words).
+        why: String,
+    },
+    /// A command-line value that is not usable (the option and why).
+    Option {
+        /// The option, as typed (`--radius-mm`).
+        option: &'static str,
+        /// Why.
+        why: String,
+    },
+    /// A stream that ended with rows refused, frames lost or notices (the summary says which).
+    StreamTrouble {
+        /// The trajectory.
+        file: String,
+        /// Rows (or `status` lines) refused.
+        refused: usize,
+        /// Notices the board sent (`# warning: ...`).
+        notices: usize,
+        /// Frames the board did not count as received whole (damaged or never seen).
+        lost_frames: u64,
+        /// Frames the board refused (e-stop).
+        refused_frames: u64,
+    },
+    /// A pose the platform cannot take (the board's words for why).
+    Pose {
+        /// The pose, as typed.
+        pose: String,
+        /// The board's words.
+        why: String,
+    },
+    /// `torque` of a platform that carries nothing (`payload_g` 0).
+    NoPayload {
+        /// The platform (a build file, or the default platform).
+        source: String,
+    },
+}
+
+/// What is wrong with a key of a build file.
+#[derive(Debug)]
+pub enum KeyError {
+    /// Refused by the firmware's own checks (an unknown name, a bad or out-of-range value, a
+    /// servo set or geometry that does not hold together): the board's words.
+    Refused(Box<control::Error>),
+    /// `baud` or `echo`: the link's, not the platform's.
+    LinkSetting,
+    /// A value that is not a number or a word (an array, a date, a table too deep).
+    NotAValue,
+    /// A `[sizing]` key that is not one, or its value out of range: why.
+    Sizing(SizingError),
+    /// With the payload and ratings so far, a servo would need more than its rating to hold
+    /// the platform at home: the board, holding home, refuses the setting (`pose-conflict`).
+    OverloadedAtHome(control::payload::TorqueError),
+}
+
+/// What is wrong with a `[sizing]` key.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SizingError {
+    /// Not one of the sizing keys.
+    Unknown {
+        /// The keys the table takes.
+        keys: &'static [&'static str],
+    },
+    /// A key the table once had, now a setting of the board.
+    Moved {
+        /// The setting to write instead.
+        setting: control::settings::SettingId,
+        /// The key's value in the setting's unit, if it was a number.
+        value: Option<f32>,
+    },
+    /// Not a number in `min..=max` (of the key's unit).
+    Range {
+        /// Smallest.
+        min: f32,
+        /// Largest.
+        max: f32,
+        /// Unit.
+        unit: &'static str,
+    },
+}
+
+/// What went wrong with a serial port.
+#[derive(Debug)]
+pub enum PortError {
+    /// It could not be opened (the system's words).
+    Open(String),
+    /// Reading or writing failed (the system's words).
+    Io(String),
+    /// No final reply to a line in time.
+    NoReply {
+        /// The line sent.
+        line: String,
+        /// How long the tool waited, s.
+        waited_s: f64,
+    },
+    /// Bytes were lost on the way to the board (a `# warning:`) and the line got no reply.
+    LineLost {
+        /// The line sent.
+        line: String,
+    },
+    /// A reply the tool cannot read (`config` without a value it knows, `status` without a
+    /// counter).
+    Unreadable {
+        /// The line sent.
+        line: String,
+        /// The reply line at fault.
+        reply: String,
+    },
+}
+
+/// What is wrong with a row of a trajectory file.
+#[derive(Debug)]
+pub enum RowError {
+    /// The CSV reader could not read it (its words).
+    Unreadable(String),
+    /// The header does not name the seven columns.
+    Header {
+        /// The columns found.
+        found: String,
+    },
+    /// Fewer or more fields than the header has.
+    FieldCount {
+        /// How many the row has.
+        found: usize,
+    },
+    /// A field that is not a decimal number (as found).
+    NotANumber(String),
+    /// `nan` or `inf`.
+    NotFinite(String),
+    /// Time does not increase.
+    TimeNotIncreasing {
+        /// The row's time, s.
+        time_s: f64,
+        /// The previous row's, s.
+        previous_s: f64,
+    },
+    /// A value beyond the board's stream full scale for the axis (the board would clamp it).
+    BeyondFullScale {
+        /// The value, mm or degrees.
+        value: f64,
+        /// The setting that holds the full scale.
+        setting: String,
+        /// The full scale, mm or degrees.
+        full_scale: f32,
+    },
+    /// The pose would be refused by the board: its words.
+    Refused(String),
+    /// A file with no rows.
+    Empty,
+}
+
+fn file_line(f: &mut Formatter<'_>, file: &str, line: impl Display) -> fmt::Result {
+    write!(f, "{file}:{line}: ")
+}
+
+impl Display for Error {
+    fn fmt(&self, f: &mut Formatter<'_>) -> fmt::Result {
+        match self {
+            Error::File { path, error } => write!(f, "{path}: {error}"),
+            Error::Toml {
+                file,
+                line,
+                message,
+            } => {
+                file_line(f, file, line)?;
+                write!(f, "not a TOML file: {}", message.trim_end())
+            }
+            Error::Key {
+                file,
+                line,
+                key,
+                why,
+            } => {
+                file_line(f, file, line)?;
+                match why {
+                    KeyError::Refused(error) => write!(f, "{key}: {}", board_words(error)),
+                    KeyError::LinkSetting => write!(
+                        f,
+                        "{key}: belongs to the serial link, not the platform (it is not saved); \
+                         a build file does not set it"
+                    ),
+                    KeyError::Sizing(SizingError::Unknown { keys }) => write!(
+                        f,
+                        "{key}: not a sizing key; [sizing] takes {}",
+                        keys.join(", ")
+                    ),
+                    KeyError::Sizing(SizingError::Range { min, max, unit }) => {
+                        write!(f, "{key}: must be a number {min}..{max} {unit}")
+                    }
+                    KeyError::Sizing(SizingError::Moved { setting, value }) => {
+                        write!(
+                            f,
+                            "{key}: now the board's setting {setting} ({}): write {} instead",
+                            setting_unit(*setting),
+                            setting_placement(*setting, *value)
+                        )
+                    }
+                    KeyError::OverloadedAtHome(cause) => write!(
+                        f,
+                        "{key}: at home {}; the board, holding home, refuses this setting \
+                         (error:pose-conflict)",
+                        torque_words(cause)
+                    ),
+                    KeyError::NotAValue => write!(
+                        f,
+                        "{key}: not a setting value (a setting takes a number or a word; \
+                         settings go in [servoN], [servos] or [stream] tables at most)"
+                    ),
+                }
+            }
+            Error::Port { port, why } => match why {
+                PortError::Open(e) => write!(f, "{port}: cannot open the serial port: {e}"),
+                PortError::Io(e) => write!(f, "{port}: serial port error: {e}"),
+                PortError::NoReply { line, waited_s } => write!(
+                    f,
+                    "{port}: the board did not answer '{line}' within {waited_s:.1} s (is it \
+                     powered, on this port, at this baud rate?)"
+                ),
+                PortError::LineLost { line } => write!(
+                    f,
+                    "{port}: bytes were lost on the way to the board and '{line}' got no \
+                     reply; nothing more was sent"
+                ),
+                PortError::Unreadable { line, reply } => {
+                    write!(f, "{port}: cannot read the reply to '{line}': '{reply}'")
+                }
+            },
+            Error::Refused {
+                at,
+                port,
+                line,
+                reply,
+            } => {
+                if let Some(at) = at {
+                    write!(f, "{at}: ")?;
+                }
+                write!(f, "{port}: the board refused '{line}': {reply}")
+            }
+            Error::Row {
+                file,
+                line,
+                field,
+                why,
+            } => {
+                file_line(f, file, line)?;
+                if let Some(field) = field {
+                    write!(f, "{field}: ")?;
+                }
+                match why {
+                    RowError::Unreadable(e) => write!(f, "unreadable row: {e}"),
+                    RowError::Header { found } => write!(
+                        f,
+                        "the header must name the columns time,x,y,z,roll,pitch,yaw (s, mm, \
+                         degrees); found '{found}'"
+                    ),
+                    RowError::FieldCount { found } => {
+                        write!(f, "{found} fields; a row has 7 (time,x,y,z,roll,pitch,yaw)")
+                    }
+                    RowError::NotANumber(text) => write!(f, "'{text}' is not a number"),
+                    RowError::NotFinite(text) => write!(f, "'{text}' is not a finite number"),
+                    RowError::TimeNotIncreasing { time_s, previous_s } => write!(
+                        f,
+                        "time {time_s} s is not after the previous row's {previous_s} s"
+                    ),
+                    RowError::BeyondFullScale {
+                        value,
+                        setting,
+                        full_scale,
+                    } => write!(
+                        f,
+                        "{value} is beyond the board's stream full scale {setting} = \
+                         {full_scale} (the board would clamp it); raise {setting} or use --text"
+                    ),
+                    RowError::Refused(words) => {
+                        write!(
+                            f,
+                            "the board would refuse this pose: {words}; nothing was sent"
+                        )
+                    }
+                    RowError::Empty => f.write_str("no rows: nothing to do"),
+                }
+            }
+            Error::Elf { path, why } => write!(f, "{path}: {why}"),
+            Error::Option { option, why } => write!(f, "{option}: {why}"),
+            Error::Pose { pose, why } => write!(f, "pose {pose}: {why}"),
+            Error::NoPayload { source } => write!(
+                f,
+                "{source}: no payload (payload_g = 0): the servos hold nothing, so every torque \
+                 is 0; give payload_g (g) and payload_com_x_mm, payload_com_y_mm, \
+                 payload_com_z_mm (mm, platform frame) in the build file (--settings)"
+            ),
+            Error::StreamTrouble {
+                file,
+                refused,
+                notices,
+                lost_frames,
+                refused_frames,
+            } => write!(
+                f,
+                "{file}: the stream did not go through whole: {refused} lines refused, \
+                 {lost_frames} frames damaged or lost, {refused_frames} frames refused, \
+                 {notices} notices from the board (see above)"
+            ),
+        }
+    }
+}
+
+impl std::error::Error for Error {}
+
+/// The unit of a setting, from the firmware's own [`Kind`](control::settings::Kind).
+fn setting_unit(id: control::settings::SettingId) -> &'static str {
+    match id.kind() {
+        control::settings::Kind::Number { unit, .. } => unit,
+        _ => "",
+    }
+}
+
+/// Where and how a build file says a setting: `payload_g = 2500` above the first table, and
+/// for a name with a dot (`servos.torque_kgcm`) either the dotted key or the table.
+fn setting_placement(id: control::settings::SettingId, value: Option<f32>) -> String {
+    let name = id.to_string();
+    let value = value.map_or_else(String::new, |v| {
+        // To a thousandth: the unit changed (2.5 kg is 2500 g), not the number's precision.
+        format!(" = {}", (v * 1000.0).round() / 1000.0)
+    });
+    let above = format!("`{name}{value}` above the file's first [table]");
+    match name.split_once('.') {
+        Some((table, key)) => format!("{above} (or `{key}{value}` in a [{table}] table)"),
+        None => above,
+    }
+}
+
+/// A torque refusal in the board's words, without its code.
+fn torque_words(cause: &control::payload::TorqueError) -> String {
+    control::Error::Torque(*cause).to_string()
+}

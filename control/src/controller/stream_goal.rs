@@ -1,0 +1,119 @@
+//! What a stream follows ([`Streaming`]: the newest frame's target, the goal, the tracker) and
+//! how a target out of reach (or, with torque ratings, beyond them) becomes a goal: a clamp
+//! ([`Clamp`]), a job of the controller's own that bisects the straight line from the current
+//! pose to the target, [`CLAMP_STEPS`] halvings, a few per slice. How frames become targets and
+//! goals is the controller's (`controller/streaming.rs`).
+
+use kinematics_core::ik::Solution;
+use kinematics_core::{Math, Pose};
+
+use super::pose_check::PoseCheck;
+use crate::report::StreamCounts;
+use crate::tracker::Tracker;
+
+/// Halvings of a clamp's bisection: the clamped pose is within 1/64 of the way from the
+/// current pose to the target (a clamp costs 1 + 6 IK solutions, the 6 as the controller's
+/// own job, [`CHECKS_PER_SLICE`](super::CHECKS_PER_SLICE) per pass).
+pub const CLAMP_STEPS: u32 = 6;
+
+/// The stream being followed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct Streaming {
+    /// The newest frame's pose, as sent.
+    pub target: Pose,
+    /// A frame arrived since the last
+    /// [`Controller::apply_stream`](super::Controller::apply_stream).
+    pub fresh: bool,
+    /// What the tracker follows: the target, clamped to the workspace.
+    pub goal: Pose,
+    /// Where the tracker is and how fast it goes.
+    pub tracker: Tracker,
+}
+
+/// A clamp in progress: bisection on the straight line from `from` (which can be driven) to
+/// `to` (which cannot), [`CLAMP_STEPS`] halvings in all.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Clamp {
+    from: Pose,
+    to: Pose,
+    /// `to - from` per axis ([`Pose::to_array`] order).
+    span: [f32; 6],
+    /// `to` is within reach with this solution, but its holding torques are still to be
+    /// checked against the ratings (the first slice); if they are within them, `to` is the
+    /// goal, else the bisection goes on.
+    unchecked: Option<Solution>,
+    /// Fractions of the way known to be drivable and not.
+    reachable: f32,
+    unreachable: f32,
+    /// The furthest drivable pose found and its solution (`None`: only `from`).
+    best: Option<(Pose, Solution)>,
+    /// Halvings done.
+    steps: u32,
+}
+
+impl Clamp {
+    /// A bisection on the straight line from `from` to `to`.
+    pub fn new(from: Pose, to: Pose, unchecked: Option<Solution>) -> Clamp {
+        let (a, b) = (from.to_array(), to.to_array());
+        Clamp {
+            from,
+            span: core::array::from_fn(|i| b[i] - a[i]),
+            to,
+            unchecked,
+            reachable: 0.0,
+            unreachable: 1.0,
+            best: None,
+            steps: 0,
+        }
+    }
+
+    /// The pose a fraction `t` of the way (what [`crate::motion::lerp`] gives, the differences
+    /// computed once per clamp rather than once per halving).
+    fn at(&self, t: f32) -> Pose {
+        let a = self.from.to_array();
+        Pose::from_array(core::array::from_fn(|i| a[i] + self.span[i] * t))
+    }
+
+    /// A slice of a clamp: the target's holding torques if they are to be checked (then the
+    /// target is the goal if they are within the ratings; else it counts as clamped), else
+    /// [`PoseCheck::per_slice`] more halvings of the bisection (each pose within reach and,
+    /// with ratings, within them). `Some` when it is done: the goal and its solution (`None`:
+    /// where the bisection started, whose solution is the current one).
+    pub fn step<M: Math>(
+        &mut self,
+        check: PoseCheck<'_>,
+        counts: &mut StreamCounts,
+    ) -> Option<(Pose, Option<Solution>)> {
+        let torque = check.settings.payload.checked();
+        if let Some(solution) = self.unchecked.take() {
+            let held = check
+                .settings
+                .payload
+                .check::<M>(check.solver, &self.to, &solution.arm_rad);
+            if held.is_ok() {
+                return Some((self.to, Some(solution)));
+            }
+            counts.clamped = counts.clamped.wrapping_add(1);
+            return None;
+        }
+        for _ in 0..check.per_slice() {
+            if self.steps >= CLAMP_STEPS {
+                break;
+            }
+            self.steps += 1;
+            let t = 0.5 * (self.reachable + self.unreachable);
+            let pose = self.at(t);
+            match check.pose::<M>(&pose, torque) {
+                Ok(solution) => {
+                    self.reachable = t;
+                    self.best = Some((pose, solution));
+                }
+                Err(_) => self.unreachable = t,
+            }
+        }
+        (self.steps >= CLAMP_STEPS).then(|| {
+            self.best
+                .map_or((self.from, None), |(pose, solution)| (pose, Some(solution)))
+        })
+    }
+}

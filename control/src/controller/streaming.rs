@@ -1,0 +1,188 @@
+//! Streaming ([`crate::stream`]): a stream frame's pose becomes the stream's target; the newest
+//! frame wins (the board feeds every waiting byte, then calls [`Controller::apply_stream`],
+//! which applies only the newest frame). An unreachable target is clamped: the last reachable
+//! pose on the straight line from the current pose to it, found by bisection
+//! ([`CLAMP_STEPS`](super::CLAMP_STEPS) IK solutions, as a job a slice per pass: so a clamped
+//! frame takes effect a few passes, well under a millisecond, later), and counted. With every
+//! speed and acceleration limit off the pose is applied at once (pass-through, like a jump:
+//! [`Controller::take_new_pulses`]);
+//! otherwise each axis follows it at the servo frame rate within the limits
+//! ([`crate::tracker`]); a step that would leave the workspace (the axes' own paths to a
+//! reachable goal can) stops the tracker where it is, counted as a clamp too. An accepted
+//! move (`pose`, `move`, `nudge`, `home`) or `stop` ends the stream (while a move's path is
+//! checked the stream holds, as a move in progress does; a refused one lets it go on); the
+//! next frame starts it again from wherever the platform is.
+//!
+//! The stream's state and the clamp's bisection are `controller/stream_goal.rs`'s; here is what
+//! frames do to the platform.
+
+use kinematics_core::ik::Solution;
+use kinematics_core::{Math, Pose};
+
+use super::stream_goal::{Clamp, Streaming};
+use super::{Controller, Job};
+use crate::motion::Motion;
+use crate::stream::Frame;
+use crate::tracker::{TrackLimits, Tracker};
+
+impl<M: Math> Controller<M> {
+    /// The body of [`Controller::apply_stream`] (see there).
+    pub(super) fn apply_newest_frame(&mut self) {
+        let Some(mut stream) = self.stream.filter(|s| s.fresh) else {
+            return;
+        };
+        let solved = self
+            .solver
+            .solve::<M>(&self.settings.servos, &stream.target);
+        let needs_job = solved.is_err() || self.settings.payload.checked();
+        if needs_job && self.job.is_some() {
+            return;
+        }
+        stream.fresh = false;
+        self.stream = Some(stream);
+        self.stream_counts.applied = self.stream_counts.applied.wrapping_add(1);
+        self.servo_power = true;
+        self.fault = None;
+        let from = *self.motion.pose();
+        match solved {
+            Ok(solution) if !self.settings.payload.checked() => {
+                self.reach_stream_goal(stream.target, Some(solution))
+            }
+            // Within reach, but with torque ratings its holding torques are checked first, as
+            // the controller's own job (a slice of their own), then it is the goal or clamped.
+            Ok(solution) => self.start_clamp(from, stream.target, Some(solution)),
+            Err(_) => {
+                // Unreachable: clamped by a bisection that runs as the controller's own job,
+                // a slice per pass (so no pass grows by its IK solutions); the platform goes
+                // on towards the previous goal meanwhile.
+                self.stream_counts.clamped = self.stream_counts.clamped.wrapping_add(1);
+                self.start_clamp(from, stream.target, None);
+            }
+        }
+    }
+
+    /// The stream tracker's limits (the same settings as commanded moves, per axis).
+    pub(super) fn track_limits(&self) -> TrackLimits {
+        let s = &self.settings;
+        TrackLimits {
+            mm_per_s: s.speed_mm_s,
+            mm_per_s2: s.accel_mm_s2,
+            rad_per_s: s.speed_deg_s.to_radians(),
+            rad_per_s2: s.accel_deg_s2.to_radians(),
+        }
+    }
+
+    /// A whole stream frame arrived: its pose becomes the stream's target (applied by
+    /// [`Controller::apply_stream`]).
+    pub(super) fn on_stream_frame(&mut self, frame: Frame) {
+        let counts = &mut self.stream_counts;
+        let Ok(target) = self.settings.stream.to_pose(frame) else {
+            counts.damaged = counts.damaged.wrapping_add(1);
+            return;
+        };
+        counts.frames = counts.frames.wrapping_add(1);
+        // No pose to start from (pulses set with servo that correspond to none) is refused
+        // like the e-stop. (The board feeds no bytes while a job runs; refused all the same if
+        // it did.)
+        let no_pose = matches!(self.direct, Some(Err(_)));
+        if self.estop.stops_motion() || self.job.is_some() || no_pose {
+            counts.refused = counts.refused.wrapping_add(1);
+            return;
+        }
+        self.heard_from_host();
+        let here = *self.motion.pose();
+        match self.stream.as_mut() {
+            Some(stream) => {
+                stream.target = target;
+                stream.fresh = true;
+            }
+            None => {
+                // The stream starts (again) from where the platform is; a move in progress ends,
+                // and so does driving the servos one by one.
+                self.motion = Motion::new(here);
+                self.returning_home = false;
+                self.direct = None;
+                self.stream = Some(Streaming {
+                    target,
+                    fresh: true,
+                    goal: here,
+                    tracker: Tracker::new(&here),
+                });
+            }
+        }
+    }
+
+    /// One servo frame of a stream: the tracker steps towards its goal; a step that cannot be
+    /// driven is clamped and the tracker stops there.
+    pub(super) fn track_frame(&mut self) {
+        let Some(mut stream) = self.stream else {
+            return;
+        };
+        let limits = self.track_limits();
+        if limits == TrackLimits::OFF {
+            return; // pass-through: applied as frames come
+        }
+        let dt_s = 1.0 / f32::from(self.settings.frame_hz.max(1));
+        let next = stream.tracker.step::<M>(&stream.goal, &limits, dt_s);
+        if next.pose() == *self.motion.pose() && next == stream.tracker {
+            return; // settled: the pulses are solved already
+        }
+        match self.solver.solve::<M>(&self.settings.servos, &next.pose()) {
+            Ok(solution) => {
+                self.motion = Motion::new(next.pose());
+                self.solution = solution;
+                stream.tracker = next;
+            }
+            Err(_) => {
+                // The goal can be driven (it was clamped), but the axes' own paths to it
+                // leave the workspace here: stop where the last step was, a step (at most one
+                // frame's travel) short of the edge, rather than spend a bisection in this
+                // pass (which also holds a clamp of the goal: the pass must stay short).
+                let here = *self.motion.pose();
+                stream.tracker.hold_at(&here);
+                stream.goal = here;
+                self.stream_counts.clamped = self.stream_counts.clamped.wrapping_add(1);
+            }
+        }
+        self.stream = Some(stream);
+    }
+
+    /// Starts clamping a stream target as the controller's own job: `to` cannot be reached
+    /// (`unchecked: None`), or can, with this solution, but its holding torques are to be
+    /// checked against the ratings first. ([`Controller::apply_stream`] waits for a command's
+    /// work to end first; a job still running here means this frame came through a transport
+    /// that feeds while busy: then the goal stays where it was.)
+    pub(super) fn start_clamp(&mut self, from: Pose, to: Pose, unchecked: Option<Solution>) {
+        if self.job.is_none() {
+            self.job = Some(Job::Clamp(Clamp::new(from, to, unchecked)));
+        }
+    }
+
+    /// A stream target, or what it was clamped to, is the goal: in pass-through the pose now
+    /// (`solution`: its IK; `None` to stay where the platform is), else the tracker's goal.
+    /// Nothing if the stream has ended meanwhile (a clamp's job outlived it).
+    pub(super) fn reach_stream_goal(&mut self, pose: Pose, solution: Option<Solution>) {
+        let Some(mut stream) = self.stream else {
+            return;
+        };
+        if self.track_limits() == TrackLimits::OFF {
+            if let Some(solution) = solution {
+                self.motion = Motion::new(pose);
+                self.solution = solution;
+                self.new_pulses = true;
+            }
+            stream.tracker.hold_at(self.motion.pose());
+            stream.goal = *self.motion.pose();
+        } else {
+            stream.goal = pose;
+        }
+        self.stream = Some(stream);
+    }
+
+    /// Ends the stream (the platform holds where it is).
+    pub(super) fn end_stream(&mut self) {
+        if self.stream.take().is_some() {
+            self.motion = Motion::new(*self.motion.pose());
+        }
+    }
+}
