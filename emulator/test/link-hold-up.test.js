@@ -2,9 +2,9 @@
 // ELF: a USB host that stops reading, or reads slowly (one 64-byte packet every 5, 20 or
 // 90 ms: src/gaps/usb.js, gap 11), while a long listing of its own is under way, delays
 // UART0's next line by 0.1 s at most, from the line's end to its reply's first byte, in
-// emulated time. The line is sent at several moments after the USB output filled up, so that
-// the deadline meets every phase of the servo frame (a deadline checked only when a frame
-// wakes the loop shows up as up to a frame late).
+// emulated time. The host changes its pace, and the line is sent at once, at several moments
+// of the servo frame (a deadline checked only when a frame wakes the loop shows up as up to a
+// frame late; a host that has just stopped reading is not yet 0.1 s stalled).
 
 import assert from 'node:assert/strict';
 import { before, test } from 'node:test';
@@ -14,8 +14,11 @@ import { firmwareBootrom, FRAME_MS } from '../src/test-support/e2e-support.js';
 
 /** README.md, "Serial links": UART0's next line waits 0.1 s at most. */
 const PROMISED_WAIT_MS = 100;
-/** USB listings queued: far more output (about 1.7 KB each) than the firmware's 4 KB queue. */
-const USB_LISTINGS = 12;
+/**
+ * USB listings sent: about 70 KB of output (1.7 KB each), far more than the firmware's 4 KB
+ * queue, and about 60 ms of a full-speed bus: still under way when the host changes its pace.
+ */
+const USB_LISTINGS = 40;
 
 let bootrom;
 before(() => {
@@ -65,16 +68,17 @@ function uartReplyDelayMs(board, line) {
 }
 
 /**
- * A USB host reading as `setUp` makes it, with `USB_LISTINGS` listings of its own under way;
- * UART0's `status` sent `afterMs` after them: its reply's delay, ms.
+ * A USB host with `USB_LISTINGS` listings of its own under way, read at the bus's pace until
+ * `afterMs`, then as `setUp` makes it read (stopped, or slowly); UART0's `status` sent at
+ * once: its reply's delay, ms.
  */
 function delayBehindUsb(setUp, afterMs) {
   const board = quietLinks();
-  setUp(board.usb);
   for (let i = 0; i < USB_LISTINGS; i++) {
     board.usb.sendLine('help');
   }
   board.runMs(afterMs);
+  setUp(board.usb);
   const delayMs = uartReplyDelayMs(board, 'status');
   // UART0's next line waits no longer, and the USB link answers again once its host has
   // read what was queued for it (README.md: its output is dropped until then).
@@ -87,7 +91,7 @@ function delayBehindUsb(setUp, afterMs) {
   return delayMs;
 }
 
-/** Moments after the USB listings were sent: the USB output is full from the first on. */
+/** Moments after the USB listings were sent, a quarter frame apart: all before they end. */
 const PHASES_MS = [30, 30 + FRAME_MS / 4, 30 + FRAME_MS / 2, 30 + (3 * FRAME_MS) / 4];
 
 test('a USB host that stops reading delays UART0 by 0.1 s at most, in every frame phase', () => {

@@ -519,6 +519,8 @@ pub struct HoldUpWatch {
     alarm: Alarm1,
     /// When the input began to wait (the timer's microseconds), while it waits.
     since_us: Option<u32>,
+    /// The work has waited for room on its link since the input began to wait.
+    starved: bool,
 }
 
 impl HoldUpWatch {
@@ -529,20 +531,23 @@ impl HoldUpWatch {
         HoldUpWatch {
             alarm,
             since_us: None,
+            starved: false,
         }
     }
 
     /// Once per pass, before the work: while input waits behind a command's work, starts the
-    /// clock (and the alarm); from the deadline on, the first time the work waits for room on
-    /// its link, gives up that link's output. (The clock runs while the input waits, not only
-    /// while the work lacks room: a slow reader makes room a packet at a time, a step's
-    /// output fills it again.)
+    /// clock (and the alarm); at the deadline, if the work has had to wait for room on its
+    /// link meanwhile, gives up that link's output. (Whether it had to wait at any time, not
+    /// only now: a slow reader makes room a packet at a time, and the pass its packet wakes
+    /// finds room for one step, which fills it again.)
     #[inline(always)]
     pub fn watch<L: Links>(&mut self, links: &mut L, controller: &Controller, timer: &Timer) {
         if !(controller.is_busy() && links.input_waiting()) {
             self.since_us = None;
+            self.starved = false;
             return;
         }
+        self.starved |= !links.work_has_room();
         let now_us = timer.get_counter_low();
         let Some(since_us) = self.since_us else {
             self.since_us = Some(now_us);
@@ -550,10 +555,20 @@ impl HoldUpWatch {
             let _ = self.alarm.schedule(HOLD_UP_US.micros());
             return;
         };
-        if now_us.wrapping_sub(since_us) >= HOLD_UP_US && !links.work_has_room() {
+        if now_us.wrapping_sub(since_us) >= HOLD_UP_US && self.starved {
             defmt::warn!("a link's output held up another's input: given up");
             links.give_up_work_output();
             self.since_us = None;
+            self.starved = false;
+        }
+    }
+
+    /// Before the loop sleeps: notes whether the work waits for room on its link (the reason
+    /// to sleep with work to do).
+    #[inline(always)]
+    pub fn before_sleep<L: Links>(&mut self, links: &L, controller: &Controller) {
+        if self.since_us.is_some() && controller.is_busy() && !links.work_has_room() {
+            self.starved = true;
         }
     }
 }

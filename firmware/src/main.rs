@@ -119,6 +119,7 @@ fn main() -> ! {
         next_frame(&mut controller, &mut servos, &mut links);
         pulses::follow_frame_rate(&controller, &mut servos);
         links.send(controller.baud());
+        hold_up.before_sleep(&links, &controller);
         sleep_unless_due(&controller, &links, &servos);
     }
 }
