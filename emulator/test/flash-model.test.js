@@ -2,7 +2,8 @@
 // and no firmware, its patched ROM flash routines called as firmware calls them (registers,
 // a return address in SRAM), and every rule it enforces broken once on purpose. Expected
 // contents follow NOR flash semantics (an erase sets bytes to 0xFF, a program can only clear
-// bits); expected durations are the W25Q80DV datasheet's figures the model states.
+// bits); expected durations are the W25Q80DV datasheet's figures the model states. The unique
+// ID (gap 14) is read as the W25Q080 datasheet's Read Unique ID describes it.
 
 import assert from 'node:assert/strict';
 import { before, test } from 'node:test';
@@ -21,6 +22,14 @@ const B_SELF = 0xe7fe;
 const LDR_R0_R1 = 0x6808; // ldr r0, [r1]
 const STR_R0_R1 = 0x6008; // str r0, [r1]
 const SECTOR = 0x1fe000; // a sector near the end of the 2 MiB
+// Gap 13: the SSI's status and data registers, the QSPI chip select's control and its
+// OUTOVER field's values (RP2040 datasheet, 4.10.13 and 2.19.6.2).
+const SSI_SR = 0x18000028;
+const SSI_DR0 = 0x18000060;
+const SSI_SR_RFNE = 1 << 3;
+const QSPI_SS_CTRL = 0x4001800c;
+const CS_LOW = 2 << 8;
+const CS_HIGH = 3 << 8;
 
 let bootromWords;
 before(() => {
@@ -29,14 +38,16 @@ before(() => {
 
 /** A bare chip with the flash model: `{ mcu, chip, faults, cuts, call(code, args) }`. */
 /**
- * @param {{ timing?: 'typical' | 'max' | { sectorEraseMs: number, pageProgramMs: number } }}
- *   [options]
+ * @param {{
+ *   timing?: 'typical' | 'max' | { sectorEraseMs: number, pageProgramMs: number },
+ *   uniqueId?: bigint,
+ * }} [options]
  */
-function bareChip({ timing = 'typical' } = {}) {
+function bareChip({ timing = 'typical', uniqueId = undefined } = {}) {
   const mcu = new RP2040();
   patchEmulatorGaps(mcu);
   mcu.loadBootrom(bootromWords);
-  const chip = new FlashChip(mcu.flash, { timing });
+  const chip = new FlashChip(mcu.flash, { timing, uniqueId });
   const faults = [];
   let cuts = 0;
   mcu.onBreak = (code) => faults.push(`breakpoint ${code}`);
@@ -156,6 +167,46 @@ test('the maximum timing is the datasheet maximum: 400 ms a sector, 3 ms a page'
   });
   assert.deepEqual(c.faults, []);
   assert.ok(Math.abs(c.mcu.clock.nanos - before - (2 * 400e6 + 2 * 3e6)) < 1e4);
+});
+
+/** Clocks `bytes` through the SSI with the chip select forced low; returns the bytes back. */
+function spiCommand(mcu, bytes) {
+  mcu.writeUint32(QSPI_SS_CTRL, CS_LOW);
+  const back = [];
+  for (const byte of bytes) {
+    mcu.writeUint32(SSI_DR0, byte);
+    assert.ok(mcu.readUint32(SSI_SR) & SSI_SR_RFNE, 'a byte came back');
+    back.push(mcu.readUint32(SSI_DR0) & 0xff);
+  }
+  assert.equal(mcu.readUint32(SSI_SR) & SSI_SR_RFNE, 0, 'nothing more came back');
+  mcu.writeUint32(QSPI_SS_CTRL, CS_HIGH);
+  return back;
+}
+
+test("Read Unique ID (0x4B, four dummy bytes) returns the chip's ID, most significant first", () => {
+  const c = bareChip({ uniqueId: 0x0123456789abcdefn });
+  let back = [];
+  sequence(c, () => {
+    back = spiCommand(c.mcu, [0x4b, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0]);
+  });
+  assert.deepEqual(c.faults, []);
+  assert.deepEqual(back.slice(5), [0x01, 0x23, 0x45, 0x67, 0x89, 0xab, 0xcd, 0xef]);
+});
+
+test('the SSI model fails the run on the chip select forced low with XIP on', () => {
+  const c = bareChip();
+  c.mcu.writeUint32(QSPI_SS_CTRL, CS_LOW);
+  assert.match(c.faults.join('\n'), /chip select forced low with XIP on/);
+});
+
+test('the SSI model fails the run on a command it does not model', () => {
+  const c = bareChip();
+  sequence(c, () => {
+    c.mcu.writeUint32(QSPI_SS_CTRL, CS_LOW);
+    c.mcu.writeUint32(SSI_DR0, 0x9f); // JEDEC ID: not modelled
+    c.mcu.writeUint32(QSPI_SS_CTRL, CS_HIGH);
+  });
+  assert.match(c.faults.join('\n'), /flash command 0x9f through the SSI: not modelled/);
 });
 
 const BROKEN_RULES = {

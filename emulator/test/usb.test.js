@@ -50,6 +50,8 @@ before(() => {
 function bothLinks() {
   const board = new EmulatedBoard({ bootrom, usb: true });
   board.boot();
+  // UART0's power-up, all of it (at 115,200 baud it may end after the USB banner).
+  board.waitForLine(/^# warning: no settings saved in flash/);
   board.usb.waitUntilOpen();
   board.usb.waitForLine(BANNER);
   board.runMs(2);

@@ -19,6 +19,15 @@
 //!
 //! A sector erase takes the Pico's flash chip up to 400 ms (W25Q080 datasheet): `main` gives
 //! the watchdog time for it. The PWM runs on (hardware), so the servos hold their pulses.
+//!
+//! The flash chip's unique ID (the board's id: its USB serial number) is read the same way,
+//! with step 3 a command of our own: the boot ROM has no routine for it. With XIP off, the SSI
+//! is a plain SPI master (8-bit frames, transmit and receive, as `flash_exit_xip` leaves it):
+//! the chip select is forced low through the QSPI SS pad's output override, the W25Q080's
+//! "Read Unique ID" (0x4B), four dummy bytes and eight more are clocked through the data
+//! register (each byte sent brings one back), and the chip select is forced high again
+//! (`flash_flush_cache` then hands it back to the SSI). The last eight bytes received are the
+//! ID (W25Q080 datasheet, Read Unique ID Number).
 
 use control::store::{NorFlash, PAGE_BYTES, SECTOR_BYTES, STORAGE_BYTES};
 use rp2040_hal::rom_data;
@@ -31,6 +40,26 @@ const BOOT2_BYTES: usize = 256;
 /// a single 4 KiB sector is always erased with the sector erase command.
 const BLOCK_BYTES: u32 = 1 << 16;
 const BLOCK_ERASE_CMD: u8 = 0xD8;
+
+/// The W25Q080's Read Unique ID Number command, the dummy bytes that follow it, and the ID.
+const READ_UNIQUE_ID_CMD: u8 = 0x4B;
+const UNIQUE_ID_DUMMY_BYTES: usize = 4;
+const UNIQUE_ID_BYTES: usize = 8;
+/// The SSI's status and data registers (RP2040 datasheet, 4.10.13: XIP_SSI at 0x18000000).
+const SSI_SR: *const u32 = 0x1800_0028 as *const u32;
+const SSI_DR0: *mut u32 = 0x1800_0060 as *mut u32;
+/// SR: transmit FIFO not full, receive FIFO not empty.
+const SSI_SR_TFNF: u32 = 1 << 1;
+const SSI_SR_RFNE: u32 = 1 << 3;
+/// Bytes sent and not yet received back, at most: the FIFOs hold 16 each (the pico-sdk
+/// keeps two spare, so the receive FIFO never overflows).
+const SSI_MAX_IN_FLIGHT: usize = 14;
+/// IO_QSPI's GPIO_QSPI_SS_CTRL (RP2040 datasheet, 2.19.6.2: IO_QSPI at 0x40018000) and its
+/// OUTOVER field (bits 9:8): drive the chip select low or high.
+const QSPI_SS_CTRL: *mut u32 = 0x4001_800C as *mut u32;
+const QSPI_SS_OUTOVER_MASK: u32 = 0b11 << 8;
+const QSPI_SS_OUTOVER_LOW: u32 = 0b10 << 8;
+const QSPI_SS_OUTOVER_HIGH: u32 = 0b11 << 8;
 
 // `memory.x`: the settings sectors (never filled by the linker).
 unsafe extern "C" {
@@ -99,6 +128,16 @@ impl SettingsFlash {
                 boot2,
             },
         }
+    }
+
+    /// The flash chip's 64-bit unique ID (its eight bytes in the order the chip sends them,
+    /// most significant first). A few microseconds with interrupts masked; call at start-up.
+    pub fn unique_id(&mut self) -> u64 {
+        let rom = self.rom;
+        let mut id = [0u8; UNIQUE_ID_BYTES];
+        // SAFETY: as for the erase; `id` is on the stack.
+        cortex_m::interrupt::free(|_| unsafe { unique_id_from_ram(&rom, &mut id) });
+        u64::from_be_bytes(id)
     }
 
     /// The first sector's offset from the start of flash (for the log).
@@ -184,5 +223,53 @@ unsafe extern "C" fn program_from_ram(rom: &Rom, address: u32, page: &[u8; PAGE_
         (rom.flash_flush_cache)();
         (rom.flash_enter_cmd_xip)();
         (rom.boot2)();
+    }
+}
+
+/// Reads the flash chip's unique ID into `id` (see the module docs). Runs from RAM.
+///
+/// # Safety
+/// Interrupts masked; `rom` and `id` in RAM.
+#[inline(never)]
+#[unsafe(link_section = ".data.ram_func.unique_id_from_ram")]
+unsafe extern "C" fn unique_id_from_ram(rom: &Rom, id: &mut [u8; UNIQUE_ID_BYTES]) {
+    const HEADER: usize = 1 + UNIQUE_ID_DUMMY_BYTES;
+    const TOTAL: usize = HEADER + UNIQUE_ID_BYTES;
+    unsafe {
+        (rom.connect_internal_flash)();
+        (rom.flash_exit_xip)();
+        force_chip_select(QSPI_SS_OUTOVER_LOW);
+        let (mut sent, mut received) = (0, 0);
+        while received < TOTAL {
+            let status = core::ptr::read_volatile(SSI_SR);
+            if status & SSI_SR_TFNF != 0 && sent < TOTAL && sent - received < SSI_MAX_IN_FLIGHT {
+                let byte = if sent == 0 { READ_UNIQUE_ID_CMD } else { 0 };
+                core::ptr::write_volatile(SSI_DR0, u32::from(byte));
+                sent += 1;
+            }
+            if status & SSI_SR_RFNE != 0 && received < sent {
+                let byte = core::ptr::read_volatile(SSI_DR0) as u8;
+                if let Some(slot) = id.get_mut(received.wrapping_sub(HEADER)) {
+                    *slot = byte;
+                }
+                received += 1;
+            }
+        }
+        force_chip_select(QSPI_SS_OUTOVER_HIGH);
+        (rom.flash_flush_cache)();
+        (rom.flash_enter_cmd_xip)();
+        (rom.boot2)();
+    }
+}
+
+/// Sets the QSPI chip select's output override. Inlined into the routine in RAM.
+///
+/// # Safety
+/// Only while XIP is off (the SSI drives the chip select otherwise).
+#[inline(always)]
+unsafe fn force_chip_select(outover: u32) {
+    unsafe {
+        let ctrl = core::ptr::read_volatile(QSPI_SS_CTRL);
+        core::ptr::write_volatile(QSPI_SS_CTRL, (ctrl & !QSPI_SS_OUTOVER_MASK) | outover);
     }
 }

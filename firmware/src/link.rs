@@ -22,7 +22,12 @@ use control::controller::Fed;
 use control::protocol::Lost;
 use control::Session;
 use firmware::Controller;
-use rp2040_hal::Timer;
+use rp2040_hal::{
+    fugit::ExtU32,
+    pac::{self, interrupt},
+    timer::{Alarm, Alarm1},
+    Timer,
+};
 
 use crate::pulses;
 use crate::serial::{Received, Serial};
@@ -58,6 +63,11 @@ pub trait Port: fmt::Write {
     fn wants_pass(&self, baud: u32, reply_awaited: bool) -> bool;
     /// Hands written output on to the hardware, as much as it takes now; never waits.
     fn send_some(&mut self);
+    /// Another link's input has waited [`HOLD_UP_US`] behind this port's output (a command of
+    /// this link runs, and its next step waits for room): drop this port's output from now on,
+    /// until what it has queued has gone, so that the command ends and the other link is
+    /// served. A port whose output always goes on by itself may ignore it.
+    fn give_up_output(&mut self);
 }
 
 /// UART0: open from power-up (greeted then), never closed.
@@ -114,6 +124,9 @@ impl Port for Serial {
     fn send_some(&mut self) {
         Serial::send_some(self)
     }
+    /// Ignored: UART0's output always leaves, at the baud rate (a step's output, at most
+    /// [`crate::serial::LONGEST_STEP_BYTES`], takes 0.18 s at 115,200 baud), whoever listens.
+    fn give_up_output(&mut self) {}
 }
 
 /// The USB port: open while the host has it open (DTR); its output is dropped meanwhile, and
@@ -153,6 +166,9 @@ impl Port for UsbSerial {
     }
     fn send_some(&mut self) {
         UsbSerial::send_some(self)
+    }
+    fn give_up_output(&mut self) {
+        UsbSerial::give_up_output(self)
     }
 }
 
@@ -293,6 +309,12 @@ pub trait Links {
     /// The same for the first link whose command runs; false if none.
     fn awaited_has_room(&self) -> bool;
 
+    /// [`Port::give_up_output`] on the link [`Links::work`] would choose.
+    fn give_up_work_output(&mut self);
+
+    /// The same for the first link whose command runs.
+    fn give_up_awaited_output(&mut self);
+
     /// [`Link::feed`] on the links from `first` on, then on those before it, until one ends the
     /// pass's input. Returns whether one did.
     fn feed_from(
@@ -354,6 +376,8 @@ impl Links for () {
     fn awaited_has_room(&self) -> bool {
         false
     }
+    fn give_up_work_output(&mut self) {}
+    fn give_up_awaited_output(&mut self) {}
     fn feed_at(&mut self, _: usize, _: &mut Controller, _: &mut ServoPwm, _: &mut usize) -> bool {
         false
     }
@@ -431,6 +455,22 @@ impl<P: Port, Rest: Links> Links for (Link<P>, Rest) {
         }
     }
 
+    fn give_up_work_output(&mut self) {
+        if self.0.session.awaits_reply() || !self.1.awaits_reply() {
+            self.0.port.give_up_output()
+        } else {
+            self.1.give_up_awaited_output()
+        }
+    }
+
+    fn give_up_awaited_output(&mut self) {
+        if self.0.session.awaits_reply() {
+            self.0.port.give_up_output()
+        } else {
+            self.1.give_up_awaited_output()
+        }
+    }
+
     #[inline(always)]
     fn feed_at(
         &mut self,
@@ -462,4 +502,80 @@ impl<P: Port, Rest: Links> Links for (Link<P>, Rest) {
         let link = &self.0;
         link.port.wants_pass(baud, link.session.awaits_reply()) || self.1.wants_pass(baud)
     }
+}
+
+/// How long one link's input may wait behind another link's output: while a command of link A
+/// runs and its next step waits for room in A's output (A's host reads slowly, or not at all),
+/// input waiting on link B waits at most this long; then A's output is given up
+/// ([`Port::give_up_output`]), A's command ends and B is served. With the time a pass, the
+/// rest of A's command and B's own take, B's reply begins within 0.1 s of its line's end
+/// (README.md, "Serial links").
+pub const HOLD_UP_US: u32 = 50_000;
+
+/// Watches for one link's output holding up another link's input (see [`HOLD_UP_US`]), and
+/// wakes the loop at the deadline with the timer's alarm 1 (`TIMER_IRQ_1`), so that the
+/// deadline does not wait for the next servo frame or byte.
+pub struct HoldUpWatch {
+    alarm: Alarm1,
+    /// When the input began to wait (the timer's microseconds), while it waits.
+    since_us: Option<u32>,
+    /// The work has waited for room on its link since the input began to wait.
+    starved: bool,
+}
+
+impl HoldUpWatch {
+    pub fn new(mut alarm: Alarm1) -> Self {
+        alarm.enable_interrupt();
+        // SAFETY: the handler only clears alarm 1's interrupt, which only this watch uses.
+        unsafe { pac::NVIC::unmask(pac::Interrupt::TIMER_IRQ_1) };
+        HoldUpWatch {
+            alarm,
+            since_us: None,
+            starved: false,
+        }
+    }
+
+    /// Once per pass, before the work: while input waits behind a command's work, starts the
+    /// clock (and the alarm); at the deadline, if the work has had to wait for room on its
+    /// link meanwhile, gives up that link's output. (Whether it had to wait at any time, not
+    /// only now: a slow reader makes room a packet at a time, and the pass its packet wakes
+    /// finds room for one step, which fills it again.)
+    #[inline(always)]
+    pub fn watch<L: Links>(&mut self, links: &mut L, controller: &Controller, timer: &Timer) {
+        if !(controller.is_busy() && links.input_waiting()) {
+            self.since_us = None;
+            self.starved = false;
+            return;
+        }
+        self.starved |= !links.work_has_room();
+        let now_us = timer.get_counter_low();
+        let Some(since_us) = self.since_us else {
+            self.since_us = Some(now_us);
+            // Cannot fail: the delay is far below the alarm's range.
+            let _ = self.alarm.schedule(HOLD_UP_US.micros());
+            return;
+        };
+        if now_us.wrapping_sub(since_us) >= HOLD_UP_US && self.starved {
+            defmt::warn!("a link's output held up another's input: given up");
+            links.give_up_work_output();
+            self.since_us = None;
+            self.starved = false;
+        }
+    }
+
+    /// Before the loop sleeps: notes whether the work waits for room on its link (the reason
+    /// to sleep with work to do).
+    #[inline(always)]
+    pub fn before_sleep<L: Links>(&mut self, links: &L, controller: &Controller) {
+        if self.since_us.is_some() && controller.is_busy() && !links.work_has_room() {
+            self.starved = true;
+        }
+    }
+}
+
+/// The hold-up deadline ([`HoldUpWatch`]): only wakes the main loop.
+#[interrupt]
+fn TIMER_IRQ_1() {
+    // SAFETY: INTR is write-one-to-clear: this clears alarm 1's interrupt alone.
+    unsafe { (*pac::TIMER::ptr()).intr().write(|w| w.bits(1 << 1)) };
 }

@@ -30,7 +30,7 @@ use control::store::{self, Store};
 use firmware::rom_math::RomMath;
 use firmware::{Board, Controller};
 use flash::SettingsFlash;
-use link::{Link, Links};
+use link::{HoldUpWatch, Link, Links};
 use safety_pins::{FreePin, SafetyPins};
 use serial::Serial;
 use servo_pwm::ServoPwm;
@@ -60,6 +60,10 @@ fn main() -> ! {
     // The newest good settings saved in flash, or the defaults (with a warning saying why).
     let mut settings_flash = SettingsFlash::new();
     let mut controller = Controller::power_up(Store::load_with::<RomMath, _>(&mut settings_flash));
+    // The board's id: the flash chip's unique ID, handed to the controller (the banner) and
+    // to the USB device (its serial number).
+    let board_id = settings_flash.unique_id();
+    controller.set_board_id(board_id);
     defmt::info!(
         "settings storage at flash offset {=u32:#x}",
         settings_flash.base()
@@ -71,7 +75,8 @@ fn main() -> ! {
         usb,
         mut servos,
         mut safety,
-    } = Drivers::new(board, &controller);
+        mut hold_up,
+    } = Drivers::new(board, &controller, board_id);
 
     // The links: each its port and its own line assembly, echo and prompt (the platform's
     // state is the controller's). UART0 is greeted now; the USB port when a host opens it.
@@ -94,6 +99,9 @@ fn main() -> ! {
     loop {
         watchdog.feed();
         links.open_or_close(&controller, &timer);
+        // A command whose output waits for a slow or stopped USB host holds up the other
+        // link's input 0.05 s at most (link::HOLD_UP_US): then that output is given up.
+        hold_up.watch(&mut links, &controller, &timer);
         // Lost input (only UART0 loses any) is announced at once, to every link; the line it
         // cut is refused when the loop reaches the gap.
         if links.announce_losses(&mut controller) {
@@ -111,25 +119,29 @@ fn main() -> ! {
         next_frame(&mut controller, &mut servos, &mut links);
         pulses::follow_frame_rate(&controller, &mut servos);
         links.send(controller.baud());
+        hold_up.before_sleep(&links, &controller);
         sleep_unless_due(&controller, &links, &servos);
     }
 }
 
-/// The board's drivers, set up for the controller's power-up settings.
+/// The board's drivers, set up for the controller's power-up settings (the USB device named
+/// with the board's id).
 struct Drivers {
     /// Started, with [`WATCHDOG_TIMEOUT_MS`].
     watchdog: Watchdog,
-    /// The 1 MHz timer: its alarm 0 polls UART0's RX FIFO, its counter times the USB host's
-    /// reading.
+    /// The 1 MHz timer: its alarm 0 polls UART0's RX FIFO, its alarm 1 is the hold-up
+    /// watch's, its counter times the USB host's reading and the hold-up.
     timer: Timer,
     serial: Serial,
     usb: UsbSerial,
     servos: ServoPwm,
     safety: SafetyPins,
+    /// With the timer's alarm 1, which wakes the loop at the hold-up deadline.
+    hold_up: HoldUpWatch,
 }
 
 impl Drivers {
-    fn new(board: Board, controller: &Controller) -> Drivers {
+    fn new(board: Board, controller: &Controller, board_id: u64) -> Drivers {
         let Board {
             mut watchdog,
             clocks,
@@ -144,6 +156,7 @@ impl Drivers {
         } = board;
         let mut timer = Timer::new(timer, &mut resets, &clocks);
         let rx_poll = timer.alarm_0().expect("alarm 0 is taken once, here");
+        let hold_up = HoldUpWatch::new(timer.alarm_1().expect("alarm 1 is taken once, here"));
         let serial = Serial::new(
             uart0,
             pins.gpio0,
@@ -190,7 +203,18 @@ impl Drivers {
         ]);
         safety.apply(&controller.settings().safety);
         watchdog.start(WATCHDOG_TIMEOUT_MS.millis());
-        let usb = UsbSerial::new(usbctrl_regs, usbctrl_dpram, clocks.usb_clock, &mut resets);
+        let serial_number =
+            cortex_m::singleton!(: [u8; 16] = control::report::board_id_digits(board_id))
+                .expect("Drivers::new is called once");
+        let serial_number =
+            core::str::from_utf8(serial_number).expect("hexadecimal digits are ASCII");
+        let usb = UsbSerial::new(
+            usbctrl_regs,
+            usbctrl_dpram,
+            clocks.usb_clock,
+            &mut resets,
+            serial_number,
+        );
         Drivers {
             watchdog,
             timer,
@@ -198,6 +222,7 @@ impl Drivers {
             usb,
             servos,
             safety,
+            hold_up,
         }
     }
 }

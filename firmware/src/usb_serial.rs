@@ -27,10 +27,14 @@
 //! - a host that has the port open but stops reading for [`STALL_US`] while output waits (its
 //!   program reads nothing and its OS buffers are full) is taken to have stopped listening:
 //!   what is queued stays queued (up to [`TX_QUEUE_BYTES`]), further output is dropped until
-//!   the host takes a packet again. Without that, a reply to that link could keep the
-//!   controller waiting for ever and with it UART0's commands; with it, the longest such wait is
-//!   [`STALL_US`]. Input from such a host is still taken (a program that streams poses and
-//!   never reads the `ok`s keeps working).
+//!   the host takes a packet again. Input from such a host is still taken (a program that
+//!   streams poses and never reads the `ok`s keeps working).
+//! - a host that reads, but too slowly for a command of its own under way while input waits
+//!   on the other link (or that stopped reading less than [`STALL_US`] ago), has its output
+//!   given up by the main loop ([`UsbSerial::give_up_output`], after
+//!   [`crate::link::HOLD_UP_US`]): dropped until it has taken all that was queued. Without
+//!   that, a reply to this link could keep the controller waiting as long as the host takes
+//!   to read it (seconds, for ever) and with it the other link's commands.
 //!
 //! Opening and closing are the host's doing (DTR, `SET_CONTROL_LINE_STATE`): the main loop asks
 //! [`UsbSerial::take_open_change`] and greets a newly opened port with the banner and a prompt.
@@ -119,6 +123,8 @@ pub struct UsbSerial {
     openings_seen: u32,
     /// The host stopped reading: output is dropped until it takes some again.
     stalled: bool,
+    /// Output was given up ([`UsbSerial::give_up_output`]): dropped until the queue is empty.
+    given_up: bool,
     /// `TX_TAKEN` when output last moved (or nothing waited), and when that was.
     taken_seen: u32,
     moved_at_us: u32,
@@ -129,13 +135,15 @@ pub struct UsbSerial {
 }
 
 impl UsbSerial {
-    /// Brings up the USB device (full speed, CDC ACM) and starts servicing it from its
+    /// Brings up the USB device (full speed, CDC ACM, named with `serial_number`: the board's
+    /// id, so that `/dev/serial/by-id/` tells boards apart) and starts servicing it from its
     /// interrupt. Call once: the queues and the bus are static singletons.
     pub fn new(
         regs: pac::USBCTRL_REGS,
         dpram: pac::USBCTRL_DPRAM,
         usb_clock: UsbClock,
         resets: &mut pac::RESETS,
+        serial_number: &'static str,
     ) -> Self {
         // The Pico does not route VBUS to the USB controller's detect input: force it.
         let bus = UsbBus::new(regs, dpram, usb_clock, true, resets);
@@ -144,7 +152,8 @@ impl UsbSerial {
         let port = SerialPort::new(allocator);
         let strings = StringDescriptors::default()
             .manufacturer(control::report::USB_MANUFACTURER)
-            .product(control::report::USB_PRODUCT);
+            .product(control::report::USB_PRODUCT)
+            .serial_number(serial_number);
         let device = UsbDeviceBuilder::new(allocator, VID_PID)
             .strings(&[strings])
             .expect("one language")
@@ -181,6 +190,7 @@ impl UsbSerial {
             open: false,
             openings_seen: 0,
             stalled: false,
+            given_up: false,
             taken_seen: 0,
             moved_at_us: 0,
             unsent: false,
@@ -197,6 +207,7 @@ impl UsbSerial {
         let change = self.open_change(reply_awaited)?;
         self.open = change;
         self.stalled = false;
+        self.given_up = false;
         if change {
             self.openings_seen = OPENINGS.load(Ordering::Relaxed);
         }
@@ -225,20 +236,33 @@ impl UsbSerial {
     /// Call once per main-loop pass with the timer's microseconds.
     pub fn watch_output(&mut self, now_us: u32) {
         let taken = TX_TAKEN.load(Ordering::Relaxed);
-        if taken != self.taken_seen || self.tx.len() == 0 || !self.open {
+        let drained = self.tx.len() == 0 || !self.open;
+        if taken != self.taken_seen || drained {
             self.taken_seen = taken;
             self.moved_at_us = now_us;
-            if self.stalled {
+            if self.stalled && (drained || !self.given_up) {
                 defmt::info!(
                     "USB host reads again ({} bytes dropped)",
                     self.dropped_bytes
                 );
+                self.stalled = false;
+                self.given_up = false;
             }
-            self.stalled = false;
         } else if !self.stalled && now_us.wrapping_sub(self.moved_at_us) >= STALL_US {
             defmt::warn!("USB host stopped reading: output dropped until it reads again");
             self.stalled = true;
         }
+    }
+
+    /// Another link's input waited too long behind this link's output (the host reads too
+    /// slowly, or not at all, for the command under way: [`crate::link::HOLD_UP_US`]): output
+    /// is dropped from now on, until the host has taken all that was queued.
+    pub fn give_up_output(&mut self) {
+        if !self.stalled {
+            defmt::warn!("USB host reads too slowly: output dropped until it has caught up");
+        }
+        self.stalled = true;
+        self.given_up = true;
     }
 
     /// True if the controller may take a step on this link: its output fits in the transmit

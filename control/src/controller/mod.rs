@@ -214,6 +214,8 @@ pub struct Controller<M: Math = Libm> {
     frame_ticks: u32,
     /// Which flash sector holds the newest good save, and its settings.
     store: Store,
+    /// The board's id (its flash chip's unique ID), for the banner; none off the board.
+    board_id: Option<u64>,
     /// The latest notices, each with its sequence number.
     notices: heapless::Deque<(u32, Notice), NOTICE_QUEUE>,
     /// Sequence number of the next notice.
@@ -269,6 +271,7 @@ impl<M: Math> Controller<M> {
             servo_power: false,
             frame_ticks: 0,
             store: Store::empty(),
+            board_id: None,
             notices: heapless::Deque::new(),
             next_notice: 0,
             _math: PhantomData,
@@ -433,11 +436,17 @@ impl<M: Math> Controller<M> {
 
     // ----- what the board calls -----
 
+    /// The board's id (its flash chip's unique ID), handed over by the board at power-up: the
+    /// banner shows it, so that two boards on one computer are told apart.
+    pub fn set_board_id(&mut self, id: u64) {
+        self.board_id = Some(id);
+    }
+
     /// Writes the banner (and the notices this link has not shown, e.g. refused settings), then
     /// the prompt, to one link: at power-up, and when a link opens (a USB host opening its
     /// port, after [`Session::reopen`]).
     pub fn banner(&self, session: &mut Session, out: &mut impl Write) {
-        report::write_banner(out);
+        report::write_banner(out, self.board_id);
         self.flush_notices(session, out);
         session.prompt(out);
     }

@@ -38,9 +38,9 @@ pub use errors::{usage, write_error_codes_doc, Code};
 pub use format::{degrees, Fixed, PoseText, Six, ValueText, Vector};
 pub use near::{nearest_setting, nearest_verb};
 pub use replies::{
-    kinematics_refusal, refusal, write_banner, write_echo, write_error, write_held_echo,
-    write_notice, write_ok, write_prompt, Fault, Listing, MotionReport, Notice, Saved,
-    StatusReport, StreamCounts, EOL, HELP, PROMPT, USB_MANUFACTURER, USB_PRODUCT, VERSION,
+    board_id_digits, kinematics_refusal, refusal, write_banner, write_echo, write_error,
+    write_held_echo, write_notice, write_ok, write_prompt, Fault, Listing, MotionReport, Notice,
+    Saved, StatusReport, StreamCounts, EOL, HELP, PROMPT, USB_MANUFACTURER, USB_PRODUCT, VERSION,
 };
 
 #[cfg(test)]
@@ -416,5 +416,28 @@ mod tests {
             text(Error::Parse(ParseError::BadServo { word: word("7") })),
             "'7' is not a servo number; servos are 1 to 6"
         );
+    }
+
+    /// The banner names the board by its id when the board has one (README.md, "Try it"):
+    /// 16 hexadecimal digits, most significant first, as the USB serial number.
+    #[test]
+    fn banner_with_and_without_a_board_id() {
+        let mut out = std::string::String::new();
+        write_banner(&mut out, Some(0xE660_C0D1_C7AB_2F28));
+        assert_eq!(
+            out,
+            std::format!(
+                "# hexapod control {VERSION} on board E660C0D1C7AB2F28: poses in mm and degrees; \
+                 type help\r\n"
+            )
+        );
+        out.clear();
+        write_banner(&mut out, None);
+        assert_eq!(
+            out,
+            std::format!("# hexapod control {VERSION}: poses in mm and degrees; type help\r\n")
+        );
+        assert_eq!(&board_id_digits(0x0123_4567_89AB_CDEF), b"0123456789ABCDEF");
+        assert_eq!(&board_id_digits(0xF), b"000000000000000F");
     }
 }

@@ -114,12 +114,47 @@ pub fn write_held_echo(out: &mut impl Write, line: &str) {
     let _ = out.write_str(line).and_then(|()| out.write_str(EOL));
 }
 
-/// The greeting written at start-up.
-pub fn write_banner(out: &mut impl Write) {
-    line(
-        out,
-        format_args!("hexapod control {VERSION}: poses in mm and degrees; type help"),
-    );
+/// The greeting written at start-up; with the board's id ([`board_id_digits`]) when the
+/// board has one (the real board: its flash chip's unique ID, also its USB serial number).
+pub fn write_banner(out: &mut impl Write, board_id: Option<u64>) {
+    match board_id {
+        Some(id) => line(
+            out,
+            format_args!(
+                "hexapod control {VERSION} on board {}: poses in mm and degrees; type help",
+                BoardId(id)
+            ),
+        ),
+        None => line(
+            out,
+            format_args!("hexapod control {VERSION}: poses in mm and degrees; type help"),
+        ),
+    }
+}
+
+/// A board's id as it is shown: its 16 hexadecimal digits, upper case, most significant
+/// first (the flash chip's unique ID bytes in the order the chip sends them). The same text
+/// is the USB serial number (so `/dev/serial/by-id/usb-hexapod-fw_hexapod_control_<id>-if00`
+/// names the board) and is in the banner.
+pub fn board_id_digits(id: u64) -> [u8; 16] {
+    const DIGITS: &[u8; 16] = b"0123456789ABCDEF";
+    let mut text = [0; 16];
+    for (i, digit) in text.iter_mut().enumerate() {
+        *digit = DIGITS[((id >> (60 - 4 * i)) & 0xF) as usize];
+    }
+    text
+}
+
+/// [`board_id_digits`] for `format_args!`.
+struct BoardId(u64);
+
+impl Display for BoardId {
+    fn fmt(&self, f: &mut Formatter<'_>) -> fmt::Result {
+        for &digit in &board_id_digits(self.0) {
+            f.write_char(char::from(digit))?;
+        }
+        Ok(())
+    }
 }
 
 /// The command list for `help`.

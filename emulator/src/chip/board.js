@@ -34,7 +34,10 @@ const FLASH_START = 0x10000000;
 const FLASH_BYTES = 16 * 1024 * 1024; // what rp2040js models; the Pico has 2 MiB
 /** Every command line gets exactly one final reply: `ok` or `error:...`. */
 export const FINAL_REPLY = /^(ok|error:)/;
-/** The boot banner's line, e.g. `# hexapod control 0.1.0: poses in mm and degrees; type help`. */
+/**
+ * The boot banner's line, e.g.
+ * `# hexapod control 0.1.0 on board E660C0D1C7AB2F28: poses in mm and degrees; type help`.
+ */
 export const BANNER = /hexapod\b.*\bhelp\b/;
 /** How often `runUntil` looks at its condition, besides on every received line. */
 const CHECK_EVERY_NANOS = 100_000;
@@ -59,6 +62,8 @@ export class EmulatedBoard {
    *   the flash chip's erase and program times (../gaps/flash.js, gap 7, `W25Q080_TIMING`)
    * @param {{address: number, bytes: Uint8Array}[]} [options.segments] what to program into
    *   the flash instead of the ELF's load segments (e.g. a UF2's blocks)
+   * @param {bigint} [options.flashId] the flash chip's 64-bit unique ID, the board's id
+   *   (../gaps/flash.js, gap 13; default `DEFAULT_FLASH_UNIQUE_ID`)
    * @param {boolean|{open?: boolean}} [options.usb] plug a USB host into the USB port at
    *   power-on (default: nothing plugged in). It enumerates the firmware and opens its serial
    *   port (DTR) unless `{ open: false }`; `board.usb` is that link.
@@ -70,10 +75,12 @@ export class EmulatedBoard {
     bootrom = loadBootrom(),
     onWatchdog = 'fail',
     flashTiming = 'typical',
+    flashId = undefined,
     segments,
     usb = false,
     xipCache = xipCacheByDefault(),
   } = {}) {
+    this.flashId = flashId;
     this.elf = elf;
     this.xipCacheModelled = xipCache;
     this.segments = segments ?? loadSegments(elf);
@@ -123,7 +130,7 @@ export class EmulatedBoard {
         }
         mcu.flash.set(bytes, offset);
       }
-      this.flash = new FlashChip(mcu.flash, { timing: this.flashTiming });
+      this.flash = new FlashChip(mcu.flash, { timing: this.flashTiming, uniqueId: this.flashId });
     }
     // Emulated time runs on across a reset (nothing is scheduled on a fresh chip yet).
     mcu.clock.tick(startNanos);
@@ -692,6 +699,11 @@ export class UsbLink extends SerialLink {
 
   startReading() {
     this.host.setReading(true);
+  }
+
+  /** The host's program reads slowly: one 64-byte IN packet per `ms` at most (0: at once). */
+  readSlowly(ms) {
+    this.host.setReadInterval(ms);
   }
 
   unplug() {

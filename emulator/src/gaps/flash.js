@@ -25,6 +25,18 @@
 //    flash window fails the run at any time. The array survives power cycles (board.js keeps
 //    it), a power cut can be armed at a chosen byte of an erase or a program
 //    (`cutPowerDuring`), and bits can be worn out (`wearOut`: a program cannot clear them).
+// 14. The flash chip's unique ID. rp2040js's SSI is a stub (its status register always says
+//    data waits, its data register reads back a constant) and IO_QSPI is not modelled, so a
+//    command the firmware clocks through the SSI itself (the W25Q080's Read Unique ID, 0x4B,
+//    which the boot ROM has no routine for) gets nothing. The model: while the firmware
+//    forces the QSPI chip select low (GPIO_QSPI_SS_CTRL's OUTOVER = low) with XIP off (after
+//    flash_exit_xip), each byte written to the SSI's data register is a byte on the wire and
+//    one byte comes back into a receive FIFO the status register reports (RFNE), as on the
+//    chip in its SPI mode; after 0x4B and four dummy bytes the chip returns its 64-bit
+//    unique ID, most significant byte first (`FlashChip.uniqueId`, per board, settable by the
+//    harness, a fixed value by default). Forcing the chip select high ends the command. Any
+//    other command, or the chip select forced low with XIP on, fails the run (not modelled).
+//    SPI clock time is not modelled (13 bytes at the ROM's SSI rate take microseconds).
 
 /** The Pico's flash: 2 MiB (rp2040js maps 16 MiB). */
 export const PICO_FLASH_BYTES = 2 * 1024 * 1024;
@@ -38,6 +50,25 @@ const ROM_BYTES = 0x4000;
 /** Where the boot ROM keeps the 16-bit pointer to its function table. */
 const ROM_FUNCTION_TABLE_POINTER = 0x14;
 const THUMB_BX_LR = 0x4770;
+/** rp2040js's peripheral keys (address >>> 14 << 2): XIP_SSI and IO_QSPI. */
+const SSI_KEY = 0x18000;
+const IO_QSPI_KEY = 0x40018;
+/** SSI registers (RP2040 datasheet, 4.10.13) and status bits. */
+const SSI_SR = 0x28;
+const SSI_DR0 = 0x60;
+const SSI_SR_TFNF = 1 << 1;
+const SSI_SR_TFE = 1 << 2;
+const SSI_SR_RFNE = 1 << 3;
+/** IO_QSPI GPIO_QSPI_SS_CTRL and its OUTOVER field (RP2040 datasheet, 2.19.6.2). */
+const QSPI_SS_CTRL = 0x0c;
+const OUTOVER_SHIFT = 8;
+const OUTOVER_LOW = 2;
+/** W25Q080 Read Unique ID Number: the command, then four dummy bytes, then the 8-byte ID. */
+const CMD_READ_UNIQUE_ID = 0x4b;
+const UNIQUE_ID_HEADER_BYTES = 5;
+const UNIQUE_ID_BYTES = 8;
+/** The unique ID of a board the harness gives none (an arbitrary fixed value). */
+export const DEFAULT_FLASH_UNIQUE_ID = 0xe660c0d1c7ab2f28n;
 const THUMB_BKPT = 0xbe00;
 /**
  * The Pico's flash chip's erase and program times: Winbond W25Q80DV datasheet, AC electrical
@@ -70,10 +101,12 @@ export class FlashChip {
    * @param {Uint8Array} image the flash array (rp2040js's, of the first chip powered on)
    * @param {object} [options]
    * @param {'typical'|'max'|{sectorEraseMs: number, pageProgramMs: number}} [options.timing]
+   * @param {bigint} [options.uniqueId] the chip's 64-bit unique ID (gap 14)
    */
-  constructor(image, { timing = 'typical' } = {}) {
+  constructor(image, { timing = 'typical', uniqueId = DEFAULT_FLASH_UNIQUE_ID } = {}) {
     this.image = image;
     this.timing = timing;
+    this.uniqueId = BigInt.asUintN(64, uniqueId);
     /** Every erase and program: `{ routine: 'erase'|'program', offset, bytes, nanos }`. */
     this.ops = [];
     this.cut = null;
@@ -102,6 +135,15 @@ export class FlashChip {
   /** Bits of the byte at `offset` that no program can clear any more (a worn-out cell). */
   wearOut(offset, mask) {
     this.worn.set(offset, (this.worn.get(offset) ?? 0) | mask);
+  }
+
+  /** The byte the chip sends back as the `index`-th byte (from 0) of command `command`. */
+  respond(command, index) {
+    if (index < UNIQUE_ID_HEADER_BYTES || command !== CMD_READ_UNIQUE_ID) {
+      return 0xff; // the chip's output is undriven while the command goes in
+    }
+    const byte = UNIQUE_ID_HEADER_BYTES + UNIQUE_ID_BYTES - 1 - index;
+    return byte < 0 ? 0xff : Number((this.uniqueId >> BigInt(8 * byte)) & 0xffn);
   }
 
   /** A copy of `length` bytes from `offset`. */
@@ -264,6 +306,52 @@ export function attachFlashChip(mcu, chip, { onFault, onPowerCut, onFlushCache =
     if (cut) {
       onPowerCut(); // after the whole program
     }
+  };
+
+  // Gap 14: commands clocked through the SSI with the chip select forced low.
+  const ssi = mcu.peripherals[SSI_KEY];
+  const ioQspi = mcu.peripherals[IO_QSPI_KEY];
+  let ssCtrl = 0;
+  /** The command on the wire: its bytes so far, and the bytes received not read yet. */
+  let wire = null;
+  const ioQspiWrite = ioQspi.writeUint32.bind(ioQspi);
+  const ioQspiRead = ioQspi.readUint32.bind(ioQspi);
+  ioQspi.writeUint32 = (offset, value) => {
+    if (offset !== QSPI_SS_CTRL) {
+      return ioQspiWrite(offset, value);
+    }
+    ssCtrl = value >>> 0;
+    const selected = ((ssCtrl >>> OUTOVER_SHIFT) & 3) === OUTOVER_LOW;
+    if (selected && !xipOff) {
+      return onFault('QSPI chip select forced low with XIP on (flash_exit_xip first)');
+    }
+    wire = selected ? { bytes: [], rx: [] } : null;
+  };
+  ioQspi.readUint32 = (offset) => (offset === QSPI_SS_CTRL ? ssCtrl : ioQspiRead(offset));
+  const ssiWrite = ssi.writeUint32.bind(ssi);
+  const ssiRead = ssi.readUint32.bind(ssi);
+  ssi.writeUint32 = (offset, value) => {
+    if (!wire || offset !== SSI_DR0) {
+      return ssiWrite(offset, value);
+    }
+    const byte = value & 0xff;
+    if (wire.bytes.length === 0 && byte !== CMD_READ_UNIQUE_ID) {
+      return onFault(`flash command ${hex(byte)} through the SSI: not modelled (gap 14)`);
+    }
+    wire.rx.push(chip.respond(wire.bytes[0] ?? byte, wire.bytes.length));
+    wire.bytes.push(byte);
+  };
+  ssi.readUint32 = (offset) => {
+    if (!wire) {
+      return ssiRead(offset);
+    }
+    if (offset === SSI_SR) {
+      return SSI_SR_TFNF | SSI_SR_TFE | (wire.rx.length > 0 ? SSI_SR_RFNE : 0);
+    }
+    if (offset === SSI_DR0) {
+      return wire.rx.shift() ?? 0;
+    }
+    return ssiRead(offset);
   };
 
   const otherBreak = mcu.onBreak;

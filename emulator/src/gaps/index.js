@@ -14,6 +14,7 @@
 // 9-12. USB: OUT arms before enumeration, the line state, IN timing, suspend and unplugging
 //    (`usb.js`, `UsbCdcHost`).
 // 13. The XIP flash cache and its registers (`xip-cache.js`, `XipCache`, `attachXipCache`).
+// 14. The flash chip's unique ID, read through the SSI (`flash.js`, `FlashChip.uniqueId`).
 //
 // `patchEmulatorGaps` installs gaps 1 and 2 on a fresh `RP2040`; the board (../chip/board.js)
 // installs the others where it wires the chip up (they need its callbacks).
@@ -24,6 +25,7 @@ import { Pl011 } from './uart.js';
 
 export {
   attachFlashChip,
+  DEFAULT_FLASH_UNIQUE_ID,
   FLASH_PAGE_BYTES,
   FLASH_SECTOR_BYTES,
   FlashChip,

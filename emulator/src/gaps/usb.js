@@ -26,7 +26,10 @@
 //    the other, and a packet completes (reaches the host, or the device's buffer) at the end
 //    of its slot. A short packet takes the whole slot (on the wire it is shorter), so figures
 //    err on the slow side. A host that stops reading leaves the IN buffer armed, as a real
-//    host whose program and OS buffers are full does.
+//    host whose program and OS buffers are full does. A slow reader (`setReadInterval`)
+//    takes one IN packet per interval at most, as a host whose OS buffers are full and whose
+//    program reads a packet's worth at a time does: the next packet waits for the interval
+//    from the last one taken, then for its bus slot.
 // 12. Suspend and unplugging: on the chip SIE_STATUS.SUSPENDED is write-one-to-clear;
 //    rp2040js does not clear it, so the suspend interrupt would fire for ever. Writing it now
 //    clears it. Unplugging (`UsbCdcHost.unplug`) stops all traffic, and 3 ms later the device
@@ -80,6 +83,10 @@ export class UsbCdcHost {
     this.plugged = true;
     /** The host's program reads (IN packets are taken). */
     this.reading = true;
+    /** A slow reader: the least time from one IN packet taken to the next (0: the bus's pace). */
+    this.readIntervalNanos = 0;
+    /** When the last IN packet was taken. */
+    this.lastInNanos = -Infinity;
     /** Bytes waiting to be sent, in order. */
     this.pending = [];
     this.pendingHead = 0;
@@ -101,6 +108,7 @@ export class UsbCdcHost {
     this.clock = mcu.clock;
     this.busFreeNanos = 0;
     this.inAlarm = this.clock.createAlarm(() => this.inTaken());
+    this.readAlarm = this.clock.createAlarm(() => this.readDue());
     this.outAlarm = this.clock.createAlarm(() => this.outDelivered());
     this.suspendAlarm = this.clock.createAlarm(() => this.suspendDevice());
     // Gap 12: SUSPENDED is write-one-to-clear.
@@ -134,6 +142,7 @@ export class UsbCdcHost {
     this.inArm = null; // { endpoint, offset } (gap 11)
     this.inScheduled = false;
     this.inAlarm.cancel();
+    this.readAlarm.cancel();
     this.controlQueue = [];
     this.control = null;
     this.configured = false;
@@ -229,6 +238,15 @@ export class UsbCdcHost {
     this.scheduleIn();
   }
 
+  /**
+   * Makes the host's program a slow reader: one IN packet taken per `ms` milliseconds at most
+   * (0: as fast as the bus carries them).
+   */
+  setReadInterval(ms) {
+    this.readIntervalNanos = ms * 1e6;
+    this.scheduleIn();
+  }
+
   /** Pulls the cable: all traffic stops; the device sees a suspend 3 ms later. */
   unplug() {
     if (!this.plugged) {
@@ -238,6 +256,7 @@ export class UsbCdcHost {
     this.configured = false;
     this.portOpen = false;
     this.inAlarm.cancel();
+    this.readAlarm.cancel();
     this.inScheduled = false;
     this.outAlarm.cancel();
     this.outPacket = null;
@@ -414,6 +433,7 @@ export class UsbCdcHost {
       return false;
     }
     this.inAlarm.cancel();
+    this.readAlarm.cancel();
     this.inScheduled = false;
     this.inArm = value & BUF_CTRL_AVAILABLE ? { endpoint: index, offset } : null;
     this.scheduleIn();
@@ -427,7 +447,18 @@ export class UsbCdcHost {
       return;
     }
     this.inScheduled = true;
+    const untilRead = this.lastInNanos + this.readIntervalNanos - this.clock.nanos;
+    if (untilRead > 0) {
+      this.readAlarm.schedule(untilRead); // a slow reader: the bus slot is taken then
+      return;
+    }
     this.inAlarm.schedule(this.busSlot() - this.clock.nanos);
+  }
+
+  /** A slow reader's interval has passed: the armed packet takes the next bus slot. */
+  readDue() {
+    this.inScheduled = false;
+    this.scheduleIn();
   }
 
   inTaken() {
@@ -443,6 +474,7 @@ export class UsbCdcHost {
     const data = this.mcu.usbDPRAM.slice(start, start + length);
     view.setUint32(arm.offset, control & ~(BUF_CTRL_AVAILABLE | BUF_CTRL_FULL), true);
     this.inArm = null;
+    this.lastInNanos = this.clock.nanos;
     this.inPackets++;
     this.inBytes += length;
     this.usb.indicateBufferReady(arm.endpoint, false);
