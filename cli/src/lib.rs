@@ -1,23 +1,30 @@
 //! The host tool `hexapod`'s library: its subcommands ([`cmd`], one file each, listed by
 //! `main.rs`) and what they are made of, each testable on its own.
 //!
-//! - [`cmd`]: each subcommand's options, run and words;
-//! - [`error`]: [`error::Error`], the one error type, worded on its variants; [`messages`]:
-//!   how the outcome is written (the words are their owners');
-//! - [`build_file`]: the TOML build file, keys the firmware's `set` names, checked by the
-//!   firmware's own code, and written commented; [`sizing`]: its host-only `[sizing]` table;
-//!   [`files`]: files read and written whole;
-//! - [`link`]: a serial link to a board, honouring its protocol; [`board`]: what its replies
-//!   say (`config` as settings, `status`'s counters);
-//! - [`trajectory`]: trajectory CSV files, and each row as the board will get it, checked;
-//!   [`demo`]: built-in trajectories; [`streamer`]: sending them at their own timing;
-//! - [`cue`]: a flight simulator's telemetry to motion cues (washout filter) to stream frames,
-//!   and a record of a flight plotted;
-//! - [`size`]: a platform's reach, stiffness and servo torques; [`draw`], [`workspace_plot`],
-//!   [`torque_plot`]: the pictures, on [`picture`] scenes with [`plot`]'s axes;
-//! - [`flash_image`]: the settings sectors as the board's `save` leaves them; [`elf`]: the load
-//!   segments of an ELF file; [`uf2`]: a UF2 file of segments, for the RP2040's USB
-//!   drag-and-drop bootloader, and the file read back.
+//! This table is the crate's one module map (ARCHITECTURE.md links here):
+//!
+//! | module | job |
+//! | --- | --- |
+//! | `main.rs` | the table of contents: each subcommand with its help line, dispatched to its `Cmd::run` |
+//! | `cmd/<subcommand>.rs` | one per subcommand (`init`, `apply`, `pull`, `describe`, `workspace`, `torque`, `draw`, `send`, `shell`, `stream`, `demo`, `cue`, `cue_plot`, `uf2`): its options (a clap `Cmd`), its `run`, its own words (the summary it prints) |
+//! | `cmd/mod.rs` | the options several share (a board's port and link, picture formats, stream options) and the summaries several write |
+//! | `error.rs` | `Error`, the one error type, each variant worded in its `Display` (the file, line and key or field, or the port); `board_words`: a refusal as the board writes it |
+//! | `messages.rs` | how the outcome is written (mechanism, no content): the summary on standard output, the error after `hexapod: ` on standard error, a reply's lines as the board wrote them |
+//! | `build_file.rs` | the TOML build file: keys are `set` names (the payload and torque ratings too; `baud` kept apart, for `apply` to send last, before `save`), each checked by `control::settings`, a payload's holding torques at home by `control::payload`; an order of `set`s the board accepts one by one; `read`; writing a commented file (each setting's meaning and range) |
+//! | `sizing.rs` | the build file's `[sizing]` table: what the board has no setting for (the servos' holding stiffness); its old payload and rating keys named with the settings that replaced them |
+//! | `files.rs` | the user's files read and written whole, errors naming the file |
+//! | `link.rs` | a serial port to a board (`serialport`, no libudev): a reader thread hands over lines; echo off, one final reply per line, resynchronisation after `# warning:` |
+//! | `board.rs` | what replies say: `config` as `Settings` (read with `SettingId::parse`/`parse_value`), `status`'s counters and pulses |
+//! | `trajectory.rs` | trajectory CSV files; each row as the board will get it (a binary frame or a `pose` line), checked with the firmware's decoder, the IK and the torque check (`control::payload`) |
+//! | `demo.rs` | built-in trajectories (circle, figure eight, sines, a tour of the workspace edge) |
+//! | `streamer.rs` | rows checked against the board's settings and sent at their own timing; round trips, late rows, the board's counters; the stream's summary |
+//! | `size.rs` | a platform sized: reach (`workspace::Limits`), stiffness (`statics`), the payload's holding torques and the ratings' verdict as the board computes them (`control::payload`), torques along a trajectory (`dynamics::actuation`); the words `describe` and `torque` share |
+//! | `draw.rs` | the platform at a pose in four views (`legs::ArmState` for the arm tips and joints), with its labels |
+//! | `workspace_plot.rs`, `torque_plot.rs` | `workspace`'s three plots; `torque`'s bars over the grid or lines along a trajectory, with the ratings; each with its labels |
+//! | `plot.rs` | axes with round ticks and units, legends, colour scales, on a `picture::Scene` |
+//! | `picture.rs` | a scene of lines, polygons, circles and text; SVG by hand; PNG by `resvg` with DejaVu Sans embedded (`dejavu` crate); `write_scene` writes the files asked for |
+//! | `cue/` | the work of `cue` and `cue-plot` (docs/cueing.md): `washout.rs` the classical washout filter (specific force and rates at the pilot's head -> high-pass, double integration; low-pass -> rate-limited tilt coordination; rates -> high-pass, integration), each channel a transfer function stepped by the trapezoidal rule at the telemetry's own time step; `reach.rs` the pivot and the limits (soft limit per axis within a margin of `workspace::Limits`' reach and the board's full scales, then the board's IK on the whole pose); `telemetry.rs` the UDP line format JSBSim and FlightGear send (`cli/sim/`), bad lines dropped and counted (why, worded on `error::BadLine`); `config.rs` the build file's `[cue]` table (`build_file` passes it by), each key's range and meaning; `run.rs` the loop (newest cue first, easing home on a stall, the end of the telemetry or Ctrl-C), reporting its progress to `cmd/cue.rs`, which words it; `record.rs` the CSV record and its plot with its labels (what the platform delivers, from the poses sent) |
+//! | `flash_image.rs`, `uf2.rs`, `elf.rs` | `uf2`: the ELF's load segments, and with `--settings` the settings sectors (found by the `_settings_start`/`_settings_end` symbols `memory.x` defines) as `Store::empty().prepare` writes them |
 //!
 //! No module imports one that imports it back: `error` is a leaf, the library's modules never
 //! use `cmd`, and `cmd/mod.rs` (the shared options) never uses its subcommands.
