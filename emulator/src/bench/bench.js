@@ -31,6 +31,7 @@ import {
   guardPoses,
   HEADLINES,
   measureHeadlines,
+  pathPoses,
   writeGuard,
 } from './headline.js';
 import {
@@ -128,18 +129,7 @@ const fmt = (x, digits = 0) =>
 
 /** A smooth streaming path: small steps in all six coordinates (mm, degrees). */
 function streamLines(count) {
-  return Array.from({ length: count }, (_, i) => {
-    const a = i * 0.01;
-    const v = [
-      10 * Math.cos(a),
-      10 * Math.sin(a),
-      2 * Math.sin(3 * a),
-      3 * Math.sin(a),
-      3 * Math.cos(2 * a),
-      5 * Math.sin(a / 2),
-    ];
-    return `pose ${v.map((x) => x.toFixed(3)).join(' ')}`;
-  });
+  return pathPoses(count).map((pose) => `pose ${pose}`);
 }
 
 // ---- the guard's table (./dev bench --update-guard): only that ----

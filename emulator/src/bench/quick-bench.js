@@ -23,6 +23,7 @@ import { DEFAULT_ELF, EmulatedBoard } from '../chip/board.js';
 import { streamingBoard } from './firmware-bench.js';
 import { symbolRanges } from '../chip/elf.js';
 import { BENCH_ELF, benchPoses, runIkBench, runStreamBench } from './ik-bench.js';
+import { pathPoses } from './headline.js';
 
 const { values: args, positionals } = parseArgs({
   allowPositionals: true,
@@ -202,17 +203,8 @@ function profilePoseLines(count) {
     return result;
   };
   let bytes = 0;
-  for (let i = 0; i < count; i++) {
-    const a = i * 0.01;
-    const v = [
-      10 * Math.cos(a),
-      10 * Math.sin(a),
-      2 * Math.sin(3 * a),
-      3 * Math.sin(a),
-      3 * Math.cos(2 * a),
-      5 * Math.sin(a / 2),
-    ];
-    const line = `pose ${v.map((x) => x.toFixed(3)).join(' ')}`;
+  for (const pose of pathPoses(count)) {
+    const line = `pose ${pose}`;
     bytes += line.length + 1;
     board.runMs(3); // a quiet stretch between lines (frames run there, not counted)
     on = true;
