@@ -127,12 +127,8 @@ fn with_the_pivot_config_lists_the_pose_found_is_the_pose_about_it() {
         0.0,
         118.458 + 100.0 * (1.0 - pitch.cos()),
     ];
-    for k in 0..3 {
-        assert!(
-            (view.frame().origin_mm[k] - origin[k]).abs() < 0.01,
-            "{:?}",
-            view.frame()
-        );
+    for (got, want) in view.frame().origin_mm.iter().zip(origin) {
+        assert!((got - want).abs() < 0.01, "{:?}", view.frame());
     }
     // Without the pivot the same pulses are that placement as a pose about the centre.
     assert!(view.set_pivot(Vec3::zeros()));
