@@ -33,12 +33,18 @@ before(() => {
 
 const PIVOT = { pivot_x_mm: 10, pivot_y_mm: -20, pivot_z_mm: 100 };
 
-/** The default settings with `PIVOT`, as the reference takes them. */
+/**
+ * The default settings with a pivot (`PIVOT` unless given), as the reference takes them.
+ * @param {Record<string, number>} [pivot]
+ */
 function withPivot(pivot = PIVOT) {
   return { ...defaultSettings(), pivot };
 }
 
-/** A board with the speed limits off (poses jump) and `PIVOT` set. */
+/**
+ * A board with the speed limits off (poses jump) and a pivot (`PIVOT` unless given) set.
+ * @param {Record<string, number>} [pivot]
+ */
 function pivotBoard(pivot = PIVOT) {
   const board = bootQuiet(bootrom);
   ok(board, 'set speed_mm_s off');
@@ -49,7 +55,11 @@ function pivotBoard(pivot = PIVOT) {
   return board;
 }
 
-/** The f64 reference's pulses for a pose about `settings`' pivot. */
+/**
+ * The f64 reference's pulses for a pose about `settings`' pivot.
+ * @param {number[]} pose
+ * @param {any} [settings]
+ */
 function f64Pulses(pose, settings = withPivot()) {
   const [answer] = reference.f64(settings, [pose]);
   assert.ok(answer.ok, `the f64 reference cannot reach ${pose}: ${JSON.stringify(answer)}`);
