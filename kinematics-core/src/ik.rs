@@ -225,6 +225,8 @@ struct FixedLeg {
     /// Home arm angle alpha0 (eq. 12) as this path finds it, in steps of 2^-28 rad
     /// (`fixed::ARM_FRAC`): home stays exact on it.
     alpha0_q: i32,
+    /// `alpha0_q` wrapped into `(-pi, pi]`, for the offsets from home.
+    alpha0_wrapped_q: i32,
 }
 
 /// Where the rotation centre `c` is, for the fixed-point path.
@@ -499,6 +501,7 @@ impl Solver {
                             round(wide_mul(two_arm_q, sin_q)),
                         ],
                         alpha0_q: 0,
+                        alpha0_wrapped_q: 0,
                     }
                 }),
             }
@@ -530,6 +533,7 @@ impl Solver {
                     let mut table = table;
                     for (c, alpha0) in table.legs.iter_mut().zip(alpha0) {
                         c.alpha0_q = alpha0;
+                        c.alpha0_wrapped_q = wrap_fixed(alpha0);
                     }
                     Some(table)
                 }
@@ -610,8 +614,8 @@ impl Solver {
         if let Some((table, fixed)) = self.fixed_pose::<M>(pose) {
             let alpha = table.arm_angles::<M>(&fixed).map_err(unreachable)?;
             return Ok(core::array::from_fn(|i| {
-                let alpha0 = table.legs[i].alpha0_q;
-                arm_rad_fixed(alpha0, offset_fixed(alpha[i], wrap_fixed(alpha0)))
+                let c = &table.legs[i];
+                arm_rad_fixed(c.alpha0_q, offset_fixed(alpha[i], c.alpha0_wrapped_q))
             }));
         }
         let mut alpha = self
@@ -645,15 +649,17 @@ impl Solver {
         let mut pulse_us = [0.0f32; LEGS];
         if let Some((table, fixed)) = self.fixed_pose::<M>(pose) {
             let alpha = table.arm_angles::<M>(&fixed).map_err(unreachable)?;
+            // Every pulse and angle first, then the limits (the first servo beyond them is
+            // named, as before): the conversions run without an exit path's values held.
+            for (i, (servo, c)) in servos.0.iter().zip(&table.legs).enumerate() {
+                let offset = offset_fixed(alpha[i], c.alpha0_wrapped_q);
+                pulse_us[i] = servo.pulse_us_for_fixed_offset::<M>(offset);
+                arm_rad[i] = arm_rad_fixed(c.alpha0_q, offset);
+            }
             for (i, servo) in servos.0.iter().enumerate() {
-                let alpha0 = table.legs[i].alpha0_q;
-                let offset = offset_fixed(alpha[i], wrap_fixed(alpha0));
-                let pulse = servo.pulse_us_for_fixed_offset::<M>(offset);
-                if !servo.allows(pulse) {
-                    return Err(limit(i, servo, pulse));
+                if !servo.allows(pulse_us[i]) {
+                    return Err(limit(i, servo, pulse_us[i]));
                 }
-                pulse_us[i] = pulse;
-                arm_rad[i] = arm_rad_fixed(alpha0, offset);
             }
         } else {
             let alpha = self
@@ -709,7 +715,12 @@ impl FixedTable {
         if !(bounded(&r[0]) && bounded(&r[1]) && bounded(&r[2])) {
             return None;
         }
-        let mut position = position.map(|v| to_fixed(v, MM_FRAC));
+        // (Written out: `map` here is a call of its own on the chip.)
+        let mut position = [
+            to_fixed(position[0], MM_FRAC),
+            to_fixed(position[1], MM_FRAC),
+            to_fixed(position[2], MM_FRAC),
+        ];
         if let Some(c) = centre {
             // About the rotation centre c: q = T + c + R (p - c) = (T + c - R c) + R p, with
             // R c exact and rounded once to 2^-20 mm (|c_k| < 384 mm: no overflow).
