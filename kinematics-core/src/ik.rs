@@ -32,9 +32,11 @@
 //! Two paths compute the same equations. Every usual build (a planar platform within the
 //! bounds of module `fixed`) and pose takes the fixed-point path: integer instructions only,
 //! from the rotation to the pulses, with `M`'s fixed-point sine and cosine, square root and arc
-//! tangent (by default the core's own: then the host and the chip compute the same bits). Other
-//! builds and poses take the float path, `f32` arithmetic through `M`. Each has its own home
-//! angles, so each gives exactly the home pulses at home.
+//! tangent (by default the core's own: then the host and the chip compute the same bits); a leg
+//! whose vector and build are within smaller bounds (every leg of every usual pose) computes
+//! eq. 9's terms in 32-bit words, any other in 64-bit words. Other builds and poses take the
+//! float path, `f32` arithmetic through `M`. Each has its own home angles, so each gives
+//! exactly the home pulses at home.
 
 use core::f32::consts::PI;
 use core::fmt;
@@ -745,9 +747,11 @@ impl FixedTable {
     /// reach.
     ///
     /// Per leg: `l = R p + (x, y, z) + ((0, 0, h0) - b)` (eq. 2, 3) in steps of 2^-20 mm (`R p`
-    /// exact, rounded once); `|l|^2`, `L`, `N`, `M` of eq. 9 in steps of 2^-36 mm^2 (exact
-    /// products cut once); then `M`, `L - N`, `L + N` scaled by one power of two to about 29
-    /// bits (the root depends only on their ratios), the discriminant
+    /// exact, rounded once); `|l|^2`, `L`, `N`, `M` of eq. 9 in 32-bit words, in steps of
+    /// 2^-15 mm^2 (products rounded once: [`FixedTable::narrow_terms`], every usual leg), or
+    /// beyond that path's bounds in 64-bit words, in steps of 2^-36 mm^2 (exact products cut
+    /// once: [`FixedTable::wide_terms`]); then `M`, `L - N`, `L + N` scaled by one power of two
+    /// to about 29 bits (the root depends only on their ratios), the discriminant
     /// `D = M^2 - (L - N)(L + N) = M^2 + N^2 - L^2` exactly, and the half-angle root (module
     /// docs) from `M`'s fixed-point square root and arc tangent ([`Math::sqrt_fixed`],
     /// [`Math::atan2_fixed`]: by default the core's integer routines, so the host runs exactly

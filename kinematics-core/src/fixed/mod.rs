@@ -5,7 +5,9 @@
 //! - lengths, mm: `i32` in steps of 2^-[`MM_FRAC`] mm (2^-20 mm, about 1e-6 mm);
 //! - rotation matrix entries (no unit) and sines and cosines: `i32` in steps of
 //!   2^-[`ROT_FRAC`];
-//! - squared lengths, mm^2: `i64` in steps of 2^-[`SQ_FRAC`] mm^2 (2^-36 mm^2);
+//! - squared lengths, mm^2: `i64` in steps of 2^-[`SQ_FRAC`] mm^2 (2^-36 mm^2), or, on the
+//!   IK's 32-bit path (every usual leg: the `NARROW_*` bounds), `i32` in steps of
+//!   2^-[`NARROW_SQ_FRAC`] mm^2 (2^-15 mm^2);
 //! - angles, rad: `i32` in steps of 2^-[`ANGLE_FRAC`] rad (the half-angles of eq. 9), which
 //!   are the arm angles in steps of 2^-[`ARM_FRAC`] rad.
 //!
