@@ -43,10 +43,10 @@ use core::fmt;
 
 use crate::configuration::{check_centre, Anchors, ConfigurationError};
 use crate::fixed::{
-    from_fixed, from_fixed32, leading_zeros, mul_mm, mul_mm_narrow, rotate_mm_split, split15,
-    square, square_mm, square_mm_narrow, to_fixed, to_fixed_sq, wide_mul, ARM_FRAC, MAX_FIXED_MM,
-    MAX_FIXED_ROD_TERM_MM2, MAX_FIXED_TWO_ARM_MM, MAX_NARROW_ROD_TERM_MM2, MAX_NARROW_TWO_ARM_MM,
-    MAX_ROTATION_ENTRY, MM_FRAC, NARROW_LEG_Q, NARROW_SQ_FRAC, ROT_FRAC,
+    from_fixed, from_fixed32, leading_zeros, mul_mm, mul_mm_narrow, rotate_mm_split, split13,
+    split15, square, square_mm, square_mm_narrow, to_fixed, to_fixed_sq, wide_mul, ARM_FRAC,
+    MAX_FIXED_MM, MAX_FIXED_ROD_TERM_MM2, MAX_FIXED_TWO_ARM_MM, MAX_NARROW_ROD_TERM_MM2,
+    MAX_NARROW_TWO_ARM_MM, MAX_ROTATION_ENTRY, MM_FRAC, NARROW_LEG_Q, NARROW_SQ_FRAC, ROT_FRAC,
 };
 use crate::geometry::{Geometry, GeometryError};
 use crate::math::{is_zero, Libm, Math, Real};
@@ -224,6 +224,8 @@ struct FixedLeg {
     offset_q: [i32; 3],
     /// `2a cos(beta)`, `2a sin(beta)`, 2^-20 mm.
     n_q: [i32; 2],
+    /// `n_q`, each split at bit 13 (`fixed::split13`) for the 32-bit path's products.
+    n_split: [[i32; 2]; 2],
     /// Home arm angle alpha0 (eq. 12) as this path finds it, in steps of 2^-28 rad
     /// (`fixed::ARM_FRAC`): home stays exact on it.
     alpha0_q: i32,
@@ -252,6 +254,8 @@ struct FixedTable {
     rod_term_q: i64,
     /// `2a`, 2^-20 mm (`fixed::MM_FRAC`).
     two_arm_q: i32,
+    /// `two_arm_q` split at bit 13 (`fixed::split13`) for the 32-bit path's products.
+    two_arm_split: [i32; 2],
     /// `s^2 - a^2` in steps of 2^-15 mm^2 (`fixed::NARROW_SQ_FRAC`), where the build allows the
     /// 32-bit path (`0 <= s^2 - a^2 < fixed::MAX_NARROW_ROD_TERM_MM2`,
     /// `2a < fixed::MAX_NARROW_TWO_ARM_MM`: every usual build); `None`: every leg takes the
@@ -484,6 +488,7 @@ impl Solver {
             FixedTable {
                 rod_term_q: to_fixed_sq(rod_term_mm2),
                 two_arm_q,
+                two_arm_split: split13(two_arm_q),
                 narrow_rod_term_q: narrow
                     .then(|| libm::round(rod_term_mm2 * f64::from(1u32 << NARROW_SQ_FRAC)) as i32),
                 centre: FixedCentre::Origin,
@@ -494,14 +499,16 @@ impl Solver {
                     // machine, like the rest of the fixed-point path.
                     let (sin_q, cos_q) = M::sin_cos_fixed(leg.beta_rad);
                     let round = |v: i64| ((v + (1 << (ROT_FRAC - 1))) >> ROT_FRAC) as i32;
+                    let n_q = [
+                        round(wide_mul(two_arm_q, cos_q)),
+                        round(wide_mul(two_arm_q, sin_q)),
+                    ];
                     FixedLeg {
                         platform_split: [0, 1]
                             .map(|k| split15(to_fixed(c.platform_mm[k], MM_FRAC))),
                         offset_q: [0, 1, 2].map(|k| to_fixed(c.offset_mm[k], MM_FRAC)),
-                        n_q: [
-                            round(wide_mul(two_arm_q, cos_q)),
-                            round(wide_mul(two_arm_q, sin_q)),
-                        ],
+                        n_q,
+                        n_split: n_q.map(split13),
                         alpha0_q: 0,
                         alpha0_wrapped_q: 0,
                     }
@@ -798,8 +805,8 @@ impl FixedTable {
             return None;
         }
         let big_l = leg_sq as i32 - rod_term;
-        let big_n = mul_mm_narrow(c.n_q[0], l_x) + mul_mm_narrow(c.n_q[1], l_y);
-        let big_m = mul_mm_narrow(self.two_arm_q, l_z);
+        let big_n = mul_mm_narrow(c.n_split[0], l_x) + mul_mm_narrow(c.n_split[1], l_y);
+        let big_m = mul_mm_narrow(self.two_arm_split, l_z);
         Some(scale_terms32([
             big_m,
             big_l.checked_sub(big_n)?,

@@ -251,11 +251,19 @@ pub(crate) fn square_mm_narrow(a: i32) -> u32 {
 /// (`h_a` signed, `|h_a| <= 2^14`, `0 <= r_a < 2^13`) and `b` alike (`|h_b| <= 2^15`):
 /// `a b / 2^25 = 2 h_a h_b + (h_a r_b + r_a h_b + r_a r_b / 2^13) / 2^12`, every product and
 /// sum below 2^30 in magnitude, the result within 2^30 + 2^17.
+/// `a` comes split ([`split13`]): the IK splits its constant factors (`2a`, `n_i`) once, when
+/// the solver is built.
 #[inline(always)]
-pub(crate) fn mul_mm_narrow(a: i32, b: i32) -> i32 {
-    let (a_hi, a_lo) = (a >> 13, a & 0x1fff);
-    let (b_hi, b_lo) = (b >> 13, b & 0x1fff);
+pub(crate) fn mul_mm_narrow([a_hi, a_lo]: [i32; 2], b: i32) -> i32 {
+    let [b_hi, b_lo] = split13(b);
     2 * a_hi * b_hi + ((a_hi * b_lo + a_lo * b_hi + ((a_lo * b_lo) >> 13) + (1 << 11)) >> 12)
+}
+
+/// `v` split at bit 13: `[v >> 13, v & 0x1fff]` (`v = hi 2^13 + lo`, `0 <= lo < 2^13`), the
+/// factors of [`mul_mm_narrow`].
+#[inline(always)]
+pub(crate) const fn split13(v: i32) -> [i32; 2] {
+    [v >> 13, v & 0x1fff]
 }
 
 /// The leading zeros of every byte value (8 for 0).
@@ -306,11 +314,11 @@ pub(crate) fn normalise(m: u32) -> (u32, u32) {
 /// the exponent field, which is then right.
 #[inline(always)]
 fn pack(sign: u32, m: u32, sticky: bool, exponent: u32) -> f32 {
-    let mut mantissa = m >> 8;
+    // Up exactly when the cut bits are above half, or at half with sticky bits or an odd
+    // mantissa: `rest + (odd | sticky) >= 0x81`, without a branch (the sum is below 0x180).
+    let mantissa = m >> 8;
     let rest = m & 0xff;
-    if rest > 0x80 || (rest == 0x80 && (sticky || mantissa & 1 == 1)) {
-        mantissa += 1;
-    }
+    let mantissa = mantissa + ((rest + ((mantissa & 1) | u32::from(sticky)) + 0x7f) >> 8);
     f32::from_bits(sign | ((exponent << 23) + mantissa - (1 << 23)))
 }
 
@@ -492,7 +500,8 @@ mod tests {
             let square = (i64::from(b) * i64::from(b)) as f64 / step;
             worst_square = worst_square.max((f64::from(square_mm_narrow(b)) - square).abs());
             let product = (i64::from(a) * i64::from(b)) as f64 / step;
-            worst_product = worst_product.max((f64::from(mul_mm_narrow(a, b)) - product).abs());
+            worst_product =
+                worst_product.max((f64::from(mul_mm_narrow(split13(a), b)) - product).abs());
         }
         assert!(worst_square <= 0.51, "square: {worst_square} steps");
         assert!(worst_product <= 0.51, "product: {worst_product} steps");
