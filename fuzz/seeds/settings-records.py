@@ -13,8 +13,10 @@ import os
 import struct
 import zlib
 
-FORMAT_VERSION = 4
+FORMAT_VERSION = 5
 PAYLOAD_LEN = 224
+# Format 4 (boards in the field hold it): no servo speed ratings (their byte reserved, 0).
+FORMAT_VERSION_NO_SPEED = 4
 # Format 3 (boards in the field hold it): no baud rate, 4 bytes shorter.
 FORMAT_VERSION_NO_BAUD = 3
 PIN_OFF = 0xFF
@@ -26,28 +28,33 @@ def record(sequence, frame_hz, speeds, layout, servos, accels=(0.0, 0.0),
            stream_scale=(25.0, 25.0, 15.0, 15.0, 15.0, 20.0), stream_bits=8,
            stream_order=('x', 'y', 'z', 'roll', 'pitch', 'yaw'), estop_pin=None,
            estop_home=False, power_pin=None, payload_g=0.0, com_mm=(0.0, 0.0, 0.0),
-           ratings_kgcm=(0.0,) * 6, baud=115200, version=FORMAT_VERSION):
+           ratings_kgcm=(0.0,) * 6, speeds_s_60deg=(0.0,) * 6, baud=115200,
+           version=FORMAT_VERSION):
     """sequence: the save's number; speeds: (mm/s, deg/s, link timeout s); layout: base radius,
     base half angle, platform radius, platform half angle, arm, rod; servos: six (trim, rate,
     min, max, reversed); accels: (mm/s^2, deg/s^2); stream_order: six axis names or None;
     pins: GPIO or None; payload_g, com_mm: the payload; ratings_kgcm: six torque ratings
-    (kgf cm, kept in hundredths; 0 not rated); baud: UART0's rate; version: 4, or 3 for the
-    older format without the baud rate."""
+    (kgf cm, kept in hundredths; 0 not rated); speeds_s_60deg: six speed ratings (s per 60
+    degrees, kept in hundredths; 0 not rated); baud: UART0's rate; version: 5, or 4 for the
+    older format without speed ratings, or 3 for the oldest, without the baud rate either."""
+    if version != FORMAT_VERSION:
+        assert all(v == 0.0 for v in speeds_s_60deg)
     payload = struct.pack('<HH', frame_hz, 0) + struct.pack('<3f', *speeds)
     payload += struct.pack('<6f', *layout)
-    for (trim, rate, lo, hi, reversed_), rating in zip(servos, ratings_kgcm):
-        payload += struct.pack('<4fBxH', trim, rate, lo, hi, 1 if reversed_ else 0,
-                               round(rating * 100))
+    for (trim, rate, lo, hi, reversed_), rating, speed in zip(servos, ratings_kgcm,
+                                                              speeds_s_60deg):
+        payload += struct.pack('<4fBBH', trim, rate, lo, hi, 1 if reversed_ else 0,
+                               round(speed * 100), round(rating * 100))
     payload += struct.pack('<2f', *accels) + struct.pack('<6f', *stream_scale)
     payload += bytes([stream_bits] + [6 if a is None else AXES.index(a) for a in stream_order])
     pin = lambda p: PIN_OFF if p is None else p
     payload += bytes([pin(estop_pin), 1 if estop_home else 0, pin(power_pin), 0, 0])
     payload += struct.pack('<f3f', payload_g, *com_mm)
-    if version == FORMAT_VERSION:
+    if version in (FORMAT_VERSION, FORMAT_VERSION_NO_SPEED):
         payload += struct.pack('<I', baud)
     else:
         assert version == FORMAT_VERSION_NO_BAUD
-    assert len(payload) == (PAYLOAD_LEN if version == FORMAT_VERSION else PAYLOAD_LEN - 4)
+    assert len(payload) == (PAYLOAD_LEN - 4 if version == FORMAT_VERSION_NO_BAUD else PAYLOAD_LEN)
     body = b'HXPS' + struct.pack('<HH', version, len(payload)) + payload
     body += struct.pack('<I', sequence)
     return body + struct.pack('<I', zlib.crc32(body))
@@ -72,7 +79,9 @@ CUSTOM = dict(
 SEEDS = {
     'record-default': record(1, 50, (50.0, 60.0, 0.0), (75.0, 20.0, 60.0, 20.0, 20.0, 120.0),
                              default_servos()),
-    'record-custom': record(**CUSTOM, baud=921600),
+    'record-custom': record(**CUSTOM, baud=921600,
+                            speeds_s_60deg=(0.1, 0.1, 0.12, 0.0, 2.55, 0.01)),
+    'record-v4-custom': record(**CUSTOM, baud=921600, version=FORMAT_VERSION_NO_SPEED),
     'record-v3-custom': record(**CUSTOM, version=FORMAT_VERSION_NO_BAUD),
 }
 

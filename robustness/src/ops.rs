@@ -145,6 +145,8 @@ pub const SETTING_NAMES: &[&str] = &[
     "payload_com_z_mm",
     "servo2.torque_kgcm",
     "servos.torque_kgcm",
+    "servo3.speed_s_60deg",
+    "servos.speed_s_60deg",
     "servo0.trim_us",
     "servo7.min_us",
     "servo1.colour",

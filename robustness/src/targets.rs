@@ -260,9 +260,16 @@ fn check_decoded(bytes: &[u8]) {
         if let Err(e) = s.validate() {
             panic!("decoded settings do not validate: {e:?}");
         }
-        if bytes[4..6] == record::FORMAT_VERSION_NO_BAUD.to_le_bytes() {
-            // Format 3 is read, never written: a save writes it again in the new format.
-            assert_eq!(r.baud, control::settings::DEFAULT_BAUD);
+        let version = [bytes[4], bytes[5]];
+        if version == record::FORMAT_VERSION_NO_BAUD.to_le_bytes()
+            || version == record::FORMAT_VERSION_NO_SPEED.to_le_bytes()
+        {
+            // Formats 3 and 4 are read, never written: a save writes them again in the new
+            // format. Neither held speed ratings (nor format 3 the baud rate).
+            assert_eq!(r.settings.servo_speed, Default::default());
+            if version == record::FORMAT_VERSION_NO_BAUD.to_le_bytes() {
+                assert_eq!(r.baud, control::settings::DEFAULT_BAUD);
+            }
             assert_eq!(record::decode(&record::encode(&r)), Ok(r));
         } else {
             assert_eq!(

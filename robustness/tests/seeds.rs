@@ -81,15 +81,29 @@ fn settings_record_seeds_decode() {
             if name.ends_with("/record-default") {
                 assert_eq!(record.baud, 115_200, "{name}");
             }
-            if name.ends_with("/record-v3-custom") {
-                assert_eq!(record.baud, 115_200, "{name}");
-                // The same settings as record-custom, in the format boards in the field hold.
+            if name.ends_with("/record-custom") {
+                // Speed ratings in hundredths of a second per 60 degrees, as written.
+                assert_eq!(
+                    s.servo_speed.s_per_60deg,
+                    [0.1, 0.1, 0.12, 0.0, 2.55, 0.01],
+                    "{name}"
+                );
+            }
+            if name.ends_with("/record-v3-custom") || name.ends_with("/record-v4-custom") {
+                let v3 = name.ends_with("/record-v3-custom");
+                assert_eq!(record.baud, if v3 { 115_200 } else { 921_600 }, "{name}");
+                // The same settings as record-custom, in the formats boards in the field hold,
+                // which have no speed ratings.
                 let new = seeds("settings")
                     .into_iter()
                     .find(|(n, _)| n.ends_with("/record-custom"))
                     .expect("record-custom is a seed");
                 let new = control::record::decode(&new.1).expect("record-custom decodes");
-                assert_eq!((record.sequence, s), (new.sequence, new.settings));
+                let unrated = control::Settings {
+                    servo_speed: Default::default(),
+                    ..new.settings
+                };
+                assert_eq!((record.sequence, s), (new.sequence, unrated), "{name}");
             }
             if name.ends_with("record-default") {
                 // The first save of a board (the encoder's sequence number 1).
