@@ -36,9 +36,10 @@ before(() => {
 
 const SECTOR_BYTES = 4096;
 /**
- * The record (control/src/record.rs), format 4: 240 bytes, UART0's baud rate at 228, sequence
- * number at 232, CRC-32 at 236.
+ * The record (control/src/record.rs), format 5: 240 bytes, UART0's baud rate at 228, sequence
+ * number at 232, CRC-32 at 236 (each servo's speed rating in its block's byte 17).
  */
+const FORMAT_VERSION = 5;
 const RECORD_BYTES = 240;
 const BAUD_AT = 228;
 const SEQUENCE_AT = 232;
@@ -75,7 +76,7 @@ function sectorState(board, sector) {
   const view = new DataView(page.buffer);
   const good =
     String.fromCharCode(...page.subarray(0, 4)) === 'HXPS' &&
-    view.getUint16(4, true) === 4 &&
+    view.getUint16(4, true) === FORMAT_VERSION &&
     view.getUint32(CRC_AT, true) === crc32(page.subarray(0, CRC_AT));
   return good ? { sequence: view.getUint32(SEQUENCE_AT, true) } : 'unusable';
 }
@@ -131,6 +132,7 @@ test('save keeps the settings across a power cycle; the pins start at the saved 
   ok(board, 'set rod_mm 122');
   ok(board, 'set frame_hz 100');
   ok(board, 'set baud 230400'); // a link setting, saved too
+  ok(board, 'set servo3.speed_s_60deg 0.12'); // format 5's speed rating
   board.runMs(5);
   assert.equal(config(board).saved, 'none', 'changed, but still nothing saved');
   ok(board, 'save');
@@ -148,6 +150,10 @@ test('save keeps the settings across a power cycle; the pins start at the saved 
   // The same settings, UART0 at the saved rate (echo, the link's own, turned off by boot).
   assert.deepEqual(after.settings, saved.settings);
   assert.ok(saved.settings.includes('baud: 230400'), JSON.stringify(saved.settings));
+  assert.ok(
+    saved.settings.some((l) => /^servo3: .* speed_s_60deg=0\.12$/.test(l)),
+    JSON.stringify(saved.settings),
+  );
   assert.ok(Math.abs(board.baud - 230400) / 230400 < 0.01, `UART0 at ${board.baud} baud`);
   // At power-up every servo gets its home pulse: its saved trim
   // (docs/geometry-and-calibration.md, "Calibration"), at the saved frame rate.
