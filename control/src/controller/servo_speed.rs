@@ -43,50 +43,48 @@ impl<M: Math> Controller<M> {
 
     /// A stream step from the current pose to `next` (the tracker's step, whose IK is
     /// `solution`), shortened with servo speed ratings so that no arm turns by more than its
-    /// rating in the frame: the tracker and solution to take (`next`'s own if the servos can
-    /// follow it). The step is shortened, all axes alike, to the fraction of it the slowest arm
-    /// can follow (at [`PLAN_MARGIN`]) and solved there; if an arm still turns too far (its
-    /// angle is not linear along the step), its arm angles and pulses are taken the fraction
-    /// of the way that keeps them within the ratings (pulses are linear in arm angles, eq. 13,
-    /// 14; the pose is taken as far, within a second-order error of so short a step). Without
-    /// ratings nothing is done; with ratings that the step keeps, six differences; a step
-    /// shortened costs one IK solution more.
+    /// rating in the frame: `next` and `solution` become the tracker and solution to take
+    /// (left as they are if the servos can follow the step). The step is shortened, all axes
+    /// alike, to the fraction of it the slowest arm can follow (at [`PLAN_MARGIN`]) and solved
+    /// there; if an arm still turns too far (its angle is not linear along the step), its arm
+    /// angles and pulses are taken the fraction of the way that keeps them within the ratings
+    /// (pulses are linear in arm angles, eq. 13, 14; the pose is taken as far, within a
+    /// second-order error of so short a step). Without ratings nothing is done; with ratings
+    /// that the step keeps, six differences; a step shortened costs one IK solution more.
     pub(super) fn step_within_servo_speed(
         &self,
         tracker: &Tracker,
-        next: Tracker,
-        solution: Solution,
-    ) -> (Tracker, Solution) {
+        next: &mut Tracker,
+        solution: &mut Solution,
+    ) {
         let speeds = &self.settings.servo_speed;
         if !speeds.rated() {
-            return (next, solution);
+            return;
         }
         let dt_s = 1.0 / f32::from(self.settings.frame_hz.max(1));
         let from = &self.solution;
         let k = speeds.step_scale(&from.arm_rad, &solution.arm_rad, dt_s);
         if k >= 1.0 {
-            return (next, solution);
+            return;
         }
-        let (next, solution) = {
-            let part = tracker.part_way(&next, k * PLAN_MARGIN);
-            match self.solver.solve::<M>(&self.settings.servos, &part.pose()) {
-                Ok(solution) => (part, solution),
-                // (Both ends can be driven, the way between them not: the arms part of the
-                // way, as below.)
-                Err(_) => (next, solution),
-            }
-        };
+        let part = tracker.part_way(next, k * PLAN_MARGIN);
+        // (Both ends can be driven; should the way between them not be, the arms are taken
+        // part of the way, as below.)
+        if let Ok(there) = self.solver.solve::<M>(&self.settings.servos, &part.pose()) {
+            *next = part;
+            *solution = there;
+        }
         let k = speeds.step_scale(&from.arm_rad, &solution.arm_rad, dt_s);
         if k >= 1.0 {
-            return (next, solution);
+            return;
         }
         let part = |a: &[f32; LEGS], b: &[f32; LEGS]| -> [f32; LEGS] {
             core::array::from_fn(|i| a[i] + (b[i] - a[i]) * k)
         };
-        let shortened = Solution {
+        *solution = Solution {
             arm_rad: part(&from.arm_rad, &solution.arm_rad),
             pulse_us: part(&from.pulse_us, &solution.pulse_us),
         };
-        (tracker.part_way(&next, k), shortened)
+        *next = tracker.part_way(next, k);
     }
 }

@@ -126,20 +126,22 @@ impl<M: Math> Controller<M> {
         let Some(mut stream) = self.stream else {
             return;
         };
-        if self.passes_through() {
-            return; // pass-through: applied as frames come
-        }
         let limits = self.track_limits();
+        if limits == TrackLimits::OFF && !self.settings.servo_speed.rated() {
+            return; // pass-through (`passes_through`): applied as frames come
+        }
         let dt_s = 1.0 / f32::from(self.settings.frame_hz.max(1));
         let next = stream.tracker.step::<M>(&stream.goal, &limits, dt_s);
         if next.pose() == *self.motion.pose() && next == stream.tracker {
             return; // settled: the pulses are solved already
         }
         match self.solver.solve::<M>(&self.settings.servos, &next.pose()) {
-            Ok(solution) => {
+            Ok(mut solution) => {
                 // (Shortened to the servos' rated speeds, if any.)
-                let (next, solution) =
-                    self.step_within_servo_speed(&stream.tracker, next, solution);
+                let mut next = next;
+                if self.settings.servo_speed.rated() {
+                    self.step_within_servo_speed(&stream.tracker, &mut next, &mut solution);
+                }
                 self.motion = Motion::new(next.pose());
                 self.solution = solution;
                 stream.tracker = next;
