@@ -615,6 +615,38 @@ mod tests {
     }
 
     #[test]
+    fn the_servos_speed_ratings_are_the_board_s_settings() {
+        let file = ok("servos.speed_s_60deg = 0.1\n[servo3]\nspeed_s_60deg = 0.25\n");
+        assert_eq!(
+            file.settings.servo_speed.s_per_60deg,
+            [0.1, 0.1, 0.25, 0.1, 0.1, 0.1]
+        );
+        let commands: Vec<String> = file.steps.iter().map(Step::command).collect();
+        assert_eq!(
+            commands,
+            [
+                "set servos.speed_s_60deg 0.1",
+                "set servo3.speed_s_60deg 0.25"
+            ]
+        );
+        // The board's refusals: more decimals than its flash keeps, a rating out of range.
+        assert!(err("[servo2]\nspeed_s_60deg = 0.125\n")
+            .starts_with("b.toml:2: servo2.speed_s_60deg: error:bad-value "));
+        assert!(err("servos.speed_s_60deg = 3\n")
+            .starts_with("b.toml:1: servos.speed_s_60deg: error:out-of-range"));
+        // Written in [servoN] as `config` lists them, off by default, and read back the same.
+        let written = write(&file.settings, &Sizing::default(), "a test");
+        assert!(written.contains("\nspeed_s_60deg = 0.25 "), "{written}");
+        assert_eq!(ok(&written).settings, file.settings);
+        let default = write(&Settings::default(), &Sizing::default(), "a test");
+        assert_eq!(
+            default.matches("\nspeed_s_60deg = \"off\" ").count(),
+            6,
+            "{default}"
+        );
+    }
+
+    #[test]
     fn the_payload_and_ratings_are_the_board_s_settings() {
         let file = ok(
             "payload_g = 1500\npayload_com_z_mm = 25\nservos.torque_kgcm = 10\n\

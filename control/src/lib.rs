@@ -30,6 +30,9 @@
 //!   rule with an integer square root).
 //! - [`payload`]: the payload carried and the servos' torque ratings: holding torques in
 //!   kgf cm from `kinematics_core::statics`, [`payload::TorqueError`].
+//! - [`servo_speed`]: the servos' rated speeds, and how moves and stream steps are slowed so
+//!   that no arm turns faster than its rating ([`servo_speed::ServoSpeeds`], the path time a
+//!   path check measures).
 //! - [`safety`]: the e-stop input's and servo-power output's settings, the e-stop latch.
 //! - [`error`]: [`Error`], why a line is refused (each layer's error type gathered).
 //! - [`report`]: every reply, error code and message, data line and notice, worded once (the
@@ -97,6 +100,7 @@ pub mod protocol;
 pub mod record;
 pub mod report;
 pub mod safety;
+pub mod servo_speed;
 pub mod session;
 pub mod settings;
 pub mod store;

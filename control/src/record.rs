@@ -13,7 +13,7 @@
 //! | 10 | 2 | reserved, 0 |
 //! | 12 | 12 | `speed_mm_s`, `speed_deg_s`, `link_timeout_s` (f32) |
 //! | 24 | 24 | layout (f32): base radius, base half angle, platform radius and half angle, a, s |
-//! | 48 | 6 x 20 | per servo: trim, rate, min, max (f32), dir (0 normal, 1 reversed), 0, torque rating (u16, hundredths of a kgf cm, 0 not rated) |
+//! | 48 | 6 x 20 | per servo: trim, rate, min, max (f32), dir (0 normal, 1 reversed), speed rating (u8, hundredths of a second per 60 degrees, 0 not rated), torque rating (u16, hundredths of a kgf cm, 0 not rated) |
 //! | 168 | 8 | `accel_mm_s2`, `accel_deg_s2` (f32) |
 //! | 176 | 24 | stream full scales x, y, z (mm), roll, pitch, yaw (deg) (f32) |
 //! | 200 | 1 | `stream.bits` |
@@ -31,9 +31,11 @@
 //!
 //! The whole record fits one 256-byte flash page.
 //!
-//! Format 4 is read too: the same bytes up to 232, without the pivot (payload length 224, the
-//! sequence number at 232, the CRC-32 of bytes 0..236 at 236); its pivot is the platform
-//! frame's origin (0, 0, 0), where every board of format 4 turned.
+//! Format 4, which boards in the field hold, is read too: the same bytes up to 232, each servo's
+//! speed rating byte (offset 17 of its block) then reserved, 0, and without the pivot (payload
+//! length 224, the sequence number at 232, the CRC-32 of bytes 0..236 at 236): its servos are
+//! not rated for speed and its pivot is the platform frame's origin (0, 0, 0), where every
+//! board of format 4 turned.
 //!
 //! Format 3, which boards in the field hold, is read too: the same bytes up to 228, without
 //! `baud` and the pivot (payload length 220, the sequence number at 228, the CRC-32 of bytes 0..232 at 232).
@@ -57,20 +59,23 @@ use kinematics_core::{Direction, Libm, Math, ServoSet};
 
 use crate::payload::hundredths;
 use crate::safety::EstopAction;
+use crate::servo_speed;
 use crate::settings::{LayoutParam, SettingError, Settings, BAUD_RATES, DEFAULT_BAUD};
 
 /// Binary format version written (1 also held the link settings, 2 had no sequence number and
 /// none of the acceleration, stream and safety settings; neither was ever written to a board's
 /// flash; 3 gained the payload and the torque ratings before any board had it, and is still
-/// read; 4 added `baud`, 5 the pivot: see the module docs).
+/// read; 4 added `baud`, and is still read; 5 the pivot and the servos' speed ratings: see the
+/// module docs).
 pub const FORMAT_VERSION: u16 = 5;
-/// An older format still read: no pivot.
+/// An older format still read: no pivot, no speed ratings.
 pub const FORMAT_VERSION_NO_PIVOT: u16 = 4;
-/// The oldest format still read (boards in the field hold it): no `baud`, no pivot.
+/// The oldest format still read (boards in the field hold it): no `baud`, no pivot, no speed
+/// ratings.
 pub const FORMAT_VERSION_NO_BAUD: u16 = 3;
 /// Bytes of settings between the header and the sequence number.
 pub const PAYLOAD_LEN: usize = 236;
-/// [`PAYLOAD_LEN`] of format 4 (no pivot).
+/// [`PAYLOAD_LEN`] of format 4 (no pivot; the speed byte reserved).
 const PAYLOAD_LEN_NO_PIVOT: usize = PAYLOAD_LEN - 12;
 /// [`PAYLOAD_LEN`] of format 3 (no `baud`, no pivot).
 const PAYLOAD_LEN_NO_BAUD: usize = PAYLOAD_LEN_NO_PIVOT - 4;
@@ -222,7 +227,13 @@ pub fn encode(record: &Record) -> [u8; ENCODED_LEN] {
     for p in LayoutParam::ALL {
         w.f32(p.get(&settings.layout));
     }
-    for (s, rating) in settings.servos.0.iter().zip(settings.payload.torque_kgcm) {
+    for ((s, rating), speed) in settings
+        .servos
+        .0
+        .iter()
+        .zip(settings.payload.torque_kgcm)
+        .zip(settings.servo_speed.s_per_60deg)
+    {
         w.f32(s.home_us);
         w.f32(s.rate_us_per_rad);
         w.f32(s.min_us);
@@ -231,7 +242,8 @@ pub fn encode(record: &Record) -> [u8; ENCODED_LEN] {
             Direction::Normal => 0,
             Direction::Reversed => 1,
         };
-        w.bytes(&[dir, 0]);
+        // Speed ratings are kept to hundredths (crate::servo_speed): exact.
+        w.bytes(&[dir, servo_speed::hundredths(speed)]);
         // Ratings are kept to hundredths (crate::payload): exact.
         w.bytes(&hundredths(rating).to_le_bytes());
     }
@@ -328,11 +340,12 @@ pub fn decode_with<M: Math>(bytes: &[u8]) -> Result<Record, DecodeError> {
     for p in LayoutParam::ALL {
         *p.slot(&mut settings.layout) = r.f32();
     }
-    for (s, rating) in settings
+    for ((s, rating), speed) in settings
         .servos
         .0
         .iter_mut()
         .zip(settings.payload.torque_kgcm.iter_mut())
+        .zip(settings.servo_speed.s_per_60deg.iter_mut())
     {
         s.home_us = r.f32();
         s.rate_us_per_rad = r.f32();
@@ -343,7 +356,11 @@ pub fn decode_with<M: Math>(bytes: &[u8]) -> Result<Record, DecodeError> {
         } else {
             Direction::Normal
         };
-        r.zeros(1)?;
+        if version == FORMAT_VERSION {
+            *speed = f32::from(r.u8()) / 100.0;
+        } else {
+            r.zeros(1)?; // reserved before format 5: not rated
+        }
         *rating = f32::from(r.u16()) / 100.0;
     }
     debug_assert_eq!(r.at, HEADER_LEN + 40 + LEGS_LEN * SERVO_RECORD_LEN);
@@ -452,6 +469,7 @@ mod tests {
         s.payload.com_mm = [-3.0, 4.25, 60.0];
         s.payload.torque_kgcm = [0.0, 2.51, 600.0, 0.01, 12.0, 0.0];
         s.pivot_mm = [12.5, -3.0, 250.0];
+        s.servo_speed.s_per_60deg = [0.1, 0.0, 2.55, 0.01, 0.13, 0.2];
         s.validate().unwrap();
         let saved = Record {
             baud: 921_600,
@@ -472,6 +490,9 @@ mod tests {
         assert_eq!(&bytes[248..252], &crc32(&bytes[..248]).to_le_bytes());
         // Servo 2's rating, 2.51 kgf cm, in hundredths at offset 48 + 20 + 18.
         assert_eq!(&bytes[86..88], &251u16.to_le_bytes());
+        // Speed ratings in hundredths of a second at offset 17 of each servo's block.
+        let speeds: Vec<u8> = (0..6).map(|i| bytes[48 + 20 * i + 17]).collect();
+        assert_eq!(speeds, [10, 0, 255, 1, 13, 20]);
         assert_eq!(&bytes[212..216], &1234.5f32.to_le_bytes());
         assert_eq!(decode(&bytes), Ok(saved));
         assert_eq!(
@@ -484,9 +505,13 @@ mod tests {
         assert_eq!(decode(&page), Ok(saved));
     }
 
-    /// A format-4 record: `record`'s bytes without the pivot's twelve, the version and payload
-    /// length of format 4, checksummed again.
+    /// A format-4 record: `record`'s bytes (its servos not rated for speed) without the
+    /// pivot's twelve, the version and payload length of format 4, checksummed again.
     fn format_4(record: &Record) -> Vec<u8> {
+        assert!(
+            !record.settings.servo_speed.rated(),
+            "format 4 has no speed ratings"
+        );
         let new = encode(record);
         let mut old = Vec::new();
         old.extend_from_slice(&new[..232]);
@@ -505,6 +530,7 @@ mod tests {
         };
         s.servos.0[3].home_us = 1512.5;
         s.payload.com_mm = [1.0, 2.0, 3.0];
+        s.payload.torque_kgcm = [0.0, 2.51, 600.0, 0.01, 12.0, 0.0];
         let mut with_pivot = s;
         with_pivot.pivot_mm = [0.0, 0.0, 300.0]; // not in a format-4 record: dropped
         let old = format_4(&Record {
@@ -522,6 +548,15 @@ mod tests {
         let mut page = [0xFFu8; 256];
         page[..old.len()].copy_from_slice(&old);
         assert_eq!(decode(&page), Ok(expected));
+        // Written again, it is format 5, with the same settings.
+        assert_eq!(decode(&encode(&decode(&old).unwrap())), Ok(expected));
+        // Its speed byte was reserved: anything but 0 there is refused.
+        let mut bytes = old.clone();
+        bytes[48 + 20 + 17] = 10;
+        let crc = crc32(&bytes[..236]);
+        bytes[236..240].copy_from_slice(&crc.to_le_bytes());
+        assert_eq!(decode(&bytes), Err(DecodeError::BadField { offset: 85 }));
+        // Damage, cut short, are refused as in format 5.
         for cut in 0..old.len() {
             let mut partial = [0xFFu8; 256];
             partial[..cut].copy_from_slice(&old[..cut]);
@@ -531,6 +566,23 @@ mod tests {
         let mut mixed = default_bytes();
         mixed[4] = 4;
         assert_eq!(decode(&mixed), Err(DecodeError::BadLength(236)));
+    }
+
+    #[test]
+    fn every_speed_rating_a_setting_takes_comes_back_from_flash() {
+        use crate::settings::{ServoParam, ServoSel, SettingId};
+        for c in 0..=255u8 {
+            let text = if c == 0 {
+                std::string::String::from("off")
+            } else {
+                std::format!("{}.{:02}", c / 100, c % 100)
+            };
+            let id = SettingId::Servo(ServoSel::One(2), ServoParam::SpeedS60Deg);
+            let s = Settings::default().with(id, id.parse_value(&text).unwrap());
+            let bytes = encode(&record(1, s));
+            assert_eq!(bytes[48 + 20 + 17], c, "{text}");
+            assert_eq!(decode(&bytes).unwrap().settings, s, "{text}");
+        }
     }
 
     /// A format-3 record, as boards in the field hold: `record`'s bytes without the baud
@@ -730,9 +782,15 @@ mod tests {
             Err(DecodeError::Invalid(SettingError::StreamAxisTwice { .. }))
         ));
         let mut bytes = default;
-        bytes[48 + 17] = 1; // servo 1's reserved byte
+        bytes[48 + 17] = 1; // servo 1's speed rating, 0.01 s: valid
+        assert!(decode(&reseal(bytes)).is_ok());
+        // In format 4 it was a reserved byte.
+        let mut old: [u8; ENCODED_LEN] = format_4(&record(7, Settings::default()))
+            .try_into()
+            .unwrap();
+        old[48 + 17] = 1;
         assert_eq!(
-            decode(&reseal(bytes)),
+            decode(&reseal(old)),
             Err(DecodeError::BadField { offset: 65 })
         );
         let mut bytes = default;

@@ -42,6 +42,7 @@ use crate::payload::{
     PayloadSettings, MAX_COM_MM, MAX_PAYLOAD_G, MAX_TORQUE_KGCM, MIN_TORQUE_KGCM,
 };
 use crate::safety::{EstopAction, SafetySettings, FREE_GPIOS};
+use crate::servo_speed::{ServoSpeeds, MAX_S_PER_60DEG, MIN_S_PER_60DEG};
 use crate::stream::{StreamSettings, TEXT_BITS_MAX, TEXT_BITS_MIN};
 use crate::word::{word, Word};
 
@@ -96,6 +97,8 @@ pub struct Settings {
     /// origin (the centre of the platform joints' circle), z up. A point of the platform: a
     /// pose's `x y z` is how far it has moved from home, its `roll pitch yaw` turn about it.
     pub pivot_mm: [f32; 3],
+    /// The servos' rated speeds.
+    pub servo_speed: ServoSpeeds,
 }
 
 impl Default for Settings {
@@ -113,6 +116,7 @@ impl Default for Settings {
             safety: SafetySettings::default(),
             payload: PayloadSettings::default(),
             pivot_mm: [0.0; 3],
+            servo_speed: ServoSpeeds::default(),
         }
     }
 }
@@ -233,17 +237,20 @@ pub enum ServoParam {
     MaxUs,
     /// Rated torque, kgf cm (a payload setting: [`PayloadSettings::torque_kgcm`]).
     TorqueKgcm,
+    /// Rated speed, s per 60 degrees ([`ServoSpeeds::s_per_60deg`]).
+    SpeedS60Deg,
 }
 
 impl ServoParam {
     /// All, in listing order.
-    pub const ALL: [ServoParam; 6] = [
+    pub const ALL: [ServoParam; 7] = [
         ServoParam::TrimUs,
         ServoParam::RateUsRad,
         ServoParam::Dir,
         ServoParam::MinUs,
         ServoParam::MaxUs,
         ServoParam::TorqueKgcm,
+        ServoParam::SpeedS60Deg,
     ];
 
     /// The field name after `servoN.`.
@@ -255,13 +262,14 @@ impl ServoParam {
             ServoParam::MinUs => "min_us",
             ServoParam::MaxUs => "max_us",
             ServoParam::TorqueKgcm => "torque_kgcm",
+            ServoParam::SpeedS60Deg => "speed_s_60deg",
         }
     }
 
     /// True for the fields of the servo's pulse mapping ([`ServoConfig`]): changing them moves
-    /// the pulses of a pose (the torque rating does not).
+    /// the pulses of a pose (the torque and speed ratings do not).
     pub const fn is_mapping(self) -> bool {
-        !matches!(self, ServoParam::TorqueKgcm)
+        !matches!(self, ServoParam::TorqueKgcm | ServoParam::SpeedS60Deg)
     }
 
     fn get(self, s: &ServoConfig) -> SettingValue {
@@ -271,8 +279,8 @@ impl ServoParam {
             ServoParam::Dir => SettingValue::Dir(s.direction),
             ServoParam::MinUs => SettingValue::Number(s.min_us),
             ServoParam::MaxUs => SettingValue::Number(s.max_us),
-            // Not a mapping field: see Settings::get.
-            ServoParam::TorqueKgcm => SettingValue::Number(0.0),
+            // Not mapping fields: see Settings::get.
+            ServoParam::TorqueKgcm | ServoParam::SpeedS60Deg => SettingValue::Number(0.0),
         }
     }
 
@@ -421,6 +429,9 @@ pub enum Expected {
     OneOf(&'static [&'static str]),
     /// A free GPIO ([`FREE_GPIOS`]) or `off`.
     FreePin,
+    /// A number with at most two decimals (a whole number of hundredths: what the flash record
+    /// keeps of a servo's rated speed).
+    Hundredths,
 }
 
 /// Why a setting value, or a set of settings, is refused.
@@ -696,6 +707,13 @@ impl SettingId {
                     off_allowed: true,
                     decimals: 2,
                 },
+                ServoParam::SpeedS60Deg => Kind::Number {
+                    min: MIN_S_PER_60DEG,
+                    max: MAX_S_PER_60DEG,
+                    unit: "s/60deg",
+                    off_allowed: true,
+                    decimals: 2,
+                },
             },
         }
     }
@@ -728,6 +746,7 @@ impl SettingId {
                 ServoParam::MinUs => "lowest pulse",
                 ServoParam::MaxUs => "highest pulse",
                 ServoParam::TorqueKgcm => "rated torque",
+                ServoParam::SpeedS60Deg => "rated speed: time to turn 60 degrees unloaded",
             },
             SettingId::StreamScale(_) => "stream full scale of the axis",
             SettingId::StreamBits => "bits of a text frame's counts",
@@ -844,6 +863,15 @@ impl SettingId {
             },
         };
         self.check(value)?;
+        if let (SettingId::Servo(_, ServoParam::SpeedS60Deg), SettingValue::Number(v)) =
+            (self, value)
+        {
+            // Kept as hundredths in flash: a value with more decimals would not come back as
+            // given after a save.
+            if ServoSpeeds::quantise(v) != v {
+                return Err(bad_value(Expected::Hundredths));
+            }
+        }
         Ok(value)
     }
 
@@ -983,6 +1011,9 @@ impl Settings {
                 };
                 match p {
                     ServoParam::TorqueKgcm => SettingValue::Number(self.payload.torque_kgcm[index]),
+                    ServoParam::SpeedS60Deg => {
+                        SettingValue::Number(self.servo_speed.s_per_60deg[index])
+                    }
                     _ => p.get(&self.servos.0[index]),
                 }
             }
@@ -1037,6 +1068,20 @@ impl Settings {
                     v
                 };
                 for (i, rating) in s.payload.torque_kgcm.iter_mut().enumerate() {
+                    if sel == ServoSel::All || sel == ServoSel::One(i as u8 + 1) {
+                        *rating = v;
+                    }
+                }
+            }
+            (SettingId::Servo(sel, ServoParam::SpeedS60Deg), SettingValue::Number(v)) => {
+                // Kept to hundredths, as the flash record holds it (out-of-range values stay
+                // out of range for validation to refuse).
+                let v = if (0.0..=MAX_S_PER_60DEG).contains(&v) {
+                    ServoSpeeds::quantise(v)
+                } else {
+                    v
+                };
+                for (i, rating) in s.servo_speed.s_per_60deg.iter_mut().enumerate() {
                     if sel == ServoSel::All || sel == ServoSel::One(i as u8 + 1) {
                         *rating = v;
                     }
@@ -1250,6 +1295,68 @@ mod tests {
                 b[i]
             );
         }
+    }
+
+    #[test]
+    fn speed_ratings_are_set_per_servo_or_all_to_hundredths() {
+        let s = parse("servo2.speed_s_60deg", "0.12").unwrap();
+        assert_eq!(s.servo_speed.s_per_60deg, [0.0, 0.12, 0.0, 0.0, 0.0, 0.0]);
+        assert_eq!(
+            s.servos,
+            ServoSet::default(),
+            "a rating is not a pulse mapping"
+        );
+        assert!(!ServoParam::SpeedS60Deg.is_mapping());
+        let s = parse("servos.speed_s_60deg", "0.1").unwrap();
+        assert_eq!(s.servo_speed.s_per_60deg, [0.1; 6]);
+        assert_eq!(
+            s.get(SettingId::parse("servo5.speed_s_60deg").unwrap()),
+            Some(SettingValue::Number(0.1))
+        );
+        for text in ["off", "0"] {
+            let s = parse("servos.speed_s_60deg", text).unwrap();
+            assert_eq!(s.servo_speed.s_per_60deg, [0.0; 6], "{text}");
+        }
+        for (text, value) in [
+            ("2.55", 2.55),
+            ("0.01", 0.01),
+            ("1e-1", 0.1),
+            ("0.200", 0.2),
+        ] {
+            let s = parse("servo6.speed_s_60deg", text).unwrap();
+            assert_eq!(s.servo_speed.s_per_60deg[5], value, "{text}");
+        }
+        use SettingError as E;
+        // More decimals than the flash keeps: refused, not rounded.
+        for text in ["0.125", "0.101", "1.5e-2", "0.0150"] {
+            assert!(
+                matches!(
+                    parse("servo1.speed_s_60deg", text),
+                    Err(E::BadValue {
+                        expected: Expected::Hundredths,
+                        ..
+                    })
+                ),
+                "{text}"
+            );
+        }
+        for text in ["2.56", "-0.1", "0.001", "300"] {
+            assert!(
+                matches!(
+                    parse("servos.speed_s_60deg", text),
+                    Err(E::OutOfRange {
+                        min: 0.01,
+                        max: 2.55,
+                        ..
+                    })
+                ),
+                "{text}"
+            );
+        }
+        assert!(matches!(
+            parse("servos.speed_s_60deg", "fast"),
+            Err(E::BadNumber { .. })
+        ));
     }
 
     #[test]

@@ -175,9 +175,9 @@ test('apply a build file through the pty: every setting on the board, saved', as
     '# payload_com_x_mm: 0.000',
     '# payload_com_z_mm: 20.000',
     '# servo3: trim_us=1510.00 rate_us_rad=509.296 dir=reversed min_us=1100.00 max_us=1900.00 ' +
-      'torque_kgcm=25.00',
+      'torque_kgcm=25.00 speed_s_60deg=off',
     '# servo4: trim_us=1500.00 rate_us_rad=509.296 dir=normal min_us=1100.00 max_us=1900.00 ' +
-      'torque_kgcm=20.00',
+      'torque_kgcm=20.00 speed_s_60deg=off',
     '# saved: yes (these settings are the ones saved in flash)',
   ]) {
     assert.ok(config.stdout.split('\n').includes(line), `${line} in ${config.stdout}`);
@@ -336,7 +336,7 @@ test('uf2 --settings: the chip booted from the file starts with the build file s
     'stream.z_mm: 16.000',
     'payload_g: 1500.0',
     'servo3: trim_us=1510.00 rate_us_rad=509.296 dir=reversed min_us=1100.00 max_us=1900.00 ' +
-      'torque_kgcm=25.00',
+      'torque_kgcm=25.00 speed_s_60deg=off',
     'saved: yes (these settings are the ones saved in flash)',
   ]) {
     assert.ok(config.includes(line), `${line} in ${JSON.stringify(config)}`);

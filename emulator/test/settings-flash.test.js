@@ -37,7 +37,8 @@ before(() => {
 const SECTOR_BYTES = 4096;
 /**
  * The record (control/src/record.rs), format 5: 252 bytes, UART0's baud rate at 228, the pivot
- * at 232, sequence number at 244, CRC-32 at 248.
+ * at 232, sequence number at 244, CRC-32 at 248 (each servo's speed rating in its block's byte
+ * 17).
  */
 const RECORD_BYTES = 252;
 const FORMAT_VERSION = 5;
@@ -134,6 +135,7 @@ test('save keeps the settings across a power cycle; the pins start at the saved 
   ok(board, 'set pivot_z_mm 80'); // where the record puts it: checked below
   ok(board, 'set frame_hz 100');
   ok(board, 'set baud 230400'); // a link setting, saved too
+  ok(board, 'set servo3.speed_s_60deg 0.12'); // format 5's speed rating
   board.runMs(5);
   assert.equal(config(board).saved, 'none', 'changed, but still nothing saved');
   ok(board, 'save');
@@ -159,6 +161,10 @@ test('save keeps the settings across a power cycle; the pins start at the saved 
   assert.deepEqual(after.settings, saved.settings);
   assert.ok(saved.settings.includes('baud: 230400'), JSON.stringify(saved.settings));
   assert.ok(saved.settings.includes('pivot_z_mm: 80.000'), JSON.stringify(saved.settings));
+  assert.ok(
+    saved.settings.some((l) => /^servo3: .* speed_s_60deg=0\.12$/.test(l)),
+    JSON.stringify(saved.settings),
+  );
   assert.ok(Math.abs(board.baud - 230400) / 230400 < 0.01, `UART0 at ${board.baud} baud`);
   // At power-up every servo gets its home pulse: its saved trim
   // (docs/geometry-and-calibration.md, "Calibration"), at the saved frame rate.

@@ -147,6 +147,8 @@ pub const SETTING_NAMES: &[&str] = &[
     "pivot_z_mm",
     "servo2.torque_kgcm",
     "servos.torque_kgcm",
+    "servo3.speed_s_60deg",
+    "servos.speed_s_60deg",
     "servo0.trim_us",
     "servo7.min_us",
     "servo1.colour",

@@ -43,7 +43,8 @@
 //!
 //! What their outcomes do to the platform, and the controller's other jobs, are `impl
 //! Controller` blocks of their own: `moves.rs` (moves, `check`, jumps), `streaming.rs`,
-//! `servo.rs`, `settings_change.rs`, `link_loss.rs`, `estop.rs`, `status.rs` and `notices.rs`.
+//! `servo.rs`, `servo_speed.rs` (moves and stream steps within the servos' rated speeds),
+//! `settings_change.rs`, `link_loss.rs`, `estop.rs`, `status.rs` and `notices.rs`.
 
 use core::fmt::Write;
 use core::marker::PhantomData;
@@ -90,6 +91,7 @@ mod link_loss;
 mod moves;
 mod notices;
 mod servo;
+mod servo_speed;
 mod settings_change;
 mod status;
 mod streaming;

@@ -32,7 +32,9 @@ impl<M: Math> Controller<M> {
 
     pub(super) fn move_to(&mut self, target: Pose) -> Result<Begun, Error> {
         let limits = self.speed_limits();
-        let jump = !(limits.mm_per_s > 0.0 || limits.deg_per_s > 0.0);
+        // (With servo speed ratings a move takes as long as the servos need: never a jump.)
+        let jump =
+            !(limits.mm_per_s > 0.0 || limits.deg_per_s > 0.0 || self.settings.servo_speed.rated());
         self.start_path(target, limits, Purpose::Move { jump })
     }
 
@@ -49,12 +51,8 @@ impl<M: Math> Controller<M> {
             return Err(Error::NoPose(e));
         }
         let solution = self.solver.solve::<M>(&self.settings.servos, &target)?;
-        let segment = Segment::plan(
-            *self.motion.pose(),
-            target,
-            limits,
-            f32::from(self.settings.frame_hz),
-        );
+        // Within the servos' rated speeds, if they have any (`controller/servo_speed.rs`).
+        let (segment, servo_time) = self.plan_within_servo_speed(target, &solution, limits);
         // A move checked while moving (or streaming): the platform holds here until the check
         // ends.
         self.holding =
@@ -64,6 +62,7 @@ impl<M: Math> Controller<M> {
             solution,
             segment,
             &self.settings,
+            servo_time,
         )));
         Ok(Begun::Pending)
     }

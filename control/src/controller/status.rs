@@ -7,7 +7,6 @@ use kinematics_core::Math;
 
 use super::Controller;
 use crate::report::{MotionReport, StatusReport};
-use crate::tracker::TrackLimits;
 
 impl<M: Math> Controller<M> {
     /// The report `status` lists, the holding torques still to be computed.
@@ -15,7 +14,7 @@ impl<M: Math> Controller<M> {
         let hz = f32::from(self.settings.frame_hz);
         let motion = match self.motion.progress() {
             None if self.stream.is_some() => MotionReport::Streaming {
-                tracking: self.track_limits() != TrackLimits::OFF,
+                tracking: !self.passes_through(),
             },
             None if self.direct.is_some() => MotionReport::Direct,
             None => MotionReport::Idle,

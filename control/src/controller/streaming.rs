@@ -4,10 +4,11 @@
 //! pose on the straight line from the current pose to it, found by bisection
 //! ([`CLAMP_STEPS`](super::CLAMP_STEPS) IK solutions, as a job a slice per pass: so a clamped
 //! frame takes effect a few passes, well under a millisecond, later), and counted. With every
-//! speed and acceleration limit off the pose is applied at once (pass-through, like a jump:
-//! [`Controller::take_new_pulses`]);
+//! speed and acceleration limit off (and no servo speed rating) the pose is applied at once
+//! (pass-through, like a jump: [`Controller::take_new_pulses`]);
 //! otherwise each axis follows it at the servo frame rate within the limits
-//! ([`crate::tracker`]); a step that would leave the workspace (the axes' own paths to a
+//! ([`crate::tracker`]), each step shortened to the servos' rated speeds if they have any
+//! (`controller/servo_speed.rs`); a step that would leave the workspace (the axes' own paths to a
 //! reachable goal can) stops the tracker where it is, counted as a clamp too. An accepted
 //! move (`pose`, `move`, `nudge`, `home`) or `stop` ends the stream (while a move's path is
 //! checked the stream holds, as a move in progress does; a refused one lets it go on); the
@@ -72,6 +73,13 @@ impl<M: Math> Controller<M> {
         }
     }
 
+    /// True if stream targets are applied as they come (pass-through): every speed and
+    /// acceleration limit off, and no servo speed rating (a rated stream is tracked, one
+    /// step per frame, so that each step can be kept to the ratings).
+    pub(super) fn passes_through(&self) -> bool {
+        self.track_limits() == TrackLimits::OFF && !self.settings.servo_speed.rated()
+    }
+
     /// A whole stream frame arrived: its pose becomes the stream's target (applied by
     /// [`Controller::apply_stream`]).
     pub(super) fn on_stream_frame(&mut self, frame: Frame) {
@@ -119,8 +127,8 @@ impl<M: Math> Controller<M> {
             return;
         };
         let limits = self.track_limits();
-        if limits == TrackLimits::OFF {
-            return; // pass-through: applied as frames come
+        if limits == TrackLimits::OFF && !self.settings.servo_speed.rated() {
+            return; // pass-through (`passes_through`): applied as frames come
         }
         let dt_s = 1.0 / f32::from(self.settings.frame_hz.max(1));
         let next = stream.tracker.step::<M>(&stream.goal, &limits, dt_s);
@@ -128,7 +136,12 @@ impl<M: Math> Controller<M> {
             return; // settled: the pulses are solved already
         }
         match self.solver.solve::<M>(&self.settings.servos, &next.pose()) {
-            Ok(solution) => {
+            Ok(mut solution) => {
+                // (Shortened to the servos' rated speeds, if any.)
+                let mut next = next;
+                if self.settings.servo_speed.rated() {
+                    self.step_within_servo_speed(&stream.tracker, &mut next, &mut solution);
+                }
                 self.motion = Motion::new(next.pose());
                 self.solution = solution;
                 stream.tracker = next;
@@ -165,7 +178,7 @@ impl<M: Math> Controller<M> {
         let Some(mut stream) = self.stream else {
             return;
         };
-        if self.track_limits() == TrackLimits::OFF {
+        if self.passes_through() {
             if let Some(solution) = solution {
                 self.motion = Motion::new(pose);
                 self.solution = solution;

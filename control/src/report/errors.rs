@@ -568,6 +568,9 @@ impl Display for SettingError {
                         f.write_str("off or a free GPIO:")?;
                         FREE_GPIOS.iter().try_for_each(|p| write!(f, " {p}"))
                     }
+                    Expected::Hundredths => f.write_str(
+                        "a number of hundredths (at most two decimals: the flash keeps hundredths, so the value saved comes back as given)",
+                    ),
                 }
             }
             SettingError::NotOneOf {
