@@ -385,6 +385,9 @@ linkTest('config lists every documented setting with its documented default', (l
     'payload_com_x_mm: 0.000',
     'payload_com_y_mm: 0.000',
     'payload_com_z_mm: 0.000',
+    'pivot_x_mm: 0.000',
+    'pivot_y_mm: 0.000',
+    'pivot_z_mm: 0.000',
     ...[1, 2, 3, 4, 5, 6].map(
       (n) =>
         `servo${n}: trim_us=1500.00 rate_us_rad=${(1600 / Math.PI).toFixed(3)} dir=${n % 2 ? 'reversed' : 'normal'} min_us=1100.00 max_us=1900.00 torque_kgcm=off speed_s_60deg=off`,
