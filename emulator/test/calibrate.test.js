@@ -45,7 +45,10 @@ async function send(...lines) {
 
 /** The pins' widths the runner printed last (`servos us: ...`). */
 function pinsUs() {
-  const lines = board.log().split(/[\r\n]/).filter((line) => line.startsWith('servos us:'));
+  const lines = board
+    .log()
+    .split(/[\r\n]/)
+    .filter((line) => line.startsWith('servos us:'));
   return numbersIn(lines.at(-1).replace(/\|.*$/, ''));
 }
 
@@ -144,7 +147,10 @@ test('the whole flow: trims in the build file (the rest kept), saved, listed, ke
   const expected = start.map((s, i) => expectedTrim(s, steps[i]));
 
   const file = readFileSync(join(dir, 'build.toml'), 'utf8');
-  assert.ok(file.startsWith('# my platform, measured\nrod_mm = 120.0   # from the drawing\n'), file);
+  assert.ok(
+    file.startsWith('# my platform, measured\nrod_mm = 120.0   # from the drawing\n'),
+    file,
+  );
   assert.match(file, /\[servo4\]\ntrim_us = [\d.]+\nmin_us = 1150\.0\n/);
   for (let n = 1; n <= 6; n += 1) {
     const written = Number(file.match(new RegExp(`\\[servo${n}\\]\\ntrim_us = (\\S+)`))[1]);
