@@ -33,7 +33,7 @@ use kinematics_core::ik::Solver;
 use kinematics_core::servo::{
     ServoError, MAX_PULSE_US, MAX_RATE_US_PER_RAD, MIN_PULSE_US, MIN_RATE_US_PER_RAD,
 };
-use kinematics_core::{Direction, Libm, Math, ServoConfig, ServoSet, LEGS};
+use kinematics_core::{Direction, Libm, Math, ServoConfig, ServoSet, Vec3, LEGS};
 
 use kinematics_core::pose::Axis;
 
@@ -62,6 +62,9 @@ pub const DEFAULT_BAUD: u32 = 115_200;
 pub const DEFAULT_SPEED_MM_S: f32 = 50.0;
 /// Default angular speed limit, deg/s.
 pub const DEFAULT_SPEED_DEG_S: f32 = 60.0;
+/// Farthest the pivot may be from the platform frame's origin along each axis, mm (a driver's
+/// head above a seat; within the core's `MAX_CENTRE_MM`).
+pub const MAX_PIVOT_MM: f32 = 1000.0;
 
 /// The platform's settings: everything `set` changes except the link settings.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -88,6 +91,11 @@ pub struct Settings {
     pub safety: SafetySettings,
     /// The payload and the servos' torque ratings.
     pub payload: PayloadSettings,
+    /// The pivot: the point the platform's rotations turn about (the IK's rotation centre,
+    /// [`Solver::set_rotation_centre_mm`]), platform frame, mm: from the platform frame's
+    /// origin (the centre of the platform joints' circle), z up. A point of the platform: a
+    /// pose's `x y z` is how far it has moved from home, its `roll pitch yaw` turn about it.
+    pub pivot_mm: [f32; 3],
 }
 
 impl Default for Settings {
@@ -104,6 +112,7 @@ impl Default for Settings {
             stream: StreamSettings::default(),
             safety: SafetySettings::default(),
             payload: PayloadSettings::default(),
+            pivot_mm: [0.0; 3],
         }
     }
 }
@@ -319,6 +328,9 @@ pub enum SettingId {
     /// `payload_com_x_mm`, `payload_com_y_mm`, `payload_com_z_mm`: the centre of mass along
     /// x (0), y (1) or z (2).
     PayloadCom(u8),
+    /// `pivot_x_mm`, `pivot_y_mm`, `pivot_z_mm`: the pivot (the rotations' centre) along x (0),
+    /// y (1) or z (2).
+    Pivot(u8),
 }
 
 /// The words `stream.axisN` takes, [`SettingValue::Choice`] indices: the axes in pose order,
@@ -510,7 +522,7 @@ const fn number_or_off(min: f32, max: f32, unit: &'static str) -> Kind {
 
 impl SettingId {
     /// The settings that are not per servo, in listing order.
-    pub const GLOBAL: [SettingId; 34] = [
+    pub const GLOBAL: [SettingId; 37] = [
         SettingId::FrameHz,
         SettingId::Baud,
         SettingId::Echo,
@@ -545,6 +557,9 @@ impl SettingId {
         SettingId::PayloadCom(0),
         SettingId::PayloadCom(1),
         SettingId::PayloadCom(2),
+        SettingId::Pivot(0),
+        SettingId::Pivot(1),
+        SettingId::Pivot(2),
     ];
 
     /// Looks a name up (already lowercase).
@@ -608,6 +623,11 @@ impl SettingId {
                 1 => "payload_com_y_mm",
                 _ => "payload_com_z_mm",
             },
+            SettingId::Pivot(k) => match k {
+                0 => "pivot_x_mm",
+                1 => "pivot_y_mm",
+                _ => "pivot_z_mm",
+            },
         })
     }
 
@@ -650,6 +670,7 @@ impl SettingId {
             SettingId::EstopPin | SettingId::PowerPin => Kind::Pin,
             SettingId::PayloadG => number(0.0, MAX_PAYLOAD_G, "g", 1),
             SettingId::PayloadCom(_) => number(-MAX_COM_MM, MAX_COM_MM, "mm", 3),
+            SettingId::Pivot(_) => number(-MAX_PIVOT_MM, MAX_PIVOT_MM, "mm", 3),
             SettingId::Layout(p) => match p {
                 LayoutParam::BaseRadiusMm | LayoutParam::PlatformRadiusMm => {
                     number(1.0, 1000.0, "mm", 3)
@@ -719,6 +740,11 @@ impl SettingId {
                 0 => "payload centre of mass, platform frame x",
                 1 => "payload centre of mass, platform frame y",
                 _ => "payload centre of mass, platform frame z (up)",
+            },
+            SettingId::Pivot(k) => match k {
+                0 => "rotation centre (pivot), platform frame x",
+                1 => "rotation centre (pivot), platform frame y",
+                _ => "rotation centre (pivot), platform frame z (up)",
             },
         }
     }
@@ -949,6 +975,7 @@ impl Settings {
             SettingId::PayloadCom(k) => {
                 SettingValue::Number(self.payload.com_mm[usize::from(k).min(2)])
             }
+            SettingId::Pivot(k) => SettingValue::Number(self.pivot_mm[usize::from(k).min(2)]),
             SettingId::Servo(sel, p) => {
                 let index = match sel {
                     ServoSel::One(n) => usize::from(n).saturating_sub(1).min(LEGS - 1),
@@ -998,6 +1025,9 @@ impl Settings {
             (SettingId::PayloadCom(k @ 0..=2), SettingValue::Number(v)) => {
                 s.payload.com_mm[usize::from(k)] = v
             }
+            (SettingId::Pivot(k @ 0..=2), SettingValue::Number(v)) => {
+                s.pivot_mm[usize::from(k)] = v
+            }
             (SettingId::Servo(sel, ServoParam::TorqueKgcm), SettingValue::Number(v)) => {
                 // Kept to hundredths, as the flash record holds it (out-of-range values stay
                 // out of range for validation to refuse).
@@ -1025,7 +1055,7 @@ impl Settings {
     }
 
     /// Checks every value's range, the servo set and the geometry; returns the IK of the
-    /// geometry (which holds the geometry), built with `libm`.
+    /// geometry (which holds the geometry) turning about the pivot, built with `libm`.
     pub fn validate(&self) -> Result<Solver, SettingError> {
         self.validate_with::<Libm>()
     }
@@ -1037,7 +1067,17 @@ impl Settings {
             .layout
             .build_with::<M>()
             .map_err(SettingError::BadGeometry)?;
-        Solver::new_with::<M>(geometry).map_err(SettingError::BadGeometry)
+        let solver = Solver::new_with::<M>(geometry).map_err(SettingError::BadGeometry)?;
+        Ok(self.about_pivot(solver))
+    }
+
+    /// `solver` turning about this pivot ([`Settings::pivot_mm`]). Every pivot within range
+    /// ([`MAX_PIVOT_MM`] per axis, checked by [`Settings::check_values`]) is one the IK takes;
+    /// one out of range leaves the solver's rotation centre as it was.
+    pub fn about_pivot(&self, mut solver: Solver) -> Solver {
+        // (A refused centre changes nothing: `set_rotation_centre_mm` checks it first.)
+        let _ = solver.set_rotation_centre_mm(Vec3::from(self.pivot_mm));
+        solver
     }
 
     /// Checks every value's range and the servo set, not the geometry.
@@ -1157,6 +1197,59 @@ mod tests {
         );
         let s = parse("servos.torque_kgcm", "off").unwrap();
         assert_eq!(s.payload.torque_kgcm, [0.0; 6]);
+    }
+
+    #[test]
+    fn the_pivot_is_three_numbers_and_the_ik_turns_about_it() {
+        let s = parse("pivot_z_mm", "120.5").unwrap();
+        assert_eq!(s.pivot_mm, [0.0, 0.0, 120.5]);
+        let s = parse("pivot_x_mm", "-1000").unwrap();
+        assert_eq!(s.pivot_mm, [-1000.0, 0.0, 0.0]);
+        assert_eq!(
+            s.get(SettingId::parse("pivot_x_mm").unwrap()),
+            Some(SettingValue::Number(-1000.0))
+        );
+        assert!(matches!(
+            parse("pivot_y_mm", "1000.5"),
+            Err(SettingError::OutOfRange {
+                min: -1000.0,
+                max: 1000.0,
+                ..
+            })
+        ));
+        assert!(matches!(
+            parse("pivot_y_mm", "off"),
+            Err(SettingError::BadNumber { .. })
+        ));
+        // The IK of valid settings turns about the pivot: with the pivot 100 mm up, a pose
+        // pitched by 5 degrees puts the platform's joints where the same pitch about the
+        // platform's centre does after a shift of (I - R) c = (-100 sin 5, 0, 100 (1 - cos 5)).
+        let about = parse("pivot_z_mm", "100").unwrap().validate().unwrap();
+        assert_eq!(about.rotation_centre_mm(), Vec3::new(0.0, 0.0, 100.0));
+        let plain = Settings::default().validate().unwrap();
+        assert_eq!(plain.rotation_centre_mm(), Vec3::zeros());
+        let pitch = 5f64.to_radians();
+        let shift = [-100.0 * pitch.sin(), 0.0, 100.0 * (1.0 - pitch.cos())];
+        let pose = kinematics_core::Pose::from_degrees(0.0, 0.0, 0.0, 0.0, 5.0, 0.0);
+        let shifted = kinematics_core::Pose::from_degrees(
+            shift[0] as f32,
+            shift[1] as f32,
+            shift[2] as f32,
+            0.0,
+            5.0,
+            0.0,
+        );
+        let a = about.arm_angles::<Libm>(&pose).unwrap();
+        let b = plain.arm_angles::<Libm>(&shifted).unwrap();
+        for i in 0..LEGS {
+            assert!(
+                (a[i] - b[i]).abs() < 1e-5,
+                "leg {}: {} vs {}",
+                i + 1,
+                a[i],
+                b[i]
+            );
+        }
     }
 
     #[test]

@@ -86,6 +86,7 @@ test('which commands change which listing', () => {
   assert.deepEqual(listingsChangedBy('SET base_half_angle_deg 15'), ['geometry']);
   assert.deepEqual(listingsChangedBy('set servo3.trim_us 1520'), ['config']);
   assert.deepEqual(listingsChangedBy('set servos.rate_us_rad 600'), ['config']);
+  assert.deepEqual(listingsChangedBy('set pivot_z_mm 100'), ['config']);
   assert.deepEqual(listingsChangedBy('defaults'), ['geometry', 'config']);
   assert.deepEqual(listingsChangedBy('set speed_mm_s 10'), []);
   assert.deepEqual(listingsChangedBy('pose 0 0 5 0 0 0'), []);

@@ -143,6 +143,8 @@ pub const SETTING_NAMES: &[&str] = &[
     "payload_g",
     "payload_com_x_mm",
     "payload_com_z_mm",
+    "pivot_x_mm",
+    "pivot_z_mm",
     "servo2.torque_kgcm",
     "servos.torque_kgcm",
     "servo0.trim_us",

@@ -49,6 +49,7 @@ fn description(d: &Description) -> String {
         g.rod_mm(),
         g.home_height_mm()
     );
+    out += &pivot_words(p.settings.pivot_mm);
     out += concat!(
         "  leg  shaft b (mm)                 joint p (mm, platform frame)  beta (deg)",
         "  alpha0 (deg)  shaft to joint at home (mm)\n"
@@ -103,6 +104,20 @@ fn description(d: &Description) -> String {
         Some(h) => out += &holding_words(p, h),
     }
     out
+}
+
+/// The pivot's line: where the rotations turn.
+fn pivot_words(pivot_mm: [f32; 3]) -> String {
+    if pivot_mm == [0.0; 3] {
+        return "  pivot: the platform frame's origin (roll, pitch and yaw turn about the platform's \
+                centre; pivot_x_mm, pivot_y_mm, pivot_z_mm move it)\n"
+            .to_string();
+    }
+    let [x, y, z] = pivot_mm;
+    format!(
+        "  pivot: ({x:.3}, {y:.3}, {z:.3}) mm in the platform frame (roll, pitch and yaw turn \
+         about it; x y z move it)\n"
+    )
 }
 
 /// `describe`'s payload section.

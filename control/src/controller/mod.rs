@@ -836,6 +836,7 @@ impl<M: Math> Controller<M> {
                         | SettingId::Servo(..)
                         | SettingId::PayloadG
                         | SettingId::PayloadCom(_)
+                        | SettingId::Pivot(_)
                 );
                 if moves_matter && self.motion.is_moving() {
                     return Err(Error::Busy);

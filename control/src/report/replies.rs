@@ -418,7 +418,7 @@ impl Display for Unusable<'_> {
             DecodeError::UnsupportedVersion(v) => write!(
                 f,
                 "written in format version {v}; this firmware reads versions \
-                 {FORMAT_VERSION_NO_BAUD} and {FORMAT_VERSION}"
+                 {FORMAT_VERSION_NO_BAUD} to {FORMAT_VERSION}"
             ),
             DecodeError::BadChecksum => f.write_str("damaged: checksum mismatch"),
             DecodeError::BadMagic | DecodeError::TooShort => {

@@ -128,7 +128,7 @@ export class ListingReader {
 
 /**
  * Which listings a command line can change, so the view asks for them again: `[]`, or some of
- * `'geometry'` and `'config'` (`defaults`; `set` of a geometry or servo setting).
+ * `'geometry'` and `'config'` (`defaults`; `set` of a geometry, servo or pivot setting).
  */
 export function listingsChangedBy(line) {
   const words = line
@@ -144,7 +144,7 @@ export function listingsChangedBy(line) {
   if (/^(base_|platform_|arm_mm$|rod_mm$)/.test(words[1])) {
     return ['geometry'];
   }
-  if (/^servo/.test(words[1])) {
+  if (/^(servo|pivot_)/.test(words[1])) {
     return ['config'];
   }
   return [];
