@@ -31,6 +31,13 @@ pub const VERSION: &str = env!("CARGO_PKG_VERSION");
 pub const USB_MANUFACTURER: &str = "hexapod-fw";
 /// The product the board names to a USB host, beside [`USB_MANUFACTURER`].
 pub const USB_PRODUCT: &str = "hexapod control";
+/// The board's USB vendor ID: the pid.codes test vendor, for open-source devices in
+/// development, until the project has a product ID of its own (pid.codes gives them to open
+/// hardware for free). A CDC ACM device needs no driver on Linux, macOS or Windows 10 and
+/// later, whatever its IDs. The host tool finds boards by it and [`USB_PID`] (`hexapod boards`).
+pub const USB_VID: u16 = 0x1209;
+/// The board's USB product ID, beside [`USB_VID`]: pid.codes' test product.
+pub const USB_PID: u16 = 0x0001;
 
 /// Writes `ok` (the success reply).
 pub fn write_ok(out: &mut impl Write) {
