@@ -130,6 +130,7 @@ test('save keeps the settings across a power cycle; the pins start at the saved 
   ok(board, 'set servo6.dir reversed');
   ok(board, 'set rod_mm 122');
   ok(board, 'set frame_hz 100');
+  ok(board, 'set stream.max_step_pct 7.5'); // in record format 4's bytes 10..12
   ok(board, 'set baud 230400'); // a link setting, saved too
   board.runMs(5);
   assert.equal(config(board).saved, 'none', 'changed, but still nothing saved');
@@ -148,6 +149,10 @@ test('save keeps the settings across a power cycle; the pins start at the saved 
   // The same settings, UART0 at the saved rate (echo, the link's own, turned off by boot).
   assert.deepEqual(after.settings, saved.settings);
   assert.ok(saved.settings.includes('baud: 230400'), JSON.stringify(saved.settings));
+  assert.ok(
+    saved.settings.includes('stream.max_step_pct: 7.5'),
+    JSON.stringify(saved.settings),
+  );
   assert.ok(Math.abs(board.baud - 230400) / 230400 < 0.01, `UART0 at ${board.baud} baud`);
   // At power-up every servo gets its home pulse: its saved trim
   // (docs/geometry-and-calibration.md, "Calibration"), at the saved frame rate.

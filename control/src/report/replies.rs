@@ -228,7 +228,8 @@ pub struct StreamCounts {
     /// Frames whose pose became the target (the others were superseded by a newer one before
     /// they were applied: the newest frame wins).
     pub applied: u32,
-    /// Frames dropped as damaged (wrong length or trailer, garbage, counts that do not fit).
+    /// Frames dropped as damaged (wrong length or trailer, garbage, counts that do not fit, a
+    /// step larger than the step guard allows).
     pub damaged: u32,
     /// Targets or steps moved back inside the workspace.
     pub clamped: u32,
