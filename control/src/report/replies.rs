@@ -303,6 +303,16 @@ pub enum Notice {
         /// The UART's hardware lost them (an overrun or a line error), not a receive queue.
         in_uart: bool,
     },
+    /// More UART receive errors in the burst whose first loss was announced
+    /// ([`Notice::InputLost`]): counted, not announced one by one.
+    InputLostBurst {
+        /// Losses after the first.
+        losses: u32,
+        /// Bytes they lost, at least.
+        at_least: u32,
+        /// Over how long, s (from the burst's start, or its last report, to its last loss).
+        over_s: f32,
+    },
     /// The settings given at start-up were invalid; the defaults are used.
     SettingsRejected(Error),
     /// The emergency-stop input opened.
@@ -353,6 +363,18 @@ pub fn write_notice(out: &mut impl Write, notice: &Notice) {
             format_args!(
                 "warning: UART receive error, input lost (at least {})",
                 Bytes(*at_least)
+            ),
+        ),
+        Notice::InputLostBurst {
+            losses,
+            at_least,
+            over_s,
+        } => line(
+            out,
+            format_args!(
+                "warning: UART receive errors went on: {losses} more, input lost (at least {}) in {} s",
+                Bytes(*at_least),
+                Fixed(*over_s, 2)
             ),
         ),
         Notice::SettingsRejected(e) => line(
