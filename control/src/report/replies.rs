@@ -216,6 +216,12 @@ pub enum MotionReport {
         /// Each axis follows within the speed and acceleration limits (not pass-through).
         tracking: bool,
     },
+    /// A stream no frame has come for in a while (it has come to rest): holding its last
+    /// pose; the next frame takes it up again.
+    StreamIdle {
+        /// Seconds since its last frame.
+        quiet_s: f32,
+    },
     /// Holding pulses set one servo at a time (`servo`).
     Direct,
 }
@@ -751,6 +757,13 @@ fn status_line(out: &mut impl Write, s: &StatusReport, index: usize) -> bool {
             MotionReport::Streaming { tracking: false } => {
                 line(out, format_args!("state: streaming (pass-through)"))
             }
+            MotionReport::StreamIdle { quiet_s } => line(
+                out,
+                format_args!(
+                    "state: idle (stream: no frame for {} s; holding its last pose, the next frame resumes it)",
+                    Fixed(quiet_s, 1)
+                ),
+            ),
             MotionReport::Direct => {
                 line(out, format_args!("state: direct (pulses set with servo)"))
             }
