@@ -100,3 +100,20 @@ test('the step guard (pass-through): a frame with a lost digit is dropped and co
   runFrames(board, 2);
   assertPins(board, pins(14), 'without the guard');
 });
+
+test('status after a stream has ended: idle, with how long since its last frame, until the next frame', () => {
+  const board = bootQuiet(bootrom);
+  ok(board, 'set speed_mm_s off');
+  ok(board, 'set speed_deg_s off');
+  board.sendBytes(frame(140));
+  runFrames(board, 50); // 1 s after the frame
+  assert.equal(status(board).state, 'streaming (pass-through)');
+  runFrames(board, 100); // 3 s after it
+  assert.match(
+    status(board).state,
+    /^idle \(stream: no frame for 3\.\d s; holding its last pose, the next frame resumes it\)$/,
+  );
+  board.sendBytes(frame(141));
+  runFrames(board, 2);
+  assert.equal(status(board).state, 'streaming (pass-through)');
+});
