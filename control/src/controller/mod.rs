@@ -64,7 +64,7 @@ use crate::store::{self, Found, Loaded, SaveError, Store};
 use self::limits::LimitsSearch;
 use self::listing::{StatusTorques, Writing};
 use self::locate::{Locate, Located};
-use self::notices::LossBurst;
+use self::loss_burst::LossBurst;
 use self::path::{PathCheck, Purpose};
 use self::pose_check::PoseCheck;
 use self::rebuild::Rebuild;
@@ -79,6 +79,7 @@ pub use self::stream_goal::CLAMP_STEPS;
 mod limits;
 mod listing;
 mod locate;
+mod loss_burst;
 mod path;
 mod pose_check;
 mod rebuild;
@@ -625,7 +626,7 @@ impl<M: Math> Controller<M> {
     /// board reaches the gap ([`Controller::on_rx_overflow`]). UART losses come in bursts (a
     /// sender at the wrong baud rate garbles every few bytes): only the first of a burst is
     /// announced at once, the rest counted for one notice when the burst ends
-    /// ([`BURST_QUIET_US`](notices::BURST_QUIET_US) without a loss).
+    /// ([`BURST_QUIET_US`](loss_burst::BURST_QUIET_US) without a loss).
     pub fn on_input_lost(
         &mut self,
         session: &mut Session,

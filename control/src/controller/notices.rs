@@ -4,83 +4,32 @@
 //! [`Controller::write_notices`](super::Controller::write_notices) and before a link's next
 //! reply; a link that is closed is shown the latest few by its banner when it opens again.
 //!
-//! UART receive errors come in bursts (a sender at the wrong baud rate garbles every few
-//! bytes; line noise): the first loss of a burst is announced at once, the others are only
-//! counted ([`LossBurst`]), and when the burst ends ([`BURST_QUIET_US`] without a loss), or
-//! every [`BURST_REPORT_US`] while it goes on, one notice gives their count.
+//! UART receive errors come in bursts: the first loss of a burst is announced at once, the
+//! others are counted for one notice ([`LossBurst`](super::loss_burst::LossBurst)).
 
 use core::fmt::Write;
 
 use kinematics_core::Math;
 
+use super::loss_burst::LossBurst;
 use super::Controller;
 use crate::report::{self, Notice};
 use crate::session::Session;
-
-/// A burst ends after this long without a UART receive error, us.
-pub const BURST_QUIET_US: u32 = 200_000;
-/// A burst that goes on is reported this often, us.
-pub const BURST_REPORT_US: u32 = 2_000_000;
-
-/// A burst of UART receive errors: the losses since its first (announced) one.
-#[derive(Debug, Clone, Copy, Default)]
-pub(super) struct LossBurst {
-    /// Losses not announced yet.
-    losses: u32,
-    /// Bytes they lost, at least.
-    bytes: u32,
-    /// Time since the last loss, us (counted in servo frames).
-    quiet_us: u32,
-    /// Time since the burst began or was last reported, us.
-    age_us: u32,
-}
 
 impl<M: Math> Controller<M> {
     /// A UART loss of `at_least` bytes: counted (true) if a burst is going on, else the start
     /// of one (false: announce it).
     pub(super) fn count_in_burst(&mut self, at_least: u32) -> bool {
-        match self.uart_burst.as_mut() {
-            Some(burst) => {
-                burst.losses = burst.losses.saturating_add(1);
-                burst.bytes = burst.bytes.saturating_add(at_least);
-                burst.quiet_us = 0;
-                true
-            }
-            None => {
-                self.uart_burst = Some(LossBurst::default());
-                false
-            }
-        }
+        LossBurst::count(&mut self.uart_burst, at_least)
     }
 
     /// A servo frame of `frame_us` passed: a burst that has ended (or gone on for
-    /// [`BURST_REPORT_US`]) gets its notice, if it lost more than its first announced loss.
+    /// [`BURST_REPORT_US`](super::loss_burst::BURST_REPORT_US)) gets its notice, if it lost
+    /// more than its first announced loss.
     pub(super) fn time_burst(&mut self, frame_us: u32) {
-        let Some(mut burst) = self.uart_burst else {
-            return;
-        };
-        burst.quiet_us = burst.quiet_us.saturating_add(frame_us);
-        burst.age_us = burst.age_us.saturating_add(frame_us);
-        let ended = burst.quiet_us >= BURST_QUIET_US;
-        if !ended && burst.age_us < BURST_REPORT_US {
-            self.uart_burst = Some(burst);
-            return;
+        if let Some(notice) = LossBurst::tick(&mut self.uart_burst, frame_us) {
+            self.notify(notice);
         }
-        if burst.losses > 0 {
-            self.notify(Notice::InputLostBurst {
-                losses: burst.losses,
-                at_least: burst.bytes,
-                over_s: burst
-                    .age_us
-                    .saturating_sub(if ended { burst.quiet_us } else { 0 })
-                    as f32
-                    / 1e6,
-            });
-        }
-        self.uart_burst = (!ended).then(|| LossBurst {
-            quiet_us: burst.quiet_us,
-            ..LossBurst::default()
-        });
     }
 
     /// Keeps a notice for every link to show (only the latest
