@@ -149,10 +149,7 @@ test('save keeps the settings across a power cycle; the pins start at the saved 
   // The same settings, UART0 at the saved rate (echo, the link's own, turned off by boot).
   assert.deepEqual(after.settings, saved.settings);
   assert.ok(saved.settings.includes('baud: 230400'), JSON.stringify(saved.settings));
-  assert.ok(
-    saved.settings.includes('stream.max_step_pct: 7.5'),
-    JSON.stringify(saved.settings),
-  );
+  assert.ok(saved.settings.includes('stream.max_step_pct: 7.5'), JSON.stringify(saved.settings));
   assert.ok(Math.abs(board.baud - 230400) / 230400 < 0.01, `UART0 at ${board.baud} baud`);
   // At power-up every servo gets its home pulse: its saved trim
   // (docs/geometry-and-calibration.md, "Calibration"), at the saved frame rate.
