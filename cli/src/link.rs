@@ -396,6 +396,19 @@ mod tests {
             let line = text.trim_end();
             assert!(is_notice(line) && is_input_lost(line), "{line}");
         }
+        // The count at the end of a burst of UART errors: input was lost after the first
+        // warning too (the host resynchronises again).
+        let mut text = String::new();
+        write_notice(
+            &mut text,
+            &Notice::InputLostBurst {
+                losses: 3,
+                at_least: 5,
+                over_s: 0.5,
+            },
+        );
+        let line = text.trim_end();
+        assert!(is_notice(line) && is_input_lost(line), "{line}");
         let mut text = String::new();
         write_notice(&mut text, &Notice::NoSavedSettings(None));
         let line = text.trim_end();

@@ -47,7 +47,8 @@
 //!   (what a stream follows; the clamp of a target out of reach), `locate` (`servo`'s forward
 //!   kinematics along a continuation), `rebuild` (new build numbers' geometry and IK), `save`
 //!   (the board's flash write), `listing` (a listing a line per slice; `status`' torques),
-//!   `limits`, sharing `pose_check` (whether a pose can be taken). What the controller does
+//!   `limits`, sharing `pose_check` (whether a pose can be taken); `loss_burst` (a burst of
+//!   UART receive errors, counted for one notice). What the controller does
 //!   with them is one `impl Controller` file per job: `moves`, `streaming`, `servo`,
 //!   `settings_change`, `link_loss`, `estop`, `status`, `notices`.
 //!

@@ -10,7 +10,7 @@
 //! | 4 | 2 | format version |
 //! | 6 | 2 | payload length ([`PAYLOAD_LEN`]) |
 //! | 8 | 2 | `frame_hz` (u16) |
-//! | 10 | 2 | reserved, 0 |
+//! | 10 | 2 | `stream.max_step_pct` (u16, tenths of a percent, 0 off; 0 in records written before it) |
 //! | 12 | 12 | `speed_mm_s`, `speed_deg_s`, `link_timeout_s` (f32) |
 //! | 24 | 24 | layout (f32): base radius, base half angle, platform radius and half angle, a, s |
 //! | 48 | 6 x 20 | per servo: trim, rate, min, max (f32), dir (0 normal, 1 reversed), speed rating (u8, hundredths of a second per 60 degrees, 0 not rated), torque rating (u16, hundredths of a kgf cm, 0 not rated) |
@@ -61,6 +61,7 @@ use crate::payload::hundredths;
 use crate::safety::EstopAction;
 use crate::servo_speed;
 use crate::settings::{LayoutParam, SettingError, Settings, BAUD_RATES, DEFAULT_BAUD};
+use crate::stream::step_tenths;
 
 /// Binary format version written (1 also held the link settings, 2 had no sequence number and
 /// none of the acceleration, stream and safety settings; neither was ever written to a board's
@@ -220,7 +221,8 @@ pub fn encode(record: &Record) -> [u8; ENCODED_LEN] {
     w.bytes(&FORMAT_VERSION.to_le_bytes());
     w.bytes(&(PAYLOAD_LEN as u16).to_le_bytes());
     w.bytes(&settings.frame_hz.to_le_bytes());
-    w.bytes(&[0, 0]);
+    // Kept to tenths (crate::stream): exact.
+    w.bytes(&step_tenths(settings.stream.max_step_pct).to_le_bytes());
     w.f32(settings.speed_mm_s);
     w.f32(settings.speed_deg_s);
     w.f32(settings.link_timeout_s);
@@ -325,7 +327,7 @@ pub fn decode_with<M: Math>(bytes: &[u8]) -> Result<Record, DecodeError> {
         at: HEADER_LEN,
     };
     let frame_hz = u16::from_le_bytes(r.take());
-    r.zeros(2)?;
+    let max_step_tenths = r.u16();
     let speed_mm_s = r.f32();
     let speed_deg_s = r.f32();
     let link_timeout_s = r.f32();
@@ -370,6 +372,7 @@ pub fn decode_with<M: Math>(bytes: &[u8]) -> Result<Record, DecodeError> {
         *v = r.f32();
     }
     settings.stream.text_bits = r.u8();
+    settings.stream.max_step_pct = f32::from(max_step_tenths) / 10.0;
     for slot in settings.stream.text_order.iter_mut() {
         let offset = r.at;
         *slot = match r.u8() {
@@ -454,6 +457,7 @@ mod tests {
         s.accel_deg_s2 = 0.0;
         s.stream.full_scale = [10.0, -20.0, 5.5, 0.0, -30.0, 45.0];
         s.stream.text_bits = 12;
+        s.stream.max_step_pct = 7.3;
         s.stream.text_order = [
             Some(Axis::Roll),
             None,
@@ -746,11 +750,24 @@ mod tests {
             Err(DecodeError::Invalid(_))
         ));
         let mut bytes = default;
-        bytes[10] = 7; // reserved
+        bytes[210] = 7; // reserved (bytes 10..12 were too, until the step guard took them)
         assert_eq!(
             decode(&reseal(bytes)),
-            Err(DecodeError::BadField { offset: 10 })
+            Err(DecodeError::BadField { offset: 210 })
         );
+        let mut bytes = default;
+        bytes[10..12].copy_from_slice(&1001u16.to_le_bytes()); // step guard 100.1 %
+        assert!(matches!(
+            decode(&reseal(bytes)),
+            Err(DecodeError::Invalid(SettingError::OutOfRange {
+                setting: SettingId::StreamMaxStep,
+                ..
+            }))
+        ));
+        let mut bytes = default;
+        bytes[10..12].copy_from_slice(&125u16.to_le_bytes()); // step guard 12.5 %
+        let decoded = decode(&reseal(bytes)).expect("a guard in range");
+        assert_eq!(decoded.settings.stream.max_step_pct, 12.5);
         let mut bytes = default;
         bytes[48 + 16] = 2; // servo 1 direction
         assert_eq!(

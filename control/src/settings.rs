@@ -325,6 +325,8 @@ pub enum SettingId {
     StreamBits,
     /// `stream.axisN`: the axis of a text frame's count N (1..=6).
     StreamAxis(u8),
+    /// `stream.max_step_pct`: the step guard.
+    StreamMaxStep,
     /// `estop_pin`.
     EstopPin,
     /// `estop_action`.
@@ -533,7 +535,7 @@ const fn number_or_off(min: f32, max: f32, unit: &'static str) -> Kind {
 
 impl SettingId {
     /// The settings that are not per servo, in listing order.
-    pub const GLOBAL: [SettingId; 37] = [
+    pub const GLOBAL: [SettingId; 38] = [
         SettingId::FrameHz,
         SettingId::Baud,
         SettingId::Echo,
@@ -561,6 +563,7 @@ impl SettingId {
         SettingId::StreamAxis(4),
         SettingId::StreamAxis(5),
         SettingId::StreamAxis(6),
+        SettingId::StreamMaxStep,
         SettingId::EstopPin,
         SettingId::EstopAction,
         SettingId::PowerPin,
@@ -625,6 +628,7 @@ impl SettingId {
                 5 => "stream.axis5",
                 _ => "stream.axis6",
             },
+            SettingId::StreamMaxStep => "stream.max_step_pct",
             SettingId::EstopPin => "estop_pin",
             SettingId::EstopAction => "estop_action",
             SettingId::PowerPin => "power_pin",
@@ -677,6 +681,13 @@ impl SettingId {
                 unit: "bits",
             },
             SettingId::StreamAxis(_) => Kind::Choice(STREAM_AXIS_WORDS),
+            SettingId::StreamMaxStep => Kind::Number {
+                min: 0.1,
+                max: 100.0,
+                unit: "%",
+                off_allowed: true,
+                decimals: 1,
+            },
             SettingId::EstopAction => Kind::Choice(ESTOP_ACTION_WORDS),
             SettingId::EstopPin | SettingId::PowerPin => Kind::Pin,
             SettingId::PayloadG => number(0.0, MAX_PAYLOAD_G, "g", 1),
@@ -751,6 +762,7 @@ impl SettingId {
             SettingId::StreamScale(_) => "stream full scale of the axis",
             SettingId::StreamBits => "bits of a text frame's counts",
             SettingId::StreamAxis(_) => "the axis this text-frame count drives",
+            SettingId::StreamMaxStep => "largest step between two frames, % of full scale",
             SettingId::EstopPin => "emergency-stop input",
             SettingId::EstopAction => "what an open e-stop does",
             SettingId::PowerPin => "servo-power enable output",
@@ -996,6 +1008,7 @@ impl Settings {
                 // `none` is the word after the six axes.
                 SettingValue::Choice(axis.map_or(6, |a| a as u8))
             }
+            SettingId::StreamMaxStep => SettingValue::Number(self.stream.max_step_pct),
             SettingId::EstopPin => SettingValue::Pin(self.safety.estop_pin),
             SettingId::EstopAction => SettingValue::Choice(self.safety.estop_action as u8),
             SettingId::PowerPin => SettingValue::Pin(self.safety.power_pin),
@@ -1042,6 +1055,15 @@ impl Settings {
             }
             (SettingId::StreamAxis(n @ 1..=6), SettingValue::Choice(i)) => {
                 s.stream.text_order[usize::from(n) - 1] = Axis::ALL.get(usize::from(i)).copied()
+            }
+            (SettingId::StreamMaxStep, SettingValue::Number(v)) => {
+                // Kept to tenths, as the flash record holds it (out-of-range values stay out
+                // of range for validation to refuse).
+                s.stream.max_step_pct = if (0.0..=100.0).contains(&v) {
+                    StreamSettings::quantise_step_pct(v)
+                } else {
+                    v
+                }
             }
             (SettingId::EstopPin, SettingValue::Pin(pin)) => s.safety.estop_pin = pin,
             (SettingId::EstopAction, SettingValue::Choice(i)) => {

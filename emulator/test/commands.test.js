@@ -378,6 +378,7 @@ linkTest('config lists every documented setting with its documented default', (l
     'stream.axis4: roll',
     'stream.axis5: pitch',
     'stream.axis6: yaw',
+    'stream.max_step_pct: off',
     'estop_pin: off',
     'estop_action: freeze',
     'power_pin: off',

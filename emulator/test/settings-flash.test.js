@@ -134,6 +134,7 @@ test('save keeps the settings across a power cycle; the pins start at the saved 
   ok(board, 'set rod_mm 122');
   ok(board, 'set pivot_z_mm 80'); // where the record puts it: checked below
   ok(board, 'set frame_hz 100');
+  ok(board, 'set stream.max_step_pct 7.5'); // in the record's bytes 10..12
   ok(board, 'set baud 230400'); // a link setting, saved too
   ok(board, 'set servo3.speed_s_60deg 0.12'); // format 5's speed rating
   board.runMs(5);
@@ -165,6 +166,7 @@ test('save keeps the settings across a power cycle; the pins start at the saved 
     saved.settings.some((l) => /^servo3: .* speed_s_60deg=0\.12$/.test(l)),
     JSON.stringify(saved.settings),
   );
+  assert.ok(saved.settings.includes('stream.max_step_pct: 7.5'), JSON.stringify(saved.settings));
   assert.ok(Math.abs(board.baud - 230400) / 230400 < 0.01, `UART0 at ${board.baud} baud`);
   // At power-up every servo gets its home pulse: its saved trim
   // (docs/geometry-and-calibration.md, "Calibration"), at the saved frame rate.

@@ -65,6 +65,7 @@ use crate::store::{self, Found, Loaded, SaveError, Store};
 use self::limits::LimitsSearch;
 use self::listing::{StatusTorques, Writing};
 use self::locate::{Locate, Located};
+use self::loss_burst::LossBurst;
 use self::path::{PathCheck, Purpose};
 use self::pose_check::PoseCheck;
 use self::rebuild::Rebuild;
@@ -79,6 +80,7 @@ pub use self::stream_goal::CLAMP_STEPS;
 mod limits;
 mod listing;
 mod locate;
+mod loss_burst;
 mod path;
 mod pose_check;
 mod rebuild;
@@ -222,6 +224,9 @@ pub struct Controller<M: Math = Libm> {
     notices: heapless::Deque<(u32, Notice), NOTICE_QUEUE>,
     /// Sequence number of the next notice.
     next_notice: u32,
+    /// A burst of UART receive errors going on: its first loss was announced, the others are
+    /// counted for one notice when it ends.
+    uart_burst: Option<LossBurst>,
     _math: PhantomData<M>,
 }
 
@@ -276,6 +281,7 @@ impl<M: Math> Controller<M> {
             board_id: None,
             notices: heapless::Deque::new(),
             next_notice: 0,
+            uart_burst: None,
             _math: PhantomData,
         })
     }
@@ -619,7 +625,10 @@ impl<M: Math> Controller<M> {
     /// framing, parity or break error) and the board has just noticed: a warning goes to every
     /// link at once (to this one now). `at_least` bytes so far; `in_uart`: the UART's
     /// hardware lost them (it cannot tell how many). The line they cut is refused when the
-    /// board reaches the gap ([`Controller::on_rx_overflow`]).
+    /// board reaches the gap ([`Controller::on_rx_overflow`]). UART losses come in bursts (a
+    /// sender at the wrong baud rate garbles every few bytes): only the first of a burst is
+    /// announced at once, the rest counted for one notice when the burst ends
+    /// ([`BURST_QUIET_US`](loss_burst::BURST_QUIET_US) without a loss).
     pub fn on_input_lost(
         &mut self,
         session: &mut Session,
@@ -627,6 +636,9 @@ impl<M: Math> Controller<M> {
         in_uart: bool,
         out: &mut impl Write,
     ) {
+        if in_uart && self.count_in_burst(at_least) {
+            return;
+        }
         self.notify(Notice::InputLost { at_least, in_uart });
         self.write_notices(session, out);
     }
@@ -663,6 +675,7 @@ impl<M: Math> Controller<M> {
         // The frame in which the last line ended counts nothing (part of it was not silent).
         self.silence_us = Some(self.silence_us.map_or(0, |s| s.saturating_add(frame_us)));
         self.check_link();
+        self.time_burst(frame_us);
 
         if self.stream.is_some() && !self.holding {
             self.track_frame();

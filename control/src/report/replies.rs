@@ -223,6 +223,12 @@ pub enum MotionReport {
         /// Each axis follows within the speed and acceleration limits (not pass-through).
         tracking: bool,
     },
+    /// A stream no frame has come for in a while (it has come to rest): holding its last
+    /// pose; the next frame takes it up again.
+    StreamIdle {
+        /// Seconds since its last frame.
+        quiet_s: f32,
+    },
     /// Holding pulses set one servo at a time (`servo`).
     Direct,
 }
@@ -235,7 +241,8 @@ pub struct StreamCounts {
     /// Frames whose pose became the target (the others were superseded by a newer one before
     /// they were applied: the newest frame wins).
     pub applied: u32,
-    /// Frames dropped as damaged (wrong length or trailer, garbage, counts that do not fit).
+    /// Frames dropped as damaged (wrong length or trailer, garbage, counts that do not fit, a
+    /// step larger than the step guard allows).
     pub damaged: u32,
     /// Targets or steps moved back inside the workspace.
     pub clamped: u32,
@@ -309,6 +316,16 @@ pub enum Notice {
         /// The UART's hardware lost them (an overrun or a line error), not a receive queue.
         in_uart: bool,
     },
+    /// More UART receive errors in the burst whose first loss was announced
+    /// ([`Notice::InputLost`]): counted, not announced one by one.
+    InputLostBurst {
+        /// Losses after the first.
+        losses: u32,
+        /// Bytes they lost, at least.
+        at_least: u32,
+        /// Over how long, s (from the burst's start, or its last report, to its last loss).
+        over_s: f32,
+    },
     /// The settings given at start-up were invalid; the defaults are used.
     SettingsRejected(Error),
     /// The emergency-stop input opened.
@@ -359,6 +376,18 @@ pub fn write_notice(out: &mut impl Write, notice: &Notice) {
             format_args!(
                 "warning: UART receive error, input lost (at least {})",
                 Bytes(*at_least)
+            ),
+        ),
+        Notice::InputLostBurst {
+            losses,
+            at_least,
+            over_s,
+        } => line(
+            out,
+            format_args!(
+                "warning: UART receive errors went on: {losses} more, input lost (at least {}) in {} s",
+                Bytes(*at_least),
+                Fixed(*over_s, 2)
             ),
         ),
         Notice::SettingsRejected(e) => line(
@@ -735,6 +764,13 @@ fn status_line(out: &mut impl Write, s: &StatusReport, index: usize) -> bool {
             MotionReport::Streaming { tracking: false } => {
                 line(out, format_args!("state: streaming (pass-through)"))
             }
+            MotionReport::StreamIdle { quiet_s } => line(
+                out,
+                format_args!(
+                    "state: idle (stream: no frame for {} s; holding its last pose, the next frame resumes it)",
+                    Fixed(quiet_s, 1)
+                ),
+            ),
             MotionReport::Direct => {
                 line(out, format_args!("state: direct (pulses set with servo)"))
             }
