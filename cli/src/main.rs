@@ -8,7 +8,7 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 
 use hexapod::cmd::{
-    apply, cue, cue_plot, demo, describe, draw, init, pull, send, shell, stream, torque, uf2,
+    apply, cue, cue_plot, demo, describe, draw, init, pull, send, shell, stream, torque, uf2, view,
     workspace,
 };
 use hexapod::messages;
@@ -57,6 +57,9 @@ enum Command {
     Send(send::Cmd),
     /// Talk to a board line by line: type commands, read replies (Ctrl-D quits)
     Shell(shell::Cmd),
+    /// The live 3D view of a board (a web page on 127.0.0.1): the platform drawn from its own
+    /// geometry and the pulses it outputs, jogging, home, stop and a terminal on the same link
+    View(view::Cmd),
 
     /// Stream a trajectory (CSV: time,x,y,z,roll,pitch,yaw in s, mm, degrees) at its own
     /// timing; every row is checked against the board's settings before anything is sent
@@ -89,6 +92,7 @@ fn main() -> ExitCode {
         Command::Draw(cmd) => cmd.run(),
         Command::Send(cmd) => cmd.run(),
         Command::Shell(cmd) => cmd.run(),
+        Command::View(cmd) => cmd.run(),
         Command::Stream(cmd) => cmd.run(),
         Command::Demo(cmd) => cmd.run(),
         Command::Cue(cmd) => cmd.run(),

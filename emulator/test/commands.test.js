@@ -243,6 +243,14 @@ linkTest('pulses: one short line, the widths the pins carry, at rest and while m
   }
   assert.ok(new Set(answers.map(String)).size > 5, `it did not follow: ${answers.join(' | ')}`);
   assert.match(status(board).state, /^moving/, 'the answers came during the move');
+  // Asked in lock-step, as `hexapod view` does, in emulated time (UART0's wire modelled at
+  // 115,200 baud: 70 bytes a round trip, 6.1 ms): at least 10 a second on UART0, 30 on USB.
+  const started = board.nanos;
+  for (let i = 0; i < 20; i++) {
+    widths(ok(board, 'pulses')[0]);
+  }
+  const perSecond = 20 / ((board.nanos - started) / 1e9);
+  assert.ok(perSecond >= (link.name === 'USB' ? 30 : 10), `${perSecond.toFixed(1)} a second`);
 });
 
 linkTest('home returns to the home pulses', (link) => {
