@@ -154,6 +154,11 @@ impl LineModel {
         let at_line_start = self.text.is_empty() && !self.refused() && self.esc == Esc::Off;
         let in_garbage = self.bad_character && !self.too_long && !self.lost;
         if self.frame.is_some() || (b == 0xA5 && (at_line_start || in_garbage)) {
+            if self.frame.is_none() {
+                // An A5 is not printable: it ends an escape sequence in progress (ESC, then
+                // garbage, then a frame: the frame's bytes are not the sequence's).
+                self.esc = Esc::Off;
+            }
             return self.frame_byte(b);
         }
         self.line_byte(b)
