@@ -103,6 +103,9 @@ pub const LINK_LOSS_SPEED_MM_S: f32 = 10.0;
 /// Angular speed for returning home after link loss when `speed_deg_s` is off, deg/s.
 pub const LINK_LOSS_SPEED_DEG_S: f32 = 15.0;
 
+/// Path checks per frame assumed before any was measured (see `moves.rs`, blends).
+const INITIAL_CHECK_RATE: u32 = 16;
+
 /// Notices kept for links that have not shown them yet (the latest ones).
 const NOTICE_QUEUE: usize = 4;
 
@@ -188,8 +191,11 @@ pub struct Controller<M: Math = Libm> {
     returning_home: bool,
     /// The work in progress, if any.
     job: Option<Job>,
-    /// The motion holds still until the job's check ends (a move checked while moving).
+    /// The motion holds still until the job's check ends (a move checked while moving, no
+    /// blend).
     holding: bool,
+    /// Path checks a frame has been seen to fit (a blend's hand-over is put that far ahead).
+    check_rate: u32,
     /// Time without a line, us, counted in whole frames from the first frame that started
     /// after the last line; `None` until that frame.
     silence_us: Option<u32>,
@@ -260,6 +266,7 @@ impl<M: Math> Controller<M> {
             returning_home: false,
             job: None,
             holding: false,
+            check_rate: INITIAL_CHECK_RATE,
             silence_us: None,
             link_loss_handled: false,
             fault: None,
@@ -572,6 +579,16 @@ impl<M: Math> Controller<M> {
                 // Copied out (not the whole job, which `take` would move), then ended.
                 let path = *path;
                 self.job = None;
+                let missed =
+                    result.is_ok() && !self.estop.stops_motion() && self.missed_hand_over(&path);
+                self.learn_check_rate(&path, missed);
+                if missed {
+                    // Too late to take over as planned: plan and check again from here.
+                    let (plan, hand_over) =
+                        self.blend_plan(*path.plan.target(), self.speed_limits());
+                    self.job = Some(Job::Path(path.replanned(plan, hand_over)));
+                    return None;
+                }
                 Some(self.finish_path(path, result))
             }
             Job::Clamp(clamp) => {

@@ -1,16 +1,16 @@
-//! A path check: the job of a reachable target whose straight path from the current pose is
-//! checked by the IK at up to [`crate::motion::MAX_PATH_CHECKS`] checkpoints, a few per slice
+//! A path check: the job of a reachable target whose path (a straight line from the current
+//! pose, or a blend from the motion in progress, [`crate::motion::blend`]) is checked by the IK at up to [`crate::motion::MAX_PATH_CHECKS`] checkpoints, a few per slice
 //! ([`PoseCheck::per_slice`]). With a payload to check against ratings or to report (`check`),
 //! the target's holding torques come first, in a slice of their own. What a checked path leads
 //! to (a move, a jump, `check`'s listing, the way home) is the controller's
 //! (`controller/moves.rs`).
 
 use kinematics_core::ik::Solution;
-use kinematics_core::Math;
+use kinematics_core::{Math, Pose};
 
 use super::pose_check::{PoseCheck, Torques};
 use crate::error::Error;
-use crate::motion::{Checkpoints, Segment};
+use crate::motion::{Plan, PlanCheckpoints};
 use crate::payload::TorqueError;
 use crate::settings::Settings;
 
@@ -41,38 +41,72 @@ impl Purpose {
     }
 }
 
-/// A reachable target whose straight path is being checked.
+/// When a blend checked while the motion in progress goes on takes over (frame counts, as
+/// the controller counts frames, wrapping).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct HandOver {
+    /// The frame count when the check began.
+    pub begun: u32,
+    /// The frame count after which the blend's first frame comes.
+    pub at: u32,
+    /// The pose and velocity (per frame) the motion was to have then, where the blend starts.
+    pub pose: Pose,
+    pub rate: [f32; 6],
+}
+
+/// A reachable target whose path is being checked.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct PathCheck {
     pub purpose: Purpose,
     /// The target's solution (solved when the command came).
     pub solution: Solution,
-    pub segment: Segment,
-    checkpoints: Checkpoints,
+    /// The move checked: from rest, or a blend from the motion in progress.
+    pub plan: Plan,
+    /// For a blend: the frame (the controller's frame count) at which it takes over, and the
+    /// frame count when the check began.
+    pub hand_over: Option<HandOver>,
+    /// IK solutions of the path done so far (the controller learns how many fit in a frame).
+    pub solved: u32,
+    checkpoints: PlanCheckpoints,
     /// The target's holding torques: `None` until computed (the first slice, when there is a
     /// payload to check or report), then what `check` reports.
     torque: Option<Option<Torques>>,
 }
 
 impl PathCheck {
-    /// The check of `segment`, whose target has `solution`, for `purpose` with `settings`.
+    /// The check of `plan`, whose target has `solution`, for `purpose` with `settings`.
     pub fn new(
         purpose: Purpose,
         solution: Solution,
-        segment: Segment,
+        plan: Plan,
+        hand_over: Option<HandOver>,
         settings: &Settings,
     ) -> PathCheck {
         PathCheck {
             purpose,
             solution,
-            segment,
-            checkpoints: segment.checkpoints(),
+            plan,
+            hand_over,
+            solved: 0,
+            checkpoints: plan.checkpoints(),
             // The target's torques take a slice of their own, if they are needed at all.
             torque: if purpose.needs_target_torque(settings) {
                 None
             } else {
                 Some(None)
             },
+        }
+    }
+
+    /// The same check of another plan (the target's torques kept, if computed): a blend whose
+    /// hand-over was missed, planned again.
+    pub fn replanned(&self, plan: Plan, hand_over: Option<HandOver>) -> PathCheck {
+        PathCheck {
+            plan,
+            hand_over,
+            solved: 0,
+            checkpoints: plan.checkpoints(),
+            ..*self
         }
     }
 
@@ -110,7 +144,7 @@ impl PathCheck {
         }
         let torques = payload.holding_torques_kgcm::<M>(
             check.solver,
-            self.segment.target(),
+            self.plan.target(),
             &self.solution.arm_rad,
         );
         if payload.checked() {
@@ -131,10 +165,11 @@ impl PathCheck {
             let Some((pose, fraction)) = self.checkpoints.next() else {
                 return Some(Ok(()));
             };
-            if pose == *self.segment.target() {
+            if pose == *self.plan.target() {
                 continue; // checked when the command came and in the first slice
             }
             solved += 1;
+            self.solved += 1;
             if let Err(cause) = check.pose::<M>(&pose, torque) {
                 return Some(Err(Error::PathBlocked {
                     percent: fraction * 100.0,
