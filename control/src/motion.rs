@@ -447,6 +447,14 @@ impl Plan {
         }
     }
 
+    /// How many poses its path check visits (without walking them).
+    pub fn check_count(&self) -> u32 {
+        match self {
+            Plan::Straight(s) => s.checkpoints().total(),
+            Plan::Blend(b) => b.check_count(),
+        }
+    }
+
     /// The poses its path check visits, in order.
     pub fn checkpoints(&self) -> PlanCheckpoints {
         match self {

@@ -10,6 +10,18 @@
 //! short). Streaming hosts use this mode. With a speed limit set the first step comes with the
 //! next frame (up to one frame later), because writing it early could put two steps into one
 //! frame and exceed the limit.
+//!
+//! A new target while moving, with an acceleration limit set: a blend
+//! ([`crate::motion::blend`]), checked while the motion in progress goes on. It takes over at
+//! the hand-over, a frame chosen when the line arrives, as far ahead as the check is expected
+//! to take (its number of poses over the poses a frame has been seen to fit, `check_rate`,
+//! with a quarter to spare), and it is planned from the pose and velocity the motion will have
+//! then ([`crate::motion::Motion::state_after`]), so the path checked is the path taken. A
+//! check that ends after its hand-over (or after the motion changed: a fault) is planned and
+//! checked again from the motion as it is then, with half the rate; the motion goes on
+//! meanwhile. A blend waiting for its hand-over is replaced by the next target's, which
+//! therefore takes over no later than it would. Without an acceleration limit, or while
+//! streaming, the platform holds during the check and starts from rest (the speed may jump).
 
 use kinematics_core::{Math, Pose};
 
@@ -89,9 +101,10 @@ impl<M: Math> Controller<M> {
     /// when its check will have ended (the hand-over): planned from the pose and velocity the
     /// motion will have then, so the motion goes on while the check runs and the path checked
     /// is the path taken. The lead is the check's size over the checks a frame has been
-    /// seen to fit (`check_rate`), with a quarter to spare; a check that ends too late is
-    /// planned and checked again ([`Controller::missed_hand_over`]). Standing still: the
-    /// straight move.
+    /// seen to fit (`check_rate`), with a quarter to spare: planned first with the lead the
+    /// last blend's size needed, and again if this one needs more, or much less. A check that ends too
+    /// late is planned and checked again ([`Controller::missed_hand_over`]). Standing still:
+    /// the straight move.
     pub(super) fn blend_plan(&self, target: Pose, limits: SpeedLimits) -> (Plan, Option<HandOver>) {
         if !self.motion.is_moving() {
             return (self.straight_plan(target, limits), None);
@@ -99,7 +112,7 @@ impl<M: Math> Controller<M> {
         let hz = f32::from(self.settings.frame_hz);
         let plan_after = |lead: u32| {
             let (pose, rate) = self.motion.state_after(lead);
-            let plan = match Blend::plan(pose, rate, target, limits, hz) {
+            let plan = match Blend::plan::<M>(pose, rate, target, limits, hz) {
                 Some(blend) => Plan::Blend(blend),
                 None => Plan::Straight(Segment::plan(pose, target, limits, hz)),
             };
@@ -114,14 +127,19 @@ impl<M: Math> Controller<M> {
         // A move queued and not started yet is replaced, so the new one takes over no later
         // than it would (if the check takes longer, it is planned again once that one runs).
         let latest = self.motion.queued_after().unwrap_or(MAX_LEAD_FRAMES);
-        let first = plan_after(latest.min(1));
-        let checks = first.0.checkpoints().total();
-        let lead = (checks.saturating_mul(5) / 4).div_ceil(self.check_rate.max(1));
-        let lead = lead.min(MAX_LEAD_FRAMES).min(latest);
-        if lead <= 1 {
+        let lead_for = |checks: u32| {
+            let lead = (checks.saturating_mul(5) / 4).div_ceil(self.check_rate.max(1));
+            lead.clamp(1, MAX_LEAD_FRAMES).min(latest)
+        };
+        let guess = lead_for(self.blend_checks);
+        let first = plan_after(guess);
+        let needed = lead_for(first.0.check_count());
+        if needed <= guess && guess <= needed + needed.div_ceil(4) {
             first
         } else {
-            plan_after(lead)
+            // Later, or sooner (the platform should not wait much longer than the check needs:
+            // the motion in progress may end before the hand-over).
+            plan_after(needed)
         }
     }
 
@@ -144,6 +162,7 @@ impl<M: Math> Controller<M> {
         let Some(h) = path.hand_over else {
             return;
         };
+        self.blend_checks = path.plan.check_count();
         let frames = self.frame_ticks.wrapping_sub(h.begun);
         self.check_rate = match path.solved.checked_div(frames) {
             Some(rate) => rate.max(1),
@@ -379,7 +398,8 @@ mod tests {
             poses.push(*c.pose());
         }
         // Every 5 frames a new target (ahead, ahead, back down, up again), each checked over
-        // several frames (four slices, 12 IK solutions, per frame).
+        // one frame or more (six slices, 18 IK solutions, per frame: the board fits more),
+        // the platform moving on meanwhile.
         for line in [
             "nudge z=4",
             "nudge z=4",
@@ -387,11 +407,12 @@ mod tests {
             "pose 0 0 9 0 0 0",
         ] {
             let before = poses.len();
-            let reply = line_while_moving(&mut c, &mut link, line, 4, &mut poses);
+            let reply = line_while_moving(&mut c, &mut link, line, 6, &mut poses);
             assert_eq!(reply, "ok\r\n", "{line}");
+            let during = &poses[before - 1..];
             assert!(
-                poses.len() - before >= 2,
-                "{line}: checked over several frames"
+                during.windows(2).all(|w| w[0] != w[1]),
+                "{line}: held during its check"
             );
             while poses.len() - before < 5 {
                 c.on_frame();

@@ -67,6 +67,8 @@ pub(super) struct PathCheck {
     pub hand_over: Option<HandOver>,
     /// IK solutions of the path done so far (the controller learns how many fit in a frame).
     pub solved: u32,
+    /// The plan is stale (a missed hand-over): the next slice plans it again.
+    pub replan: bool,
     checkpoints: PlanCheckpoints,
     /// The target's holding torques: `None` until computed (the first slice, when there is a
     /// payload to check or report), then what `check` reports.
@@ -88,6 +90,7 @@ impl PathCheck {
             plan,
             hand_over,
             solved: 0,
+            replan: false,
             checkpoints: plan.checkpoints(),
             // The target's torques take a slice of their own, if they are needed at all.
             torque: if purpose.needs_target_torque(settings) {
@@ -105,8 +108,17 @@ impl PathCheck {
             plan,
             hand_over,
             solved: 0,
+            replan: false,
             checkpoints: plan.checkpoints(),
             ..*self
+        }
+    }
+
+    /// The same check, its plan marked stale (a missed hand-over): the next slice plans again.
+    pub fn to_replan(self) -> PathCheck {
+        PathCheck {
+            replan: true,
+            ..self
         }
     }
 

@@ -32,7 +32,7 @@
 //! [`super::MAX_PATH_CHECKS`]), or for longer blends, evenly spaced frames (at most the budget,
 //! as many as the path's length at that spacing needs).
 
-use kinematics_core::Pose;
+use kinematics_core::{Math, Pose};
 
 use super::{lerp, SpeedLimits, MAX_FRAMES, MAX_PATH_CHECKS, PATH_STEP_DEG, PATH_STEP_MM};
 
@@ -41,11 +41,6 @@ type Six = [f32; 6];
 
 /// The groups: linear (x, y, z, mm) and angular (roll, pitch, yaw, rad).
 const GROUPS: [core::ops::Range<usize>; 2] = [0..3, 3..6];
-
-fn norm(a: &Six, g: usize) -> f32 {
-    let r = GROUPS[g].clone();
-    libm::sqrtf(a[r].iter().map(|x| x * x).sum())
-}
 
 fn dot(a: &Six, b: &Six, g: usize) -> f32 {
     let r = GROUPS[g].clone();
@@ -98,7 +93,7 @@ struct Tail {
 impl Tail {
     /// The profile from speed `f0` with acceleration `accel` and speed `speed` (fractions per
     /// frame, per frame^2; infinite: no limit).
-    fn plan(f0: f32, accel: f32, speed: f32) -> Tail {
+    fn plan<M: Math>(f0: f32, accel: f32, speed: f32) -> Tail {
         if accel.is_infinite() {
             // No acceleration limit applies to this line: constant speed (or a jump).
             let (peak, end) = if speed.is_finite() {
@@ -116,7 +111,7 @@ impl Tail {
             };
         }
         // The highest speed that still stops on 1: (2 peak^2 - f0^2) / (2 a) = 1.
-        let peak = libm::sqrtf(accel + 0.5 * f0 * f0).min(speed).max(f0);
+        let peak = M::sqrt(accel + 0.5 * f0 * f0).min(speed).max(f0);
         let t1 = (peak - f0) / accel;
         let d1 = (peak * peak - f0 * f0) / (2.0 * accel);
         let d3 = peak * peak / (2.0 * accel);
@@ -183,10 +178,11 @@ pub struct Blend {
 
 impl Blend {
     /// Plans the move from `start` moving at `rate` (mm and rad per frame, as
-    /// [`super::Segment::rate_at`] gives) to `target` within `limits` at `frame_hz`. `None` when
-    /// no blend is needed: standing still, or no acceleration limit applies to the motion in
-    /// progress (then a move from rest, [`super::Segment`], is the same thing).
-    pub fn plan(
+    /// [`super::Segment::rate_at`] gives) to `target` within `limits` at `frame_hz`, square
+    /// roots by `M`. `None` when no blend is needed: standing still, or no acceleration limit
+    /// applies to the motion in progress (then a move from rest, [`super::Segment`], is the
+    /// same thing).
+    pub fn plan<M: Math>(
         start: Pose,
         rate: [f32; 6],
         target: Pose,
@@ -197,34 +193,37 @@ impl Blend {
         let p = start.to_array();
         let v = rate;
         let c = target.to_array();
+        let v_norm = [M::sqrt(dot(&v, &v, 0)), M::sqrt(dot(&v, &v, 1))];
         // The time the faster group needs to brake at its limit.
         let mut t_blend = 0.0f32;
-        for g in 0..2 {
-            if l.accel[g].is_finite() {
-                t_blend = t_blend.max(norm(&v, g) / l.accel[g]);
+        for (vn, a) in v_norm.iter().zip(l.accel) {
+            if a.is_finite() {
+                t_blend = t_blend.max(vn / a);
             }
         }
         if !(t_blend > 0.0 && t_blend.is_finite()) {
             return None;
         }
         let u: Six = core::array::from_fn(|i| c[i] - p[i] - v[i] * t_blend * 0.5);
+        let u_norm = [M::sqrt(dot(&u, &u, 0)), M::sqrt(dot(&u, &u, 1))];
         // The largest lambda in [0, 1 / T] (w = lambda u) within every group's constraints.
         let mut lambda = 1.0 / t_blend;
         for g in 0..2 {
-            let (uu, uv, vv) = (dot(&u, &u, g), dot(&u, &v, g), dot(&v, &v, g));
-            let un = libm::sqrtf(uu);
+            let un = u_norm[g];
             if un == 0.0 {
                 continue;
             }
+            let (uu, uv) = (un * un, dot(&u, &v, g));
             let a = l.accel[g];
             if a.is_finite() {
                 // |lambda u - v| <= a T: lambda^2 uu - 2 lambda uv + vv - (a T)^2 <= 0.
                 let reach = a * t_blend;
+                let vv = v_norm[g] * v_norm[g];
                 let disc = (uv * uv - uu * (vv - reach * reach)).max(0.0);
-                lambda = lambda.min(((uv + libm::sqrtf(disc)) / uu).max(0.0));
+                lambda = lambda.min(((uv + M::sqrt(disc)) / uu).max(0.0));
                 // The tail stops on C: lambda^2 |u| / (2 a) + lambda T / 2 <= 1.
                 let (c2, c1) = (un / (2.0 * a), 0.5 * t_blend);
-                lambda = lambda.min((-c1 + libm::sqrtf(c1 * c1 + 4.0 * c2)) / (2.0 * c2));
+                lambda = lambda.min((-c1 + M::sqrt(c1 * c1 + 4.0 * c2)) / (2.0 * c2));
             }
             // |w_g| within the speed limit.
             lambda = lambda.min(l.speed[g] / un);
@@ -236,19 +235,19 @@ impl Blend {
         };
         let w: Six = core::array::from_fn(|i| lambda * u[i]);
         let corner: Six = core::array::from_fn(|i| p[i] + (v[i] + w[i]) * t_blend * 0.5);
-        let d: Six = core::array::from_fn(|i| c[i] - corner[i]);
+        // C - E = u (1 - lambda T / 2), w = f0 (C - E): the tail's lengths and start speed.
+        let shrink = 1.0 - 0.5 * lambda * t_blend;
+        let d_norm = [u_norm[0] * shrink, u_norm[1] * shrink];
+        let f0 = lambda / shrink;
         // The tail in fractions of its line: the tighter group's limits.
         let (mut accel, mut speed) = (f32::INFINITY, f32::INFINITY);
-        for g in 0..2 {
-            let dn = norm(&d, g);
-            if dn > 0.0 {
-                accel = accel.min(l.accel[g] / dn);
-                speed = speed.min(l.speed[g] / dn);
+        for ((dn, a), v) in d_norm.iter().zip(l.accel).zip(l.speed) {
+            if *dn > 0.0 {
+                accel = accel.min(a / dn);
+                speed = speed.min(v / dn);
             }
         }
-        // w = f0 (C - E), C - E = u (1 - lambda T / 2).
-        let f0 = lambda / (1.0 - 0.5 * lambda * t_blend);
-        let tail = Tail::plan(f0, accel, speed);
+        let tail = Tail::plan::<M>(f0, accel, speed);
         let total = libm::ceilf(t_blend + tail.end);
         let frames = if total >= MAX_FRAMES as f32 {
             MAX_FRAMES
@@ -263,8 +262,8 @@ impl Blend {
             .into_iter()
             .enumerate()
         {
-            let fastest = norm(&v, g).max(norm(&w, g));
-            let dn = norm(&d, g);
+            let fastest = v_norm[g].max(lambda * u_norm[g]);
+            let dn = d_norm[g];
             let tail_fastest = if tail.peak.is_finite() {
                 tail.peak * dn
             } else {
@@ -355,7 +354,13 @@ impl Blend {
             i: 1,
             previous: self.start(),
             previous_k: 0,
+            current: self.pose_at(self.sampled(1)),
         }
+    }
+
+    /// How many poses [`Blend::checkpoints`] visits (without walking them).
+    pub fn check_count(&self) -> u32 {
+        self.samples.saturating_mul(self.sub)
     }
 
     /// The frame of the `j`-th sampled frame (1-based; the last is `frames`).
@@ -378,12 +383,14 @@ pub struct BlendCheckpoints {
     i: u32,
     previous: Pose,
     previous_k: u32,
+    /// The pose of the sampled frame being reached (computed once for its chords).
+    current: Pose,
 }
 
 impl BlendCheckpoints {
     /// How many poses the whole check visits (from its start), without walking it.
     pub fn total(&self) -> u32 {
-        self.blend.samples.saturating_mul(self.blend.sub)
+        self.blend.check_count()
     }
 }
 
@@ -399,17 +406,19 @@ impl Iterator for BlendCheckpoints {
         let n = b.frames as f32;
         if self.i < b.sub {
             let t = self.i as f32 / b.sub as f32;
-            let current = b.pose_at(k);
             self.i += 1;
             let at = self.previous_k as f32 + (k - self.previous_k) as f32 * t;
-            return Some((lerp(&self.previous, &current, t), at / n));
+            return Some((lerp(&self.previous, &self.current, t), at / n));
         }
-        let current = b.pose_at(k);
-        self.previous = current;
+        let reached = self.current;
+        self.previous = reached;
         self.previous_k = k;
         self.i = 1;
         self.j += 1;
-        Some((current, k as f32 / n))
+        if self.j <= b.samples {
+            self.current = b.pose_at(b.sampled(self.j));
+        }
+        Some((reached, k as f32 / n))
     }
 }
 
@@ -417,6 +426,7 @@ impl Iterator for BlendCheckpoints {
 mod tests {
     use super::super::{angular_distance_deg, linear_distance_mm, Motion, Plan, Segment};
     use super::*;
+    use kinematics_core::Libm;
 
     const HZ: f32 = 50.0;
 
@@ -435,7 +445,7 @@ mod tests {
         // A move queued and not started yet is replaced: take over no later than it would.
         let lead = lead.min(m.queued_after().unwrap_or(u32::MAX));
         let (pose, rate) = m.state_after(lead);
-        let plan = match Blend::plan(pose, rate, target, l, HZ) {
+        let plan = match Blend::plan::<Libm>(pose, rate, target, l, HZ) {
             Some(b) => Plan::Blend(b),
             None => Plan::Straight(Segment::plan(pose, target, l, HZ)),
         };
@@ -611,7 +621,7 @@ mod tests {
         // 0.4 s in: at 40 mm/s (the ramp took 0.2 s).
         assert!((rate[2] / dt - 40.0).abs() < 0.01, "{rate:?}");
         let down = Pose::from_degrees(0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
-        let b = Blend::plan(pose, rate, down, l, HZ).unwrap();
+        let b = Blend::plan::<Libm>(pose, rate, down, l, HZ).unwrap();
         // Braking from 40 mm/s at 200 mm/s2 takes 0.2 s (10 frames) and 4 mm: the corner is
         // where it comes to rest, straight ahead, then it comes back from rest.
         assert!((b.t_blend - 10.0).abs() < 1e-3, "{}", b.t_blend);
@@ -619,7 +629,7 @@ mod tests {
         assert!((b.corner[2] - (pose.z_mm + 4.0)).abs() < 1e-3);
         // A right angle: also to rest at the corner.
         let side = Pose::from_degrees(10.0, 0.0, pose.z_mm + 2.0, 0.0, 0.0, 0.0);
-        let b = Blend::plan(pose, rate, side, l, HZ).unwrap();
+        let b = Blend::plan::<Libm>(pose, rate, side, l, HZ).unwrap();
         let e = b.corner;
         let u = [
             side.x_mm - pose.x_mm,
@@ -629,7 +639,7 @@ mod tests {
         assert!(u[2] <= 0.0 && b.w == [0.0; 6], "{u:?} {:?} {e:?}", b.w);
         // 45 degrees ahead: it keeps moving, within the limits.
         let ahead = Pose::from_degrees(10.0, 0.0, pose.z_mm + 14.0, 0.0, 0.0, 0.0);
-        let b = Blend::plan(pose, rate, ahead, l, HZ).unwrap();
+        let b = Blend::plan::<Libm>(pose, rate, ahead, l, HZ).unwrap();
         let w = libm::sqrtf(b.w.iter().map(|c| c * c).sum()) / dt;
         assert!(w > 10.0 && w <= 40.0 + 1e-3, "{w} mm/s at the corner");
     }
@@ -638,13 +648,15 @@ mod tests {
     fn standing_still_or_no_acceleration_limit_means_no_blend() {
         let l = limits(40.0, 30.0, 200.0, 0.0);
         let t = Pose::from_degrees(0.0, 0.0, 5.0, 0.0, 0.0, 0.0);
-        assert!(Blend::plan(Pose::HOME, [0.0; 6], t, l, HZ).is_none());
+        assert!(Blend::plan::<Libm>(Pose::HOME, [0.0; 6], t, l, HZ).is_none());
         // Turning about an axis with no angular acceleration limit: the rotation's speed may
         // change at once, so the move from rest is the same thing.
         let turning = [0.0, 0.0, 0.0, 0.01, 0.0, 0.0];
-        assert!(Blend::plan(Pose::HOME, turning, t, l, HZ).is_none());
+        assert!(Blend::plan::<Libm>(Pose::HOME, turning, t, l, HZ).is_none());
         let off = limits(40.0, 30.0, 0.0, 0.0);
-        assert!(Blend::plan(Pose::HOME, [0.0, 0.0, 0.5, 0.0, 0.0, 0.0], t, off, HZ).is_none());
+        assert!(
+            Blend::plan::<Libm>(Pose::HOME, [0.0, 0.0, 0.5, 0.0, 0.0, 0.0], t, off, HZ).is_none()
+        );
     }
 
     #[test]
@@ -661,7 +673,7 @@ mod tests {
             Pose::from_degrees(5.0, -3.0, 2.0, 4.0, 0.0, -6.0),
             Pose::from_degrees(0.0, 0.0, 30.0, 0.0, 0.0, 0.0),
         ] {
-            let b = Blend::plan(pose, rate, target, l, HZ).unwrap();
+            let b = Blend::plan::<Libm>(pose, rate, target, l, HZ).unwrap();
             let checked: std::vec::Vec<(Pose, f32)> = b.checkpoints().collect();
             assert_eq!(checked.len() as u32, b.checkpoints().total());
             assert!(checked.len() as u32 <= MAX_PATH_CHECKS);
@@ -680,7 +692,7 @@ mod tests {
         let slow = limits(1.0, 0.0, 0.5, 0.0);
         let (pose, rate) = (Pose::HOME, [0.0, 0.0, 1.0 / HZ, 0.0, 0.0, 0.0]);
         let far = Pose::from_degrees(0.0, 0.0, -30.0, 0.0, 0.0, 0.0);
-        let b = Blend::plan(pose, rate, far, slow, HZ).unwrap();
+        let b = Blend::plan::<Libm>(pose, rate, far, slow, HZ).unwrap();
         assert!(b.frames() > MAX_PATH_CHECKS);
         let checked: std::vec::Vec<(Pose, f32)> = b.checkpoints().collect();
         assert!(checked.len() as u32 <= MAX_PATH_CHECKS && checked.len() >= 60);
