@@ -39,11 +39,11 @@
 //! (see that module). [`Plan`] is either; [`Motion`] runs one and can hold the next, queued to
 //! start at a given frame (the hand-over).
 
-use kinematics_core::Pose;
+use kinematics_core::{Math, Pose};
 
 pub mod blend;
 
-use self::blend::{Blend, BlendCheckpoints};
+use self::blend::{Blend, BlendCheckpoints, CheckRule};
 
 /// Largest spacing between path checks along the linear coordinates, mm.
 pub const PATH_STEP_MM: f32 = 0.5;
@@ -397,6 +397,25 @@ impl Iterator for Checkpoints {
     }
 }
 
+/// The rule a blend's path check follows: the straight moves' spacing and budget.
+pub const CHECK_RULE: CheckRule = CheckRule {
+    step_mm: PATH_STEP_MM,
+    step_deg: PATH_STEP_DEG,
+    max_checks: MAX_PATH_CHECKS,
+    max_frames: MAX_FRAMES,
+};
+
+impl From<SpeedLimits> for blend::Limits {
+    fn from(l: SpeedLimits) -> blend::Limits {
+        blend::Limits {
+            mm_per_s: l.mm_per_s,
+            deg_per_s: l.deg_per_s,
+            mm_per_s2: l.mm_per_s2,
+            deg_per_s2: l.deg_per_s2,
+        }
+    }
+}
+
 /// A planned move: a straight line from rest, or a blend from a moving state.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Plan {
@@ -407,6 +426,21 @@ pub enum Plan {
 }
 
 impl Plan {
+    /// The move to `target` from `start` moving at `rate` (mm and rad per frame): a blend
+    /// ([`Blend::plan`], square roots by `M`), or the straight move when none is needed.
+    pub fn after<M: Math>(
+        start: Pose,
+        rate: [f32; 6],
+        target: Pose,
+        limits: SpeedLimits,
+        frame_hz: f32,
+    ) -> Plan {
+        match Blend::plan::<M>(start, rate, target, limits.into(), frame_hz, CHECK_RULE) {
+            Some(blend) => Plan::Blend(blend),
+            None => Plan::Straight(Segment::plan(start, target, limits, frame_hz)),
+        }
+    }
+
     /// Where the move starts.
     pub fn start(&self) -> Pose {
         match self {

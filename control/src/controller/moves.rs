@@ -28,7 +28,6 @@ use kinematics_core::{Math, Pose};
 use super::path::{HandOver, PathCheck, Purpose};
 use super::{Begun, Controller, Done, Job};
 use crate::error::Error;
-use crate::motion::blend::Blend;
 use crate::motion::{Motion, Plan, Segment, SpeedLimits};
 use crate::report::{Listing, Notice};
 
@@ -112,10 +111,7 @@ impl<M: Math> Controller<M> {
         let hz = f32::from(self.settings.frame_hz);
         let plan_after = |lead: u32| {
             let (pose, rate) = self.motion.state_after(lead);
-            let plan = match Blend::plan::<M>(pose, rate, target, limits, hz) {
-                Some(blend) => Plan::Blend(blend),
-                None => Plan::Straight(Segment::plan(pose, target, limits, hz)),
-            };
+            let plan = Plan::after::<M>(pose, rate, target, limits, hz);
             let hand_over = HandOver {
                 begun: self.frame_ticks,
                 at: self.frame_ticks.wrapping_add(lead),

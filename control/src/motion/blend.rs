@@ -28,13 +28,44 @@
 //! is at most the limit times one frame, through the transition too.
 //!
 //! The path check visits the poses the blend will command: every frame (and chords between
-//! frames further apart than [`super::PATH_STEP_MM`] / [`super::PATH_STEP_DEG`], within
-//! [`super::MAX_PATH_CHECKS`]), or for longer blends, evenly spaced frames (at most the budget,
+//! frames further apart than the check spacing, within the budget: [`CheckRule`], which
+//! [`super`] gives, its straight moves' rule), or for longer blends, evenly spaced frames (at most the budget,
 //! as many as the path's length at that spacing needs).
 
 use kinematics_core::{Math, Pose};
 
-use super::{lerp, SpeedLimits, MAX_FRAMES, MAX_PATH_CHECKS, PATH_STEP_DEG, PATH_STEP_MM};
+/// The limits a blend keeps (a leaf: [`super`] hands them over; 0 or less: no limit).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Limits {
+    /// Linear speed, mm/s.
+    pub mm_per_s: f32,
+    /// Angular speed, deg/s.
+    pub deg_per_s: f32,
+    /// Linear acceleration, mm/s^2.
+    pub mm_per_s2: f32,
+    /// Angular acceleration, deg/s^2.
+    pub deg_per_s2: f32,
+}
+
+/// How densely a path is checked and how long a move may be (the straight moves' rule, which
+/// [`super`] gives).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CheckRule {
+    /// Largest spacing between checks along the linear coordinates, mm.
+    pub step_mm: f32,
+    /// Largest spacing between checks along the angular coordinates, degrees.
+    pub step_deg: f32,
+    /// Most poses checked for one move.
+    pub max_checks: u32,
+    /// Most frames one move may take.
+    pub max_frames: u32,
+}
+
+/// The pose a fraction `t` of the way from `a` to `b` (a chord between two frames' poses).
+fn chord(a: &Pose, b: &Pose, t: f32) -> Pose {
+    let (va, vb) = (a.to_array(), b.to_array());
+    Pose::from_array(core::array::from_fn(|i| va[i] + (vb[i] - va[i]) * t))
+}
 
 /// Six coordinates (mm and rad) or their rates (per frame).
 type Six = [f32; 6];
@@ -55,7 +86,7 @@ struct FrameLimits {
 }
 
 impl FrameLimits {
-    fn new(limits: SpeedLimits, frame_hz: f32) -> FrameLimits {
+    fn new(limits: Limits, frame_hz: f32) -> FrameLimits {
         let dt = 1.0 / frame_hz;
         let per = |limit: f32, scale: f32| {
             if limit > 0.0 {
@@ -178,16 +209,17 @@ pub struct Blend {
 
 impl Blend {
     /// Plans the move from `start` moving at `rate` (mm and rad per frame, as
-    /// [`super::Segment::rate_at`] gives) to `target` within `limits` at `frame_hz`, square
-    /// roots by `M`. `None` when no blend is needed: standing still, or no acceleration limit
+    /// [`super::Segment::rate_at`] gives) to `target` within `limits` at `frame_hz`, checked
+    /// by `rule`, square roots by `M`. `None` when no blend is needed: standing still, or no acceleration limit
     /// applies to the motion in progress (then a move from rest, [`super::Segment`], is the
     /// same thing).
     pub fn plan<M: Math>(
         start: Pose,
         rate: [f32; 6],
         target: Pose,
-        limits: SpeedLimits,
+        limits: Limits,
         frame_hz: f32,
+        rule: CheckRule,
     ) -> Option<Blend> {
         let l = FrameLimits::new(limits, frame_hz);
         let p = start.to_array();
@@ -249,8 +281,8 @@ impl Blend {
         }
         let tail = Tail::plan::<M>(f0, accel, speed);
         let total = libm::ceilf(t_blend + tail.end);
-        let frames = if total >= MAX_FRAMES as f32 {
-            MAX_FRAMES
+        let frames = if total >= rule.max_frames as f32 {
+            rule.max_frames
         } else if total >= 1.0 {
             total as u32
         } else {
@@ -258,7 +290,7 @@ impl Blend {
         };
         // Checkpoints: per group, the fastest a frame can go and the path's length.
         let (mut step, mut length) = (0.0f32, 0.0f32);
-        for (g, spacing) in [PATH_STEP_MM, PATH_STEP_DEG.to_radians()]
+        for (g, spacing) in [rule.step_mm, rule.step_deg.to_radians()]
             .into_iter()
             .enumerate()
         {
@@ -272,11 +304,11 @@ impl Blend {
             step = step.max(fastest.max(tail_fastest) / spacing);
             length = length.max((fastest * t_blend + dn) / spacing);
         }
-        let (samples, sub) = if frames <= MAX_PATH_CHECKS {
-            let sub = libm::ceilf(step).clamp(1.0, (MAX_PATH_CHECKS / frames) as f32);
+        let (samples, sub) = if frames <= rule.max_checks {
+            let sub = libm::ceilf(step).clamp(1.0, (rule.max_checks / frames) as f32);
             (frames, sub as u32)
         } else {
-            let m = libm::ceilf(length).clamp(1.0, MAX_PATH_CHECKS as f32);
+            let m = libm::ceilf(length).clamp(1.0, rule.max_checks as f32);
             (m as u32, 1)
         };
         Some(Blend {
@@ -408,7 +440,7 @@ impl Iterator for BlendCheckpoints {
             let t = self.i as f32 / b.sub as f32;
             self.i += 1;
             let at = self.previous_k as f32 + (k - self.previous_k) as f32 * t;
-            return Some((lerp(&self.previous, &self.current, t), at / n));
+            return Some((chord(&self.previous, &self.current, t), at / n));
         }
         let reached = self.current;
         self.previous = reached;
@@ -424,7 +456,10 @@ impl Iterator for BlendCheckpoints {
 
 #[cfg(test)]
 mod tests {
-    use super::super::{angular_distance_deg, linear_distance_mm, Motion, Plan, Segment};
+    use super::super::{
+        angular_distance_deg, linear_distance_mm, Motion, Plan, Segment, SpeedLimits, CHECK_RULE,
+        MAX_PATH_CHECKS, PATH_STEP_DEG, PATH_STEP_MM,
+    };
     use super::*;
     use kinematics_core::Libm;
 
@@ -445,10 +480,7 @@ mod tests {
         // A move queued and not started yet is replaced: take over no later than it would.
         let lead = lead.min(m.queued_after().unwrap_or(u32::MAX));
         let (pose, rate) = m.state_after(lead);
-        let plan = match Blend::plan::<Libm>(pose, rate, target, l, HZ) {
-            Some(b) => Plan::Blend(b),
-            None => Plan::Straight(Segment::plan(pose, target, l, HZ)),
-        };
+        let plan = Plan::after::<Libm>(pose, rate, target, l, HZ);
         assert_eq!(plan.start(), pose);
         if m.is_moving() {
             m.start_after(plan, lead);
@@ -621,7 +653,7 @@ mod tests {
         // 0.4 s in: at 40 mm/s (the ramp took 0.2 s).
         assert!((rate[2] / dt - 40.0).abs() < 0.01, "{rate:?}");
         let down = Pose::from_degrees(0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
-        let b = Blend::plan::<Libm>(pose, rate, down, l, HZ).unwrap();
+        let b = Blend::plan::<Libm>(pose, rate, down, l.into(), HZ, CHECK_RULE).unwrap();
         // Braking from 40 mm/s at 200 mm/s2 takes 0.2 s (10 frames) and 4 mm: the corner is
         // where it comes to rest, straight ahead, then it comes back from rest.
         assert!((b.t_blend - 10.0).abs() < 1e-3, "{}", b.t_blend);
@@ -629,7 +661,7 @@ mod tests {
         assert!((b.corner[2] - (pose.z_mm + 4.0)).abs() < 1e-3);
         // A right angle: also to rest at the corner.
         let side = Pose::from_degrees(10.0, 0.0, pose.z_mm + 2.0, 0.0, 0.0, 0.0);
-        let b = Blend::plan::<Libm>(pose, rate, side, l, HZ).unwrap();
+        let b = Blend::plan::<Libm>(pose, rate, side, l.into(), HZ, CHECK_RULE).unwrap();
         let e = b.corner;
         let u = [
             side.x_mm - pose.x_mm,
@@ -639,7 +671,7 @@ mod tests {
         assert!(u[2] <= 0.0 && b.w == [0.0; 6], "{u:?} {:?} {e:?}", b.w);
         // 45 degrees ahead: it keeps moving, within the limits.
         let ahead = Pose::from_degrees(10.0, 0.0, pose.z_mm + 14.0, 0.0, 0.0, 0.0);
-        let b = Blend::plan::<Libm>(pose, rate, ahead, l, HZ).unwrap();
+        let b = Blend::plan::<Libm>(pose, rate, ahead, l.into(), HZ, CHECK_RULE).unwrap();
         let w = libm::sqrtf(b.w.iter().map(|c| c * c).sum()) / dt;
         assert!(w > 10.0 && w <= 40.0 + 1e-3, "{w} mm/s at the corner");
     }
@@ -648,15 +680,21 @@ mod tests {
     fn standing_still_or_no_acceleration_limit_means_no_blend() {
         let l = limits(40.0, 30.0, 200.0, 0.0);
         let t = Pose::from_degrees(0.0, 0.0, 5.0, 0.0, 0.0, 0.0);
-        assert!(Blend::plan::<Libm>(Pose::HOME, [0.0; 6], t, l, HZ).is_none());
+        assert!(Blend::plan::<Libm>(Pose::HOME, [0.0; 6], t, l.into(), HZ, CHECK_RULE).is_none());
         // Turning about an axis with no angular acceleration limit: the rotation's speed may
         // change at once, so the move from rest is the same thing.
         let turning = [0.0, 0.0, 0.0, 0.01, 0.0, 0.0];
-        assert!(Blend::plan::<Libm>(Pose::HOME, turning, t, l, HZ).is_none());
+        assert!(Blend::plan::<Libm>(Pose::HOME, turning, t, l.into(), HZ, CHECK_RULE).is_none());
         let off = limits(40.0, 30.0, 0.0, 0.0);
-        assert!(
-            Blend::plan::<Libm>(Pose::HOME, [0.0, 0.0, 0.5, 0.0, 0.0, 0.0], t, off, HZ).is_none()
-        );
+        assert!(Blend::plan::<Libm>(
+            Pose::HOME,
+            [0.0, 0.0, 0.5, 0.0, 0.0, 0.0],
+            t,
+            off.into(),
+            HZ,
+            CHECK_RULE
+        )
+        .is_none());
     }
 
     #[test]
@@ -673,7 +711,7 @@ mod tests {
             Pose::from_degrees(5.0, -3.0, 2.0, 4.0, 0.0, -6.0),
             Pose::from_degrees(0.0, 0.0, 30.0, 0.0, 0.0, 0.0),
         ] {
-            let b = Blend::plan::<Libm>(pose, rate, target, l, HZ).unwrap();
+            let b = Blend::plan::<Libm>(pose, rate, target, l.into(), HZ, CHECK_RULE).unwrap();
             let checked: std::vec::Vec<(Pose, f32)> = b.checkpoints().collect();
             assert_eq!(checked.len() as u32, b.checkpoints().total());
             assert!(checked.len() as u32 <= MAX_PATH_CHECKS);
@@ -692,7 +730,7 @@ mod tests {
         let slow = limits(1.0, 0.0, 0.5, 0.0);
         let (pose, rate) = (Pose::HOME, [0.0, 0.0, 1.0 / HZ, 0.0, 0.0, 0.0]);
         let far = Pose::from_degrees(0.0, 0.0, -30.0, 0.0, 0.0, 0.0);
-        let b = Blend::plan::<Libm>(pose, rate, far, slow, HZ).unwrap();
+        let b = Blend::plan::<Libm>(pose, rate, far, slow.into(), HZ, CHECK_RULE).unwrap();
         assert!(b.frames() > MAX_PATH_CHECKS);
         let checked: std::vec::Vec<(Pose, f32)> = b.checkpoints().collect();
         assert!(checked.len() as u32 <= MAX_PATH_CHECKS && checked.len() >= 60);
