@@ -577,6 +577,34 @@ mod tests {
     }
 
     #[test]
+    fn the_pivot_is_three_keys_the_board_takes_and_a_written_file_keeps_it() {
+        let file = ok("pivot_z_mm = 250\npivot_x_mm = -12.5\n");
+        assert_eq!(file.settings.pivot_mm, [-12.5, 0.0, 250.0]);
+        let commands: Vec<String> = file.steps.iter().map(Step::command).collect();
+        assert_eq!(commands, ["set pivot_z_mm 250", "set pivot_x_mm -12.5"]);
+        // The IK the file's settings make turns about it.
+        let solver = file.settings.validate().unwrap();
+        assert_eq!(
+            solver.rotation_centre_mm(),
+            kinematics_core::Vec3::new(-12.5, 0.0, 250.0)
+        );
+        let written = write(&file.settings, &Sizing::default(), "a test");
+        assert!(
+            written.contains("\npivot_z_mm = 250.0 ") && written.contains("\npivot_y_mm = 0.0 "),
+            "{written}"
+        );
+        assert!(
+            written.contains("rotation centre (pivot), platform frame z (up), -1000..1000 mm"),
+            "{written}"
+        );
+        assert_eq!(ok(&written).settings, file.settings);
+        assert_eq!(
+            err("pivot_y_mm = 1001\n"),
+            "b.toml:1: pivot_y_mm: error:out-of-range pivot_y_mm 1001 is outside -1000..1000 mm"
+        );
+    }
+
+    #[test]
     fn the_pins_comment_names_the_free_gpios_the_readme_lists() {
         // README, "Settings": estop_pin and power_pin take 8..=22 or 26..=28.
         let written = write(&Settings::default(), &Sizing::default(), "a test");
@@ -584,6 +612,38 @@ mod tests {
         assert!(written.contains(pin), "{written}");
         assert_eq!(runs(&[3, 5, 6, 7, 9]), "3, 5..7, 9");
         assert_eq!(runs(&[]), "");
+    }
+
+    #[test]
+    fn the_servos_speed_ratings_are_the_board_s_settings() {
+        let file = ok("servos.speed_s_60deg = 0.1\n[servo3]\nspeed_s_60deg = 0.25\n");
+        assert_eq!(
+            file.settings.servo_speed.s_per_60deg,
+            [0.1, 0.1, 0.25, 0.1, 0.1, 0.1]
+        );
+        let commands: Vec<String> = file.steps.iter().map(Step::command).collect();
+        assert_eq!(
+            commands,
+            [
+                "set servos.speed_s_60deg 0.1",
+                "set servo3.speed_s_60deg 0.25"
+            ]
+        );
+        // The board's refusals: more decimals than its flash keeps, a rating out of range.
+        assert!(err("[servo2]\nspeed_s_60deg = 0.125\n")
+            .starts_with("b.toml:2: servo2.speed_s_60deg: error:bad-value "));
+        assert!(err("servos.speed_s_60deg = 3\n")
+            .starts_with("b.toml:1: servos.speed_s_60deg: error:out-of-range"));
+        // Written in [servoN] as `config` lists them, off by default, and read back the same.
+        let written = write(&file.settings, &Sizing::default(), "a test");
+        assert!(written.contains("\nspeed_s_60deg = 0.25 "), "{written}");
+        assert_eq!(ok(&written).settings, file.settings);
+        let default = write(&Settings::default(), &Sizing::default(), "a test");
+        assert_eq!(
+            default.matches("\nspeed_s_60deg = \"off\" ").count(),
+            6,
+            "{default}"
+        );
     }
 
     #[test]

@@ -107,6 +107,9 @@ pub struct Model {
     pub platform_origin: Vec3,
     /// The platform frame's axes, base frame.
     pub platform_axes: [Vec3; 3],
+    /// The pivot (the rotation centre, `pivot_*_mm`), base frame; `None` at the platform
+    /// frame's origin (the default, not marked).
+    pub pivot: Option<Vec3>,
     /// Each arm plane's horizontal direction (cos beta, sin beta).
     pub arm_directions: [[f32; 2]; LEGS],
     /// Arm length a and rod length s.
@@ -183,6 +186,7 @@ pub fn model(settings: &Settings, pose: &Pose) -> Result<Model, String> {
         joints: state.placement.joints_mm,
         platform_origin,
         platform_axes: core::array::from_fn(|i| rotation.column(i).into_owned()),
+        pivot: (settings.pivot_mm != [0.0; 3]).then_some(state.placement.centre_mm),
         arm_directions: core::array::from_fn(|i| solver.arm_plane(i)),
         arm_mm: geometry.arm_mm(),
         rod_mm: geometry.rod_mm(),
@@ -246,6 +250,7 @@ fn all_points(model: &Model) -> Vec<Vec3> {
             .platform_axes
             .map(|u| model.platform_origin + u * axis_mm),
     );
+    points.extend(model.pivot);
     points
 }
 
@@ -294,6 +299,9 @@ fn scale_bar(mm: f64) -> String {
 fn drawing_title(pose: &str) -> String {
     format!("pose {pose}  (x y z mm, roll pitch yaw degrees)")
 }
+
+/// The pivot's label.
+const PIVOT_LABEL: &str = "pivot";
 
 /// A drawing of a pose the platform takes.
 const DRAWING_REACHABLE: &str = "reachable: every leg reaches its joint within its servo's limits";
@@ -517,6 +525,27 @@ fn panel(scene: &mut Scene, model: &Model, view: View, corner: [f64; 2], eye: f6
                 Style::fill(colour),
             );
         }
+    }
+    // The pivot: a ring with its name, and its mm coordinates.
+    if let Some(pivot) = model.pivot {
+        let at = px(pivot);
+        let ring = scene.add(
+            "pivot",
+            Shape::Circle(at, 5.0),
+            Style::stroke("#7b2fa3", 2.0),
+        );
+        ring.data.extend(mm(pivot));
+        scene.add(
+            "pivot",
+            Shape::Text {
+                at: [at[0] + 8.0, at[1] - 6.0],
+                text: PIVOT_LABEL.to_string(),
+                size_px: 11.0,
+                anchor: Anchor::Start,
+                rotate_deg: 0.0,
+            },
+            Style::fill("#7b2fa3"),
+        );
     }
     // Numbers: the leg beside its rod's middle, the servo beside its shaft (away from the
     // centre of the picture's base).

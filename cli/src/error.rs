@@ -126,6 +126,12 @@ pub enum Error {
     },
     /// `cue`'s telemetry or board, or `cue-plot`'s record.
     Cue(Box<CueError>),
+    /// `calibrate`: the trims could not be put in the build file as it is written (a trim in a
+    /// form the tool does not edit, e.g. an inline table); the file is left as it was.
+    TrimsNotWritten {
+        /// The build file.
+        file: String,
+    },
 }
 
 /// What is wrong with a key of a build file.
@@ -381,6 +387,11 @@ pub enum PortError {
         /// The reply line at fault.
         reply: String,
     },
+    /// The platform was still moving after this long (`status`).
+    StillMoving {
+        /// How long the tool waited, s.
+        waited_s: f64,
+    },
 }
 
 /// What is wrong with a row of a trajectory file.
@@ -531,6 +542,10 @@ impl Display for Error {
                 PortError::Unreadable { line, reply } => {
                     write!(f, "{port}: cannot read the reply to '{line}': '{reply}'")
                 }
+                PortError::StillMoving { waited_s } => write!(
+                    f,
+                    "{port}: the platform was still moving after {waited_s:.0} s (`status`)"
+                ),
             },
             Error::Refused {
                 at,
@@ -602,6 +617,13 @@ impl Display for Error {
                  payload_com_z_mm (mm, platform frame) in the build file (--settings)"
             ),
             Error::Cue(why) => write!(f, "{why}"),
+            Error::TrimsNotWritten { file } => write!(
+                f,
+                "{file}: the trims could not be written into this file as it is (a trim_us in a \
+                 form the tool does not edit, such as an inline table); the file is unchanged and \
+                 the board keeps the new trims unsaved: write them by hand (`[servoN] trim_us`), \
+                 or give another --output"
+            ),
             Error::StreamTrouble {
                 file,
                 refused,

@@ -6,14 +6,16 @@
 //! | module | job |
 //! | --- | --- |
 //! | `main.rs` | the table of contents: each subcommand with its help line, dispatched to its `Cmd::run` |
-//! | `cmd/<subcommand>.rs` | one per subcommand (`init`, `apply`, `pull`, `describe`, `workspace`, `torque`, `draw`, `send`, `shell`, `stream`, `demo`, `cue`, `cue_plot`, `uf2`): its options (a clap `Cmd`), its `run`, its own words (the summary it prints) |
-//! | `cmd/mod.rs` | the options several share (a board's port and link, picture formats, stream options) and the summaries several write |
+//! | `cmd/<subcommand>.rs` | one per subcommand (`init`, `apply`, `pull`, `calibrate`, `boards`, `describe`, `workspace`, `torque`, `draw`, `send`, `shell`, `stream`, `demo`, `cue`, `cue_plot`, `uf2`): its options (a clap `Cmd`), its `run`, its own words (the summary it prints) |
+//! | `cmd/mod.rs` | the options several share (a board's port and link, picture formats, stream options, Ctrl-C taken as a flag: `cue`, `calibrate`) and the summaries several write |
 //! | `error.rs` | `Error`, the one error type, each variant worded in its `Display` (the file, line and key or field, or the port); `board_words`: a refusal as the board writes it |
 //! | `messages.rs` | how the outcome is written (mechanism, no content): the summary on standard output, the error after `hexapod: ` on standard error, a reply's lines as the board wrote them |
 //! | `build_file.rs` | the TOML build file: keys are `set` names (the payload and torque ratings too; `baud` kept apart, for `apply` to send last, before `save`), each checked by `control::settings`, a payload's holding torques at home by `control::payload`; an order of `set`s the board accepts one by one; `read`; writing a commented file (each setting's meaning and range) |
 //! | `sizing.rs` | the build file's `[sizing]` table: what the board has no setting for (the servos' holding stiffness); its old payload and rating keys named with the settings that replaced them |
 //! | `files.rs` | the user's files read and written whole, errors naming the file |
 //! | `link.rs` | a serial port to a board (`serialport`, no libudev): a reader thread hands over lines; echo off, one final reply per line, resynchronisation after `# warning:` |
+//! | `boards.rs` | the serial ports the system lists, the boards first: a USB port with the firmware's USB IDs (`control::report::USB_VID`, `USB_PID`) named by its serial number (the board's id) |
+//! | `calibration.rs` | the guided calibration's pieces: keys to pulse steps within the servo's limits, the trim from the pulse that holds the arm level (`ServoConfig`'s eq. 13 / 14), the check poses, a build file's trims replaced with the rest of its text kept |
 //! | `board.rs` | what replies say: `config` as `Settings` (read with `SettingId::parse`/`parse_value`), `status`'s counters and pulses |
 //! | `trajectory.rs` | trajectory CSV files; each row as the board will get it (a binary frame or a `pose` line), checked with the firmware's decoder, the IK and the torque check (`control::payload`) |
 //! | `demo.rs` | built-in trajectories (circle, figure eight, sines, a tour of the workspace edge) |
@@ -30,7 +32,9 @@
 //! use `cmd`, and `cmd/mod.rs` (the shared options) never uses its subcommands.
 
 pub mod board;
+pub mod boards;
 pub mod build_file;
+pub mod calibration;
 pub mod cmd;
 pub mod cue;
 pub mod demo;

@@ -21,6 +21,7 @@ use std::time::{Duration, Instant};
 
 use serialport::SerialPort;
 
+use crate::boards;
 use crate::error::{Error, PortError};
 
 /// How long a read on the port blocks before the reader thread checks it is still wanted.
@@ -97,14 +98,12 @@ pub struct Received {
     pub line: String,
 }
 
-/// Why a port did not open, with the ports the system does list (none if it cannot list
-/// them).
+/// Why a port did not open, with the ports the system does list, boards first with their ids
+/// (none if it cannot list them).
 fn not_opened(error: &serialport::Error) -> PortError {
     PortError::Open {
         why: error.to_string(),
-        present: serialport::available_ports()
-            .map(|ports| ports.into_iter().map(|p| p.port_name).collect())
-            .unwrap_or_default(),
+        present: boards::present().iter().map(boards::Found::short).collect(),
         denied: error.kind() == serialport::ErrorKind::Io(std::io::ErrorKind::PermissionDenied),
     }
 }
@@ -397,6 +396,19 @@ mod tests {
             let line = text.trim_end();
             assert!(is_notice(line) && is_input_lost(line), "{line}");
         }
+        // The count at the end of a burst of UART errors: input was lost after the first
+        // warning too (the host resynchronises again).
+        let mut text = String::new();
+        write_notice(
+            &mut text,
+            &Notice::InputLostBurst {
+                losses: 3,
+                at_least: 5,
+                over_s: 0.5,
+            },
+        );
+        let line = text.trim_end();
+        assert!(is_notice(line) && is_input_lost(line), "{line}");
         let mut text = String::new();
         write_notice(&mut text, &Notice::NoSavedSettings(None));
         let line = text.trim_end();

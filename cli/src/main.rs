@@ -8,8 +8,8 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 
 use hexapod::cmd::{
-    apply, cue, cue_plot, demo, describe, draw, init, pull, send, shell, stream, torque, uf2,
-    workspace,
+    apply, boards, calibrate, cue, cue_plot, demo, describe, draw, init, pull, send, shell, stream,
+    torque, uf2, workspace,
 };
 use hexapod::messages;
 
@@ -36,6 +36,10 @@ enum Command {
     Apply(apply::Cmd),
     /// Write a board's settings (`config`) to a build file
     Pull(pull::Cmd),
+    /// Calibrate a board, guided: servo by servo, bring its arm level with +/- steps (the trim
+    /// is taken from it), check the platform at a few poses, write the build file and `save`;
+    /// q or Ctrl-C puts everything back
+    Calibrate(calibrate::Cmd),
 
     // See and size it.
     /// Describe a platform: geometry, reach from home, stiffness, and with a payload its holding
@@ -52,6 +56,9 @@ enum Command {
     Draw(draw::Cmd),
 
     // Drive it.
+    /// List the serial ports, the boards first with their ids (the USB serial number the
+    /// firmware makes from its flash chip's unique ID)
+    Boards(boards::Cmd),
     /// Send lines to a board and print its replies (the lines given, or standard input's);
     /// stops at the first refusal
     Send(send::Cmd),
@@ -83,6 +90,8 @@ fn main() -> ExitCode {
         Command::Init(cmd) => cmd.run(),
         Command::Apply(cmd) => cmd.run(),
         Command::Pull(cmd) => cmd.run(),
+        Command::Calibrate(cmd) => cmd.run(),
+        Command::Boards(cmd) => cmd.run(),
         Command::Describe(cmd) => cmd.run(),
         Command::Workspace(cmd) => cmd.run(),
         Command::Torque(cmd) => cmd.run(),

@@ -10,7 +10,7 @@ use std::net::UdpSocket;
 use std::thread;
 use std::time::{Duration, Instant};
 
-use support::{hexapod, scratch, text, SimBoard};
+use support::{hexapod, pass_through_board, scratch, text, SimBoard};
 
 /// A UDP port free on the loopback now (bound, then released for the tool).
 fn free_port() -> u16 {
@@ -76,18 +76,7 @@ fn fly(port: u16) {
 #[test]
 fn telemetry_becomes_frames_bad_lines_are_counted_and_the_end_eases_home() {
     let dir = scratch("cue");
-    let board = SimBoard::start();
-    let setup = hexapod(
-        &dir,
-        &[
-            "send",
-            "--port",
-            &board.path,
-            "set speed_mm_s off",
-            "set speed_deg_s off",
-        ],
-    );
-    assert!(setup.status.success(), "{:?}", text(&setup));
+    let board = pass_through_board(&dir);
     std::fs::write(
         dir.join("build.toml"),
         "[cue]\nease_s = 0.5\n[cue.tilt]\nrate_deg_s = 8\n",
@@ -280,18 +269,7 @@ fn ctrl_c_eases_the_platform_home_before_exiting() {
     use std::sync::Arc;
 
     let dir = scratch("cue-ctrl-c");
-    let board = SimBoard::start();
-    let setup = hexapod(
-        &dir,
-        &[
-            "send",
-            "--port",
-            &board.path,
-            "set speed_mm_s off",
-            "set speed_deg_s off",
-        ],
-    );
-    assert!(setup.status.success(), "{:?}", text(&setup));
+    let board = pass_through_board(&dir);
     std::fs::write(
         dir.join("build.toml"),
         "[cue]\nease_s = 1.0\n[cue.tilt]\nrate_deg_s = 8\n",

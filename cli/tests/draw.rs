@@ -126,6 +126,85 @@ fn four_views_six_legs_joints_where_the_kinematics_put_them() {
     assert!(verdict[0].text().unwrap().starts_with("reachable"));
 }
 
+/// `R c` for `R = Rz(yaw) Ry(pitch) Rx(roll)` (eq. 1), degrees: each elementary rotation in
+/// turn, innermost first.
+fn rotate(roll: f64, pitch: f64, yaw: f64, c: [f64; 3]) -> [f64; 3] {
+    let turn = |v: [f64; 3], i: usize, j: usize, angle: f64| {
+        let (s, co) = angle.to_radians().sin_cos();
+        let mut out = v;
+        out[i] = co * v[i] - s * v[j];
+        out[j] = s * v[i] + co * v[j];
+        out
+    };
+    // Rx turns y towards z, Ry turns z towards x, Rz turns x towards y.
+    let v = turn(c, 1, 2, roll);
+    let v = turn(v, 2, 0, pitch);
+    turn(v, 0, 1, yaw)
+}
+
+#[test]
+fn with_a_pivot_the_platform_turns_about_it_and_the_pivot_is_marked() {
+    let dir = scratch("draw-pivot");
+    std::fs::write(dir.join("b.toml"), "pivot_x_mm = 5\npivot_z_mm = 80\n").unwrap();
+    let out = hexapod(
+        &dir,
+        &[
+            "draw",
+            "--settings",
+            "b.toml",
+            "--pose",
+            "2 -1 3 4 -3 6",
+            "-o",
+            "p",
+        ],
+    );
+    assert!(out.status.success(), "{:?}", text(&out));
+    let svg = std::fs::read_to_string(dir.join("p.svg")).unwrap();
+    let doc = roxmltree::Document::parse(&svg).unwrap();
+    let class = |c: &str| -> Vec<roxmltree::Node> {
+        doc.descendants()
+            .filter(|n| n.attribute("class") == Some(c))
+            .collect()
+    };
+    // q_i = (x, y, h0 + z) + c + R (p_i - c): the joints about the platform's centre, moved by
+    // c - R c.
+    let c = [5.0, 0.0, 80.0];
+    let rc = rotate(4.0, -3.0, 6.0, c);
+    let want: Vec<[f64; 3]> = joints([2.0, -1.0, 3.0, 4.0, -3.0, 6.0])
+        .into_iter()
+        .map(|q| core::array::from_fn(|k| q[k] + c[k] - rc[k]))
+        .collect();
+    for joint in class("joint") {
+        let leg: usize = joint.attribute("data-leg").unwrap().parse().unwrap();
+        let got = mm(&joint);
+        for d in 0..3 {
+            assert!(
+                (got[d] - want[leg - 1][d]).abs() < 0.01,
+                "leg {leg}: {got:?} vs {:?}",
+                want[leg - 1]
+            );
+        }
+    }
+    // The pivot, marked in every view: where it was at home, moved by x y z.
+    let rings: Vec<_> = class("pivot")
+        .into_iter()
+        .filter(|n| n.has_attribute("data-x-mm"))
+        .collect();
+    assert_eq!(rings.len(), 4);
+    let at = [2.0 + 5.0, -1.0, HOME_HEIGHT_MM + 3.0 + 80.0];
+    for ring in rings {
+        let got = mm(&ring);
+        for d in 0..3 {
+            assert!((got[d] - at[d]).abs() < 0.01, "{got:?} vs {at:?}");
+        }
+    }
+    // Without a pivot, none is marked.
+    let out = hexapod(&dir, &["draw", "--pose", "2 -1 3 4 -3 6", "-o", "q"]);
+    assert!(out.status.success(), "{:?}", text(&out));
+    let svg = std::fs::read_to_string(dir.join("q.svg")).unwrap();
+    assert!(!svg.contains("class=\"pivot\""));
+}
+
 #[test]
 fn an_unreachable_pose_is_drawn_with_the_failing_leg_marked() {
     let dir = scratch("draw-unreachable");

@@ -60,6 +60,42 @@ fn number_after(text: &str, key: &str) -> f64 {
 }
 
 #[test]
+fn describe_names_the_pivot_and_its_reaches_turn_about_it_as_the_board_does() {
+    let dir = scratch("describe-pivot");
+    std::fs::write(dir.join("b.toml"), "pivot_y_mm = -10\npivot_z_mm = 60\n").unwrap();
+    let out = hexapod(&dir, &["describe", "--settings", "b.toml"]);
+    let (stdout, stderr) = text(&out);
+    assert!(out.status.success(), "{stderr}");
+    assert!(
+        stdout.contains("  pivot: (0.000, -10.000, 60.000) mm in the platform frame"),
+        "{stdout}"
+    );
+    // The pitch reach is about the pivot: the board, with the same pivot, accepts it and
+    // refuses a little more; about the platform's centre the reach is another.
+    let settings = control::Settings {
+        pivot_mm: [0.0, -10.0, 60.0],
+        ..control::Settings::default()
+    };
+    let line = stdout
+        .lines()
+        .find(|l| l.trim_start().starts_with("pitch "))
+        .unwrap();
+    let pitch = number_after(line, "..") as f32;
+    assert!(board_check(settings, [0.0, 0.0, 0.0, 0.0, pitch - 0.001, 0.0]).is_some());
+    assert!(board_check(settings, [0.0, 0.0, 0.0, 0.0, pitch + 0.02, 0.0]).is_none());
+    let plain = hexapod(&dir, &["describe"]);
+    let (plain, _) = text(&plain);
+    let line = plain
+        .lines()
+        .find(|l| l.trim_start().starts_with("pitch "))
+        .unwrap();
+    assert!(
+        (number_after(line, "..") as f32 - pitch).abs() > 0.5,
+        "{line}"
+    );
+}
+
+#[test]
 fn describe_gives_the_geometry_reaches_the_board_agrees_with_and_torques_virtual_work_gives() {
     let dir = scratch("describe");
     let out = hexapod(&dir, &["describe"]);
@@ -88,6 +124,11 @@ fn describe_gives_the_geometry_reaches_the_board_agrees_with_and_torques_virtual
     let roll = number_after(line, "..") as f32;
     assert!(board_accepts([0.0, 0.0, 0.0, roll - 0.001, 0.0, 0.0]));
     assert!(!board_accepts([0.0, 0.0, 0.0, roll + 0.02, 0.0, 0.0]));
+
+    assert!(
+        stdout.contains("  pivot: the platform frame's origin (roll, pitch and yaw turn about"),
+        "{stdout}"
+    );
 
     // The default platform carries nothing (payload_g 0, the board's default).
     assert!(

@@ -7,7 +7,7 @@ mod support;
 
 use control::settings::Settings;
 use kinematics_core::{Libm, Pose};
-use support::{hexapod, scratch, text, SimBoard};
+use support::{hexapod, pass_through_board, scratch, text, SimBoard};
 
 /// A trajectory: from home up to `end` over 1 s at 50 rows/s, then holding it for 0.2 s.
 fn ramp_to(end: [f64; 6]) -> String {
@@ -39,18 +39,7 @@ fn host_pulses(pose: [f32; 6]) -> [f32; 6] {
 fn a_binary_stream_arrives_whole_and_leaves_the_platform_at_the_last_row() {
     let dir = scratch("binary");
     std::fs::write(dir.join("t.csv"), ramp_to([4.0, -3.0, 5.0, 2.0, -1.5, 6.0])).unwrap();
-    let board = SimBoard::start();
-    let setup = hexapod(
-        &dir,
-        &[
-            "send",
-            "--port",
-            &board.path,
-            "set speed_mm_s off",
-            "set speed_deg_s off",
-        ],
-    );
-    assert!(setup.status.success(), "{:?}", text(&setup));
+    let board = pass_through_board(&dir);
     let stream = hexapod(
         &dir,
         &[

@@ -31,6 +31,9 @@
 //!   rule with an integer square root).
 //! - [`payload`]: the payload carried and the servos' torque ratings: holding torques in
 //!   kgf cm from `kinematics_core::statics`, [`payload::TorqueError`].
+//! - [`servo_speed`]: the servos' rated speeds, and how moves and stream steps are slowed so
+//!   that no arm turns faster than its rating ([`servo_speed::ServoSpeeds`], the path time a
+//!   path check measures).
 //! - [`safety`]: the e-stop input's and servo-power output's settings, the e-stop latch.
 //! - [`error`]: [`Error`], why a line is refused (each layer's error type gathered).
 //! - [`report`]: every reply, error code and message, data line and notice, worded once (the
@@ -45,7 +48,8 @@
 //!   (what a stream follows; the clamp of a target out of reach), `locate` (`servo`'s forward
 //!   kinematics along a continuation), `rebuild` (new build numbers' geometry and IK), `save`
 //!   (the board's flash write), `listing` (a listing a line per slice; `status`' torques),
-//!   `limits`, sharing `pose_check` (whether a pose can be taken). What the controller does
+//!   `limits`, sharing `pose_check` (whether a pose can be taken); `loss_burst` (a burst of
+//!   UART receive errors, counted for one notice). What the controller does
 //!   with them is one `impl Controller` file per job: `moves`, `streaming`, `servo`,
 //!   `settings_change`, `link_loss`, `estop`, `status`, `notices`.
 //!
@@ -98,6 +102,7 @@ pub mod protocol;
 pub mod record;
 pub mod report;
 pub mod safety;
+pub mod servo_speed;
 pub mod session;
 pub mod settings;
 pub mod store;

@@ -10,10 +10,10 @@
 //! | 4 | 2 | format version |
 //! | 6 | 2 | payload length ([`PAYLOAD_LEN`]) |
 //! | 8 | 2 | `frame_hz` (u16) |
-//! | 10 | 2 | reserved, 0 |
+//! | 10 | 2 | `stream.max_step_pct` (u16, tenths of a percent, 0 off; 0 in records written before it) |
 //! | 12 | 12 | `speed_mm_s`, `speed_deg_s`, `link_timeout_s` (f32) |
 //! | 24 | 24 | layout (f32): base radius, base half angle, platform radius and half angle, a, s |
-//! | 48 | 6 x 20 | per servo: trim, rate, min, max (f32), dir (0 normal, 1 reversed), 0, torque rating (u16, hundredths of a kgf cm, 0 not rated) |
+//! | 48 | 6 x 20 | per servo: trim, rate, min, max (f32), dir (0 normal, 1 reversed), speed rating (u8, hundredths of a second per 60 degrees, 0 not rated), torque rating (u16, hundredths of a kgf cm, 0 not rated) |
 //! | 168 | 8 | `accel_mm_s2`, `accel_deg_s2` (f32) |
 //! | 176 | 24 | stream full scales x, y, z (mm), roll, pitch, yaw (deg) (f32) |
 //! | 200 | 1 | `stream.bits` |
@@ -25,14 +25,22 @@
 //! | 212 | 4 | `payload_g` (f32) |
 //! | 216 | 12 | `payload_com_x_mm`, `payload_com_y_mm`, `payload_com_z_mm` (f32) |
 //! | 228 | 4 | `baud`: UART0's baud rate (u32, one of [`BAUD_RATES`]) |
-//! | 232 | 4 | sequence number of the save (u32; the newer of two records has the higher one) |
-//! | 236 | 4 | CRC-32 (IEEE 802.3) of bytes 0..236 |
+//! | 232 | 12 | `pivot_x_mm`, `pivot_y_mm`, `pivot_z_mm` (f32) |
+//! | 244 | 4 | sequence number of the save (u32; the newer of two records has the higher one) |
+//! | 248 | 4 | CRC-32 (IEEE 802.3) of bytes 0..248 |
 //!
 //! The whole record fits one 256-byte flash page.
 //!
+//! Format 4, which boards in the field hold, is read too: the same bytes up to 232, each servo's
+//! speed rating byte (offset 17 of its block) then reserved, 0, and without the pivot (payload
+//! length 224, the sequence number at 232, the CRC-32 of bytes 0..236 at 236): its servos are
+//! not rated for speed and its pivot is the platform frame's origin (0, 0, 0), where every
+//! board of format 4 turned.
+//!
 //! Format 3, which boards in the field hold, is read too: the same bytes up to 228, without
-//! `baud` (payload length 220, the sequence number at 228, the CRC-32 of bytes 0..232 at 232).
-//! Its baud rate is [`DEFAULT_BAUD`], the rate every board of format 3 came up at. (The
+//! `baud` and the pivot (payload length 220, the sequence number at 228, the CRC-32 of bytes 0..232 at 232).
+//! Its baud rate is [`DEFAULT_BAUD`], the rate every board of format 3 came up at, and its
+//! pivot the origin. (The
 //! payload and the torque ratings joined format 3 before any board had a format-3 record in
 //! its flash, so every format-3 record ever written has them.)
 //!
@@ -51,19 +59,27 @@ use kinematics_core::{Direction, Libm, Math, ServoSet};
 
 use crate::payload::hundredths;
 use crate::safety::EstopAction;
+use crate::servo_speed;
 use crate::settings::{LayoutParam, SettingError, Settings, BAUD_RATES, DEFAULT_BAUD};
+use crate::stream::step_tenths;
 
 /// Binary format version written (1 also held the link settings, 2 had no sequence number and
 /// none of the acceleration, stream and safety settings; neither was ever written to a board's
 /// flash; 3 gained the payload and the torque ratings before any board had it, and is still
-/// read; 4 added `baud`: see the module docs).
-pub const FORMAT_VERSION: u16 = 4;
-/// The older format still read (boards in the field hold it): no `baud`.
+/// read; 4 added `baud`, and is still read; 5 the pivot and the servos' speed ratings: see the
+/// module docs).
+pub const FORMAT_VERSION: u16 = 5;
+/// An older format still read: no pivot, no speed ratings.
+pub const FORMAT_VERSION_NO_PIVOT: u16 = 4;
+/// The oldest format still read (boards in the field hold it): no `baud`, no pivot, no speed
+/// ratings.
 pub const FORMAT_VERSION_NO_BAUD: u16 = 3;
 /// Bytes of settings between the header and the sequence number.
-pub const PAYLOAD_LEN: usize = 224;
-/// [`PAYLOAD_LEN`] of format 3 (no `baud`).
-const PAYLOAD_LEN_NO_BAUD: usize = PAYLOAD_LEN - 4;
+pub const PAYLOAD_LEN: usize = 236;
+/// [`PAYLOAD_LEN`] of format 4 (no pivot; the speed byte reserved).
+const PAYLOAD_LEN_NO_PIVOT: usize = PAYLOAD_LEN - 12;
+/// [`PAYLOAD_LEN`] of format 3 (no `baud`, no pivot).
+const PAYLOAD_LEN_NO_BAUD: usize = PAYLOAD_LEN_NO_PIVOT - 4;
 /// A pin byte meaning "off".
 const PIN_OFF: u8 = 0xFF;
 /// A `stream.axisN` byte meaning `none`.
@@ -121,7 +137,7 @@ pub enum DecodeError {
 }
 
 /// CRC-32 (IEEE 802.3, reflected, polynomial 0xEDB88320), bit by bit: small and fast enough
-/// for a 232-byte record.
+/// for a 248-byte record.
 pub fn crc32(bytes: &[u8]) -> u32 {
     let mut crc = 0xFFFF_FFFFu32;
     for &b in bytes {
@@ -205,14 +221,21 @@ pub fn encode(record: &Record) -> [u8; ENCODED_LEN] {
     w.bytes(&FORMAT_VERSION.to_le_bytes());
     w.bytes(&(PAYLOAD_LEN as u16).to_le_bytes());
     w.bytes(&settings.frame_hz.to_le_bytes());
-    w.bytes(&[0, 0]);
+    // Kept to tenths (crate::stream): exact.
+    w.bytes(&step_tenths(settings.stream.max_step_pct).to_le_bytes());
     w.f32(settings.speed_mm_s);
     w.f32(settings.speed_deg_s);
     w.f32(settings.link_timeout_s);
     for p in LayoutParam::ALL {
         w.f32(p.get(&settings.layout));
     }
-    for (s, rating) in settings.servos.0.iter().zip(settings.payload.torque_kgcm) {
+    for ((s, rating), speed) in settings
+        .servos
+        .0
+        .iter()
+        .zip(settings.payload.torque_kgcm)
+        .zip(settings.servo_speed.s_per_60deg)
+    {
         w.f32(s.home_us);
         w.f32(s.rate_us_per_rad);
         w.f32(s.min_us);
@@ -221,7 +244,8 @@ pub fn encode(record: &Record) -> [u8; ENCODED_LEN] {
             Direction::Normal => 0,
             Direction::Reversed => 1,
         };
-        w.bytes(&[dir, 0]);
+        // Speed ratings are kept to hundredths (crate::servo_speed): exact.
+        w.bytes(&[dir, servo_speed::hundredths(speed)]);
         // Ratings are kept to hundredths (crate::payload): exact.
         w.bytes(&hundredths(rating).to_le_bytes());
     }
@@ -251,6 +275,9 @@ pub fn encode(record: &Record) -> [u8; ENCODED_LEN] {
         w.f32(v);
     }
     w.bytes(&record.baud.to_le_bytes());
+    for v in settings.pivot_mm {
+        w.f32(v);
+    }
     debug_assert_eq!(w.at, SEQUENCE_OFFSET);
     w.bytes(&record.sequence.to_le_bytes());
     let crc = crc32(&buf[..CRC_OFFSET]);
@@ -277,6 +304,7 @@ pub fn decode_with<M: Math>(bytes: &[u8]) -> Result<Record, DecodeError> {
     let version = u16::from_le_bytes([bytes[4], bytes[5]]);
     let payload_len = match version {
         FORMAT_VERSION => PAYLOAD_LEN,
+        FORMAT_VERSION_NO_PIVOT => PAYLOAD_LEN_NO_PIVOT,
         FORMAT_VERSION_NO_BAUD => PAYLOAD_LEN_NO_BAUD,
         _ => return Err(DecodeError::UnsupportedVersion(version)),
     };
@@ -299,7 +327,7 @@ pub fn decode_with<M: Math>(bytes: &[u8]) -> Result<Record, DecodeError> {
         at: HEADER_LEN,
     };
     let frame_hz = u16::from_le_bytes(r.take());
-    r.zeros(2)?;
+    let max_step_tenths = r.u16();
     let speed_mm_s = r.f32();
     let speed_deg_s = r.f32();
     let link_timeout_s = r.f32();
@@ -314,11 +342,12 @@ pub fn decode_with<M: Math>(bytes: &[u8]) -> Result<Record, DecodeError> {
     for p in LayoutParam::ALL {
         *p.slot(&mut settings.layout) = r.f32();
     }
-    for (s, rating) in settings
+    for ((s, rating), speed) in settings
         .servos
         .0
         .iter_mut()
         .zip(settings.payload.torque_kgcm.iter_mut())
+        .zip(settings.servo_speed.s_per_60deg.iter_mut())
     {
         s.home_us = r.f32();
         s.rate_us_per_rad = r.f32();
@@ -329,7 +358,11 @@ pub fn decode_with<M: Math>(bytes: &[u8]) -> Result<Record, DecodeError> {
         } else {
             Direction::Normal
         };
-        r.zeros(1)?;
+        if version == FORMAT_VERSION {
+            *speed = f32::from(r.u8()) / 100.0;
+        } else {
+            r.zeros(1)?; // reserved before format 5: not rated
+        }
         *rating = f32::from(r.u16()) / 100.0;
     }
     debug_assert_eq!(r.at, HEADER_LEN + 40 + LEGS_LEN * SERVO_RECORD_LEN);
@@ -339,6 +372,7 @@ pub fn decode_with<M: Math>(bytes: &[u8]) -> Result<Record, DecodeError> {
         *v = r.f32();
     }
     settings.stream.text_bits = r.u8();
+    settings.stream.max_step_pct = f32::from(max_step_tenths) / 10.0;
     for slot in settings.stream.text_order.iter_mut() {
         let offset = r.at;
         *slot = match r.u8() {
@@ -374,6 +408,11 @@ pub fn decode_with<M: Math>(bytes: &[u8]) -> Result<Record, DecodeError> {
         }
         baud
     };
+    if version == FORMAT_VERSION {
+        for v in settings.pivot_mm.iter_mut() {
+            *v = r.f32();
+        }
+    }
     debug_assert_eq!(r.at, sequence_offset);
     settings
         .validate_with::<M>()
@@ -418,6 +457,7 @@ mod tests {
         s.accel_deg_s2 = 0.0;
         s.stream.full_scale = [10.0, -20.0, 5.5, 0.0, -30.0, 45.0];
         s.stream.text_bits = 12;
+        s.stream.max_step_pct = 7.3;
         s.stream.text_order = [
             Some(Axis::Roll),
             None,
@@ -432,21 +472,31 @@ mod tests {
         s.payload.mass_g = 1234.5;
         s.payload.com_mm = [-3.0, 4.25, 60.0];
         s.payload.torque_kgcm = [0.0, 2.51, 600.0, 0.01, 12.0, 0.0];
+        s.pivot_mm = [12.5, -3.0, 250.0];
+        s.servo_speed.s_per_60deg = [0.1, 0.0, 2.55, 0.01, 0.13, 0.2];
         s.validate().unwrap();
         let saved = Record {
             baud: 921_600,
             ..record(0xDEAD_BEEF, s)
         };
         let bytes = encode(&saved);
-        assert_eq!(bytes.len(), 240);
+        assert_eq!(bytes.len(), 252);
         assert!(bytes.len() <= crate::store::PAGE_BYTES, "one flash page");
         assert_eq!(&bytes[..4], b"HXPS");
-        assert_eq!(&bytes[4..8], &[4, 0, 224, 0], "format 4, payload 224 bytes");
-        // The baud rate and the sequence number at their documented places, little-endian.
+        assert_eq!(&bytes[4..8], &[5, 0, 236, 0], "format 5, payload 236 bytes");
+        // The baud rate, the pivot and the sequence number at their documented places,
+        // little-endian.
         assert_eq!(&bytes[228..232], &[0x00, 0x10, 0x0E, 0x00]);
-        assert_eq!(&bytes[232..236], &[0xEF, 0xBE, 0xAD, 0xDE]);
+        assert_eq!(&bytes[232..236], &12.5f32.to_le_bytes());
+        assert_eq!(&bytes[236..240], &(-3.0f32).to_le_bytes());
+        assert_eq!(&bytes[240..244], &250.0f32.to_le_bytes());
+        assert_eq!(&bytes[244..248], &[0xEF, 0xBE, 0xAD, 0xDE]);
+        assert_eq!(&bytes[248..252], &crc32(&bytes[..248]).to_le_bytes());
         // Servo 2's rating, 2.51 kgf cm, in hundredths at offset 48 + 20 + 18.
         assert_eq!(&bytes[86..88], &251u16.to_le_bytes());
+        // Speed ratings in hundredths of a second at offset 17 of each servo's block.
+        let speeds: Vec<u8> = (0..6).map(|i| bytes[48 + 20 * i + 17]).collect();
+        assert_eq!(speeds, [10, 0, 255, 1, 13, 20]);
         assert_eq!(&bytes[212..216], &1234.5f32.to_le_bytes());
         assert_eq!(decode(&bytes), Ok(saved));
         assert_eq!(
@@ -459,13 +509,94 @@ mod tests {
         assert_eq!(decode(&page), Ok(saved));
     }
 
+    /// A format-4 record: `record`'s bytes (its servos not rated for speed) without the
+    /// pivot's twelve, the version and payload length of format 4, checksummed again.
+    fn format_4(record: &Record) -> Vec<u8> {
+        assert!(
+            !record.settings.servo_speed.rated(),
+            "format 4 has no speed ratings"
+        );
+        let new = encode(record);
+        let mut old = Vec::new();
+        old.extend_from_slice(&new[..232]);
+        old.extend_from_slice(&new[244..248]); // the sequence number
+        old[4..8].copy_from_slice(&[4, 0, 224, 0]);
+        let crc = crc32(&old);
+        old.extend_from_slice(&crc.to_le_bytes());
+        old
+    }
+
+    #[test]
+    fn a_format_4_record_is_read_with_the_pivot_at_the_origin() {
+        let mut s = Settings {
+            speed_mm_s: 0.0,
+            ..Settings::default()
+        };
+        s.servos.0[3].home_us = 1512.5;
+        s.payload.com_mm = [1.0, 2.0, 3.0];
+        s.payload.torque_kgcm = [0.0, 2.51, 600.0, 0.01, 12.0, 0.0];
+        let mut with_pivot = s;
+        with_pivot.pivot_mm = [0.0, 0.0, 300.0]; // not in a format-4 record: dropped
+        let old = format_4(&Record {
+            baud: 921_600,
+            ..record(42, with_pivot)
+        });
+        assert_eq!(old.len(), 240);
+        let expected = Record {
+            sequence: 42,
+            settings: s,
+            baud: 921_600,
+        };
+        assert_eq!(expected.settings.pivot_mm, [0.0; 3]);
+        assert_eq!(decode(&old), Ok(expected));
+        let mut page = [0xFFu8; 256];
+        page[..old.len()].copy_from_slice(&old);
+        assert_eq!(decode(&page), Ok(expected));
+        // Written again, it is format 5, with the same settings.
+        assert_eq!(decode(&encode(&decode(&old).unwrap())), Ok(expected));
+        // Its speed byte was reserved: anything but 0 there is refused.
+        let mut bytes = old.clone();
+        bytes[48 + 20 + 17] = 10;
+        let crc = crc32(&bytes[..236]);
+        bytes[236..240].copy_from_slice(&crc.to_le_bytes());
+        assert_eq!(decode(&bytes), Err(DecodeError::BadField { offset: 85 }));
+        // Damage, cut short, are refused as in format 5.
+        for cut in 0..old.len() {
+            let mut partial = [0xFFu8; 256];
+            partial[..cut].copy_from_slice(&old[..cut]);
+            assert!(decode(&partial).is_err(), "cut at byte {cut}");
+        }
+        // A format-4 header on format-5 bytes is not taken for either.
+        let mut mixed = default_bytes();
+        mixed[4] = 4;
+        assert_eq!(decode(&mixed), Err(DecodeError::BadLength(236)));
+    }
+
+    #[test]
+    fn every_speed_rating_a_setting_takes_comes_back_from_flash() {
+        use crate::settings::{ServoParam, ServoSel, SettingId};
+        for c in 0..=255u8 {
+            let text = if c == 0 {
+                std::string::String::from("off")
+            } else {
+                std::format!("{}.{:02}", c / 100, c % 100)
+            };
+            let id = SettingId::Servo(ServoSel::One(2), ServoParam::SpeedS60Deg);
+            let s = Settings::default().with(id, id.parse_value(&text).unwrap());
+            let bytes = encode(&record(1, s));
+            assert_eq!(bytes[48 + 20 + 17], c, "{text}");
+            assert_eq!(decode(&bytes).unwrap().settings, s, "{text}");
+        }
+    }
+
     /// A format-3 record, as boards in the field hold: `record`'s bytes without the baud
-    /// rate's four, the version and payload length of format 3, checksummed again.
+    /// rate's four and the pivot's twelve, the version and payload length of format 3,
+    /// checksummed again.
     fn format_3(record: &Record) -> Vec<u8> {
         let new = encode(record);
         let mut old = Vec::new();
         old.extend_from_slice(&new[..228]);
-        old.extend_from_slice(&new[232..236]); // the sequence number
+        old.extend_from_slice(&new[244..248]); // the sequence number
         old[4..8].copy_from_slice(&[3, 0, 220, 0]);
         let crc = crc32(&old);
         old.extend_from_slice(&crc.to_le_bytes());
@@ -496,7 +627,7 @@ mod tests {
         let mut page = [0xFFu8; 256];
         page[..old.len()].copy_from_slice(&old);
         assert_eq!(decode(&page), Ok(expected));
-        // Damage, cut short, are refused as in format 4.
+        // Damage, cut short, are refused as in format 5.
         for cut in 0..old.len() {
             let mut partial = [0xFFu8; 256];
             partial[..cut].copy_from_slice(&old[..cut]);
@@ -505,10 +636,10 @@ mod tests {
         let mut flipped = old.clone();
         flipped[100] ^= 4;
         assert_eq!(decode(&flipped), Err(DecodeError::BadChecksum));
-        // A format-3 header on format-4 bytes is not taken for either.
+        // A format-3 header on format-5 bytes is not taken for either.
         let mut mixed = default_bytes();
         mixed[4] = 3;
-        assert_eq!(decode(&mixed), Err(DecodeError::BadLength(224)));
+        assert_eq!(decode(&mixed), Err(DecodeError::BadLength(236)));
     }
 
     #[test]
@@ -581,9 +712,10 @@ mod tests {
         bytes[4] = 2;
         assert_eq!(decode(&bytes), Err(DecodeError::UnsupportedVersion(2)));
         let mut bytes = default_bytes();
-        bytes[4] = 5;
-        assert_eq!(decode(&bytes), Err(DecodeError::UnsupportedVersion(5)));
-        // A format-3 record needs its 236 bytes, a format-4 one its 240.
+        bytes[4] = 6;
+        assert_eq!(decode(&bytes), Err(DecodeError::UnsupportedVersion(6)));
+        // A format-3 record needs its 236 bytes, a format-4 one its 240, a format-5 one 252.
+        assert_eq!(decode(&default_bytes()[..251]), Err(DecodeError::TooShort));
         assert_eq!(decode(&default_bytes()[..239]), Err(DecodeError::TooShort));
         assert_eq!(decode(&default_bytes()[..235]), Err(DecodeError::TooShort));
         let mut bytes = default_bytes();
@@ -618,11 +750,24 @@ mod tests {
             Err(DecodeError::Invalid(_))
         ));
         let mut bytes = default;
-        bytes[10] = 7; // reserved
+        bytes[210] = 7; // reserved (bytes 10..12 were too, until the step guard took them)
         assert_eq!(
             decode(&reseal(bytes)),
-            Err(DecodeError::BadField { offset: 10 })
+            Err(DecodeError::BadField { offset: 210 })
         );
+        let mut bytes = default;
+        bytes[10..12].copy_from_slice(&1001u16.to_le_bytes()); // step guard 100.1 %
+        assert!(matches!(
+            decode(&reseal(bytes)),
+            Err(DecodeError::Invalid(SettingError::OutOfRange {
+                setting: SettingId::StreamMaxStep,
+                ..
+            }))
+        ));
+        let mut bytes = default;
+        bytes[10..12].copy_from_slice(&125u16.to_le_bytes()); // step guard 12.5 %
+        let decoded = decode(&reseal(bytes)).expect("a guard in range");
+        assert_eq!(decoded.settings.stream.max_step_pct, 12.5);
         let mut bytes = default;
         bytes[48 + 16] = 2; // servo 1 direction
         assert_eq!(
@@ -654,11 +799,15 @@ mod tests {
             Err(DecodeError::Invalid(SettingError::StreamAxisTwice { .. }))
         ));
         let mut bytes = default;
-        bytes[48 + 17] = 1; // servo 1's reserved byte
-        assert_eq!(
-            decode(&reseal(bytes)),
-            Err(DecodeError::BadField { offset: 65 })
-        );
+        bytes[48 + 17] = 1; // servo 1's speed rating, 0.01 s: valid
+        assert!(decode(&reseal(bytes)).is_ok());
+        // In format 4 it was a reserved byte.
+        let mut old = format_4(&record(7, Settings::default()));
+        assert_eq!(old.len(), 240);
+        old[48 + 17] = 1;
+        let crc = crc32(&old[..236]);
+        old[236..].copy_from_slice(&crc.to_le_bytes());
+        assert_eq!(decode(&old), Err(DecodeError::BadField { offset: 65 }));
         let mut bytes = default;
         bytes[48 + 18..48 + 20].copy_from_slice(&60_001u16.to_le_bytes()); // 600.01 kgf cm
         assert!(matches!(
@@ -673,6 +822,21 @@ mod tests {
                 setting: SettingId::PayloadG,
                 ..
             }))
+        ));
+        let mut bytes = default;
+        bytes[240..244].copy_from_slice(&1000.5f32.to_le_bytes()); // pivot_z_mm 1000.5
+        assert!(matches!(
+            decode(&reseal(bytes)),
+            Err(DecodeError::Invalid(SettingError::OutOfRange {
+                setting: SettingId::Pivot(2),
+                ..
+            }))
+        ));
+        let mut bytes = default;
+        bytes[232..236].copy_from_slice(&f32::NAN.to_le_bytes()); // pivot_x_mm NaN
+        assert!(matches!(
+            decode(&reseal(bytes)),
+            Err(DecodeError::Invalid(_))
         ));
         let mut bytes = default;
         bytes[24 + 20..24 + 24].copy_from_slice(&5.0f32.to_le_bytes()); // rod 5 mm

@@ -33,7 +33,7 @@ use kinematics_core::ik::Solver;
 use kinematics_core::servo::{
     ServoError, MAX_PULSE_US, MAX_RATE_US_PER_RAD, MIN_PULSE_US, MIN_RATE_US_PER_RAD,
 };
-use kinematics_core::{Direction, Libm, Math, ServoConfig, ServoSet, LEGS};
+use kinematics_core::{Direction, Libm, Math, ServoConfig, ServoSet, Vec3, LEGS};
 
 use kinematics_core::pose::Axis;
 
@@ -42,6 +42,7 @@ use crate::payload::{
     PayloadSettings, MAX_COM_MM, MAX_PAYLOAD_G, MAX_TORQUE_KGCM, MIN_TORQUE_KGCM,
 };
 use crate::safety::{EstopAction, SafetySettings, FREE_GPIOS};
+use crate::servo_speed::{ServoSpeeds, MAX_S_PER_60DEG, MIN_S_PER_60DEG};
 use crate::stream::{StreamSettings, TEXT_BITS_MAX, TEXT_BITS_MIN};
 use crate::word::{word, Word};
 
@@ -62,6 +63,9 @@ pub const DEFAULT_BAUD: u32 = 115_200;
 pub const DEFAULT_SPEED_MM_S: f32 = 50.0;
 /// Default angular speed limit, deg/s.
 pub const DEFAULT_SPEED_DEG_S: f32 = 60.0;
+/// Farthest the pivot may be from the platform frame's origin along each axis, mm (a driver's
+/// head above a seat; within the core's `MAX_CENTRE_MM`).
+pub const MAX_PIVOT_MM: f32 = 1000.0;
 
 /// The platform's settings: everything `set` changes except the link settings.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -88,6 +92,13 @@ pub struct Settings {
     pub safety: SafetySettings,
     /// The payload and the servos' torque ratings.
     pub payload: PayloadSettings,
+    /// The pivot: the point the platform's rotations turn about (the IK's rotation centre,
+    /// [`Solver::set_rotation_centre_mm`]), platform frame, mm: from the platform frame's
+    /// origin (the centre of the platform joints' circle), z up. A point of the platform: a
+    /// pose's `x y z` is how far it has moved from home, its `roll pitch yaw` turn about it.
+    pub pivot_mm: [f32; 3],
+    /// The servos' rated speeds.
+    pub servo_speed: ServoSpeeds,
 }
 
 impl Default for Settings {
@@ -104,6 +115,8 @@ impl Default for Settings {
             stream: StreamSettings::default(),
             safety: SafetySettings::default(),
             payload: PayloadSettings::default(),
+            pivot_mm: [0.0; 3],
+            servo_speed: ServoSpeeds::default(),
         }
     }
 }
@@ -224,17 +237,20 @@ pub enum ServoParam {
     MaxUs,
     /// Rated torque, kgf cm (a payload setting: [`PayloadSettings::torque_kgcm`]).
     TorqueKgcm,
+    /// Rated speed, s per 60 degrees ([`ServoSpeeds::s_per_60deg`]).
+    SpeedS60Deg,
 }
 
 impl ServoParam {
     /// All, in listing order.
-    pub const ALL: [ServoParam; 6] = [
+    pub const ALL: [ServoParam; 7] = [
         ServoParam::TrimUs,
         ServoParam::RateUsRad,
         ServoParam::Dir,
         ServoParam::MinUs,
         ServoParam::MaxUs,
         ServoParam::TorqueKgcm,
+        ServoParam::SpeedS60Deg,
     ];
 
     /// The field name after `servoN.`.
@@ -246,13 +262,14 @@ impl ServoParam {
             ServoParam::MinUs => "min_us",
             ServoParam::MaxUs => "max_us",
             ServoParam::TorqueKgcm => "torque_kgcm",
+            ServoParam::SpeedS60Deg => "speed_s_60deg",
         }
     }
 
     /// True for the fields of the servo's pulse mapping ([`ServoConfig`]): changing them moves
-    /// the pulses of a pose (the torque rating does not).
+    /// the pulses of a pose (the torque and speed ratings do not).
     pub const fn is_mapping(self) -> bool {
-        !matches!(self, ServoParam::TorqueKgcm)
+        !matches!(self, ServoParam::TorqueKgcm | ServoParam::SpeedS60Deg)
     }
 
     fn get(self, s: &ServoConfig) -> SettingValue {
@@ -262,8 +279,8 @@ impl ServoParam {
             ServoParam::Dir => SettingValue::Dir(s.direction),
             ServoParam::MinUs => SettingValue::Number(s.min_us),
             ServoParam::MaxUs => SettingValue::Number(s.max_us),
-            // Not a mapping field: see Settings::get.
-            ServoParam::TorqueKgcm => SettingValue::Number(0.0),
+            // Not mapping fields: see Settings::get.
+            ServoParam::TorqueKgcm | ServoParam::SpeedS60Deg => SettingValue::Number(0.0),
         }
     }
 
@@ -308,6 +325,8 @@ pub enum SettingId {
     StreamBits,
     /// `stream.axisN`: the axis of a text frame's count N (1..=6).
     StreamAxis(u8),
+    /// `stream.max_step_pct`: the step guard.
+    StreamMaxStep,
     /// `estop_pin`.
     EstopPin,
     /// `estop_action`.
@@ -319,6 +338,9 @@ pub enum SettingId {
     /// `payload_com_x_mm`, `payload_com_y_mm`, `payload_com_z_mm`: the centre of mass along
     /// x (0), y (1) or z (2).
     PayloadCom(u8),
+    /// `pivot_x_mm`, `pivot_y_mm`, `pivot_z_mm`: the pivot (the rotations' centre) along x (0),
+    /// y (1) or z (2).
+    Pivot(u8),
 }
 
 /// The words `stream.axisN` takes, [`SettingValue::Choice`] indices: the axes in pose order,
@@ -409,6 +431,9 @@ pub enum Expected {
     OneOf(&'static [&'static str]),
     /// A free GPIO ([`FREE_GPIOS`]) or `off`.
     FreePin,
+    /// A number with at most two decimals (a whole number of hundredths: what the flash record
+    /// keeps of a servo's rated speed).
+    Hundredths,
 }
 
 /// Why a setting value, or a set of settings, is refused.
@@ -510,7 +535,7 @@ const fn number_or_off(min: f32, max: f32, unit: &'static str) -> Kind {
 
 impl SettingId {
     /// The settings that are not per servo, in listing order.
-    pub const GLOBAL: [SettingId; 34] = [
+    pub const GLOBAL: [SettingId; 38] = [
         SettingId::FrameHz,
         SettingId::Baud,
         SettingId::Echo,
@@ -538,6 +563,7 @@ impl SettingId {
         SettingId::StreamAxis(4),
         SettingId::StreamAxis(5),
         SettingId::StreamAxis(6),
+        SettingId::StreamMaxStep,
         SettingId::EstopPin,
         SettingId::EstopAction,
         SettingId::PowerPin,
@@ -545,6 +571,9 @@ impl SettingId {
         SettingId::PayloadCom(0),
         SettingId::PayloadCom(1),
         SettingId::PayloadCom(2),
+        SettingId::Pivot(0),
+        SettingId::Pivot(1),
+        SettingId::Pivot(2),
     ];
 
     /// Looks a name up (already lowercase).
@@ -599,6 +628,7 @@ impl SettingId {
                 5 => "stream.axis5",
                 _ => "stream.axis6",
             },
+            SettingId::StreamMaxStep => "stream.max_step_pct",
             SettingId::EstopPin => "estop_pin",
             SettingId::EstopAction => "estop_action",
             SettingId::PowerPin => "power_pin",
@@ -607,6 +637,11 @@ impl SettingId {
                 0 => "payload_com_x_mm",
                 1 => "payload_com_y_mm",
                 _ => "payload_com_z_mm",
+            },
+            SettingId::Pivot(k) => match k {
+                0 => "pivot_x_mm",
+                1 => "pivot_y_mm",
+                _ => "pivot_z_mm",
             },
         })
     }
@@ -646,10 +681,18 @@ impl SettingId {
                 unit: "bits",
             },
             SettingId::StreamAxis(_) => Kind::Choice(STREAM_AXIS_WORDS),
+            SettingId::StreamMaxStep => Kind::Number {
+                min: 0.1,
+                max: 100.0,
+                unit: "%",
+                off_allowed: true,
+                decimals: 1,
+            },
             SettingId::EstopAction => Kind::Choice(ESTOP_ACTION_WORDS),
             SettingId::EstopPin | SettingId::PowerPin => Kind::Pin,
             SettingId::PayloadG => number(0.0, MAX_PAYLOAD_G, "g", 1),
             SettingId::PayloadCom(_) => number(-MAX_COM_MM, MAX_COM_MM, "mm", 3),
+            SettingId::Pivot(_) => number(-MAX_PIVOT_MM, MAX_PIVOT_MM, "mm", 3),
             SettingId::Layout(p) => match p {
                 LayoutParam::BaseRadiusMm | LayoutParam::PlatformRadiusMm => {
                     number(1.0, 1000.0, "mm", 3)
@@ -672,6 +715,13 @@ impl SettingId {
                     min: MIN_TORQUE_KGCM,
                     max: MAX_TORQUE_KGCM,
                     unit: "kgf cm",
+                    off_allowed: true,
+                    decimals: 2,
+                },
+                ServoParam::SpeedS60Deg => Kind::Number {
+                    min: MIN_S_PER_60DEG,
+                    max: MAX_S_PER_60DEG,
+                    unit: "s/60deg",
                     off_allowed: true,
                     decimals: 2,
                 },
@@ -707,10 +757,12 @@ impl SettingId {
                 ServoParam::MinUs => "lowest pulse",
                 ServoParam::MaxUs => "highest pulse",
                 ServoParam::TorqueKgcm => "rated torque",
+                ServoParam::SpeedS60Deg => "rated speed: time to turn 60 degrees unloaded",
             },
             SettingId::StreamScale(_) => "stream full scale of the axis",
             SettingId::StreamBits => "bits of a text frame's counts",
             SettingId::StreamAxis(_) => "the axis this text-frame count drives",
+            SettingId::StreamMaxStep => "largest step between two frames, % of full scale",
             SettingId::EstopPin => "emergency-stop input",
             SettingId::EstopAction => "what an open e-stop does",
             SettingId::PowerPin => "servo-power enable output",
@@ -719,6 +771,11 @@ impl SettingId {
                 0 => "payload centre of mass, platform frame x",
                 1 => "payload centre of mass, platform frame y",
                 _ => "payload centre of mass, platform frame z (up)",
+            },
+            SettingId::Pivot(k) => match k {
+                0 => "rotation centre (pivot), platform frame x",
+                1 => "rotation centre (pivot), platform frame y",
+                _ => "rotation centre (pivot), platform frame z (up)",
             },
         }
     }
@@ -818,6 +875,15 @@ impl SettingId {
             },
         };
         self.check(value)?;
+        if let (SettingId::Servo(_, ServoParam::SpeedS60Deg), SettingValue::Number(v)) =
+            (self, value)
+        {
+            // Kept as hundredths in flash: a value with more decimals would not come back as
+            // given after a save.
+            if ServoSpeeds::quantise(v) != v {
+                return Err(bad_value(Expected::Hundredths));
+            }
+        }
         Ok(value)
     }
 
@@ -942,6 +1008,7 @@ impl Settings {
                 // `none` is the word after the six axes.
                 SettingValue::Choice(axis.map_or(6, |a| a as u8))
             }
+            SettingId::StreamMaxStep => SettingValue::Number(self.stream.max_step_pct),
             SettingId::EstopPin => SettingValue::Pin(self.safety.estop_pin),
             SettingId::EstopAction => SettingValue::Choice(self.safety.estop_action as u8),
             SettingId::PowerPin => SettingValue::Pin(self.safety.power_pin),
@@ -949,6 +1016,7 @@ impl Settings {
             SettingId::PayloadCom(k) => {
                 SettingValue::Number(self.payload.com_mm[usize::from(k).min(2)])
             }
+            SettingId::Pivot(k) => SettingValue::Number(self.pivot_mm[usize::from(k).min(2)]),
             SettingId::Servo(sel, p) => {
                 let index = match sel {
                     ServoSel::One(n) => usize::from(n).saturating_sub(1).min(LEGS - 1),
@@ -956,6 +1024,9 @@ impl Settings {
                 };
                 match p {
                     ServoParam::TorqueKgcm => SettingValue::Number(self.payload.torque_kgcm[index]),
+                    ServoParam::SpeedS60Deg => {
+                        SettingValue::Number(self.servo_speed.s_per_60deg[index])
+                    }
                     _ => p.get(&self.servos.0[index]),
                 }
             }
@@ -985,6 +1056,15 @@ impl Settings {
             (SettingId::StreamAxis(n @ 1..=6), SettingValue::Choice(i)) => {
                 s.stream.text_order[usize::from(n) - 1] = Axis::ALL.get(usize::from(i)).copied()
             }
+            (SettingId::StreamMaxStep, SettingValue::Number(v)) => {
+                // Kept to tenths, as the flash record holds it (out-of-range values stay out
+                // of range for validation to refuse).
+                s.stream.max_step_pct = if (0.0..=100.0).contains(&v) {
+                    StreamSettings::quantise_step_pct(v)
+                } else {
+                    v
+                }
+            }
             (SettingId::EstopPin, SettingValue::Pin(pin)) => s.safety.estop_pin = pin,
             (SettingId::EstopAction, SettingValue::Choice(i)) => {
                 s.safety.estop_action = if i == 1 {
@@ -998,6 +1078,9 @@ impl Settings {
             (SettingId::PayloadCom(k @ 0..=2), SettingValue::Number(v)) => {
                 s.payload.com_mm[usize::from(k)] = v
             }
+            (SettingId::Pivot(k @ 0..=2), SettingValue::Number(v)) => {
+                s.pivot_mm[usize::from(k)] = v
+            }
             (SettingId::Servo(sel, ServoParam::TorqueKgcm), SettingValue::Number(v)) => {
                 // Kept to hundredths, as the flash record holds it (out-of-range values stay
                 // out of range for validation to refuse).
@@ -1007,6 +1090,20 @@ impl Settings {
                     v
                 };
                 for (i, rating) in s.payload.torque_kgcm.iter_mut().enumerate() {
+                    if sel == ServoSel::All || sel == ServoSel::One(i as u8 + 1) {
+                        *rating = v;
+                    }
+                }
+            }
+            (SettingId::Servo(sel, ServoParam::SpeedS60Deg), SettingValue::Number(v)) => {
+                // Kept to hundredths, as the flash record holds it (out-of-range values stay
+                // out of range for validation to refuse).
+                let v = if (0.0..=MAX_S_PER_60DEG).contains(&v) {
+                    ServoSpeeds::quantise(v)
+                } else {
+                    v
+                };
+                for (i, rating) in s.servo_speed.s_per_60deg.iter_mut().enumerate() {
                     if sel == ServoSel::All || sel == ServoSel::One(i as u8 + 1) {
                         *rating = v;
                     }
@@ -1025,7 +1122,7 @@ impl Settings {
     }
 
     /// Checks every value's range, the servo set and the geometry; returns the IK of the
-    /// geometry (which holds the geometry), built with `libm`.
+    /// geometry (which holds the geometry) turning about the pivot, built with `libm`.
     pub fn validate(&self) -> Result<Solver, SettingError> {
         self.validate_with::<Libm>()
     }
@@ -1037,7 +1134,17 @@ impl Settings {
             .layout
             .build_with::<M>()
             .map_err(SettingError::BadGeometry)?;
-        Solver::new_with::<M>(geometry).map_err(SettingError::BadGeometry)
+        let solver = Solver::new_with::<M>(geometry).map_err(SettingError::BadGeometry)?;
+        Ok(self.about_pivot(solver))
+    }
+
+    /// `solver` turning about this pivot ([`Settings::pivot_mm`]). Every pivot within range
+    /// ([`MAX_PIVOT_MM`] per axis, checked by [`Settings::check_values`]) is one the IK takes;
+    /// one out of range leaves the solver's rotation centre as it was.
+    pub fn about_pivot(&self, mut solver: Solver) -> Solver {
+        // (A refused centre changes nothing: `set_rotation_centre_mm` checks it first.)
+        let _ = solver.set_rotation_centre_mm(Vec3::from(self.pivot_mm));
+        solver
     }
 
     /// Checks every value's range and the servo set, not the geometry.
@@ -1157,6 +1264,121 @@ mod tests {
         );
         let s = parse("servos.torque_kgcm", "off").unwrap();
         assert_eq!(s.payload.torque_kgcm, [0.0; 6]);
+    }
+
+    #[test]
+    fn the_pivot_is_three_numbers_and_the_ik_turns_about_it() {
+        let s = parse("pivot_z_mm", "120.5").unwrap();
+        assert_eq!(s.pivot_mm, [0.0, 0.0, 120.5]);
+        let s = parse("pivot_x_mm", "-1000").unwrap();
+        assert_eq!(s.pivot_mm, [-1000.0, 0.0, 0.0]);
+        assert_eq!(
+            s.get(SettingId::parse("pivot_x_mm").unwrap()),
+            Some(SettingValue::Number(-1000.0))
+        );
+        assert!(matches!(
+            parse("pivot_y_mm", "1000.5"),
+            Err(SettingError::OutOfRange {
+                min: -1000.0,
+                max: 1000.0,
+                ..
+            })
+        ));
+        assert!(matches!(
+            parse("pivot_y_mm", "off"),
+            Err(SettingError::BadNumber { .. })
+        ));
+        // The IK of valid settings turns about the pivot: with the pivot 100 mm up, a pose
+        // pitched by 5 degrees puts the platform's joints where the same pitch about the
+        // platform's centre does after a shift of (I - R) c = (-100 sin 5, 0, 100 (1 - cos 5)).
+        let about = parse("pivot_z_mm", "100").unwrap().validate().unwrap();
+        assert_eq!(about.rotation_centre_mm(), Vec3::new(0.0, 0.0, 100.0));
+        let plain = Settings::default().validate().unwrap();
+        assert_eq!(plain.rotation_centre_mm(), Vec3::zeros());
+        let pitch = 5f64.to_radians();
+        let shift = [-100.0 * pitch.sin(), 0.0, 100.0 * (1.0 - pitch.cos())];
+        let pose = kinematics_core::Pose::from_degrees(0.0, 0.0, 0.0, 0.0, 5.0, 0.0);
+        let shifted = kinematics_core::Pose::from_degrees(
+            shift[0] as f32,
+            shift[1] as f32,
+            shift[2] as f32,
+            0.0,
+            5.0,
+            0.0,
+        );
+        let a = about.arm_angles::<Libm>(&pose).unwrap();
+        let b = plain.arm_angles::<Libm>(&shifted).unwrap();
+        for i in 0..LEGS {
+            assert!(
+                (a[i] - b[i]).abs() < 1e-5,
+                "leg {}: {} vs {}",
+                i + 1,
+                a[i],
+                b[i]
+            );
+        }
+    }
+
+    #[test]
+    fn speed_ratings_are_set_per_servo_or_all_to_hundredths() {
+        let s = parse("servo2.speed_s_60deg", "0.12").unwrap();
+        assert_eq!(s.servo_speed.s_per_60deg, [0.0, 0.12, 0.0, 0.0, 0.0, 0.0]);
+        assert_eq!(
+            s.servos,
+            ServoSet::default(),
+            "a rating is not a pulse mapping"
+        );
+        assert!(!ServoParam::SpeedS60Deg.is_mapping());
+        let s = parse("servos.speed_s_60deg", "0.1").unwrap();
+        assert_eq!(s.servo_speed.s_per_60deg, [0.1; 6]);
+        assert_eq!(
+            s.get(SettingId::parse("servo5.speed_s_60deg").unwrap()),
+            Some(SettingValue::Number(0.1))
+        );
+        for text in ["off", "0"] {
+            let s = parse("servos.speed_s_60deg", text).unwrap();
+            assert_eq!(s.servo_speed.s_per_60deg, [0.0; 6], "{text}");
+        }
+        for (text, value) in [
+            ("2.55", 2.55),
+            ("0.01", 0.01),
+            ("1e-1", 0.1),
+            ("0.200", 0.2),
+        ] {
+            let s = parse("servo6.speed_s_60deg", text).unwrap();
+            assert_eq!(s.servo_speed.s_per_60deg[5], value, "{text}");
+        }
+        use SettingError as E;
+        // More decimals than the flash keeps: refused, not rounded.
+        for text in ["0.125", "0.101", "1.5e-2", "0.0150"] {
+            assert!(
+                matches!(
+                    parse("servo1.speed_s_60deg", text),
+                    Err(E::BadValue {
+                        expected: Expected::Hundredths,
+                        ..
+                    })
+                ),
+                "{text}"
+            );
+        }
+        for text in ["2.56", "-0.1", "0.001", "300"] {
+            assert!(
+                matches!(
+                    parse("servos.speed_s_60deg", text),
+                    Err(E::OutOfRange {
+                        min: 0.01,
+                        max: 2.55,
+                        ..
+                    })
+                ),
+                "{text}"
+            );
+        }
+        assert!(matches!(
+            parse("servos.speed_s_60deg", "fast"),
+            Err(E::BadNumber { .. })
+        ));
     }
 
     #[test]

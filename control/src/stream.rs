@@ -19,6 +19,13 @@
 //! y, z; degrees for roll, pitch, yaw; a negative full scale inverts the axis), so the middle
 //! count is the home pose. Binary frames are 16-bit in the order x y z roll pitch yaw; text
 //! frames have the settable bit depth and axis order of an existing profile.
+//!
+//! What no format can catch, a digit lost from a text frame's count (`127` read as `12`),
+//! makes a wrong but well-formed frame. The optional step guard (`stream.max_step_pct`, off by
+//! default) catches most of them: a frame that moves any axis by more than that share of its
+//! full scale from the last frame taken is dropped, unless the frame before it (dropped too)
+//! already said nearly the same: so one wrong frame is never applied and a real jump costs
+//! one frame ([`StreamSettings::step_allowed`]).
 
 use kinematics_core::pose::Axis;
 use kinematics_core::Pose;
@@ -66,6 +73,9 @@ pub struct StreamSettings {
     /// The axis each of a text frame's six counts drives (`stream.axis1` .. `stream.axis6`);
     /// `None`: that count is ignored. No axis twice.
     pub text_order: [Option<Axis>; 6],
+    /// The step guard (`stream.max_step_pct`): the largest change of an axis between two
+    /// frames, percent of its full scale (a whole number of tenths); 0 = off.
+    pub max_step_pct: f32,
 }
 
 impl Default for StreamSettings {
@@ -74,6 +84,7 @@ impl Default for StreamSettings {
             full_scale: [25.0, 25.0, 15.0, 15.0, 15.0, 20.0],
             text_bits: 8,
             text_order: Axis::ALL.map(Some),
+            max_step_pct: 0.0,
         }
     }
 }
@@ -91,6 +102,22 @@ pub enum CountError {
 impl StreamSettings {
     /// The pose a frame's counts mean (see the module documentation).
     pub fn to_pose(&self, frame: Frame) -> Result<Pose, CountError> {
+        Ok(self.pose_of(&self.fractions(frame)?))
+    }
+
+    /// The pose of each axis' share of its full scale ([`StreamSettings::fractions`]).
+    pub fn pose_of(&self, fractions: &[f32; 6]) -> Pose {
+        let mut values = [0.0f32; 6];
+        for (v, (f, scale)) in values.iter_mut().zip(fractions.iter().zip(self.full_scale)) {
+            *v = f * scale;
+        }
+        let [x, y, z, roll, pitch, yaw] = values;
+        Pose::from_degrees(x, y, z, roll, pitch, yaw)
+    }
+
+    /// Each axis' share of its full scale a frame's counts mean, -1..1, [`Axis::ALL`] order
+    /// (0 for an axis no count drives).
+    pub fn fractions(&self, frame: Frame) -> Result<[f32; 6], CountError> {
         let (counts, bits, order) = match frame {
             Frame::Binary(counts) => (counts, BINARY_BITS, Axis::ALL.map(Some)),
             Frame::Text(counts) => (counts, self.text_bits, self.text_order),
@@ -102,13 +129,40 @@ impl StreamSettings {
                 return Err(CountError::TooLarge { count: i as u8 + 1 });
             }
             if let Some(axis) = axis {
-                let fraction = (count as f32 - half as f32) / half as f32;
-                values[axis as usize] = fraction * self.full_scale[axis as usize];
+                values[axis as usize] = (count as f32 - half as f32) / half as f32;
             }
         }
-        let [x, y, z, roll, pitch, yaw] = values;
-        Ok(Pose::from_degrees(x, y, z, roll, pitch, yaw))
+        Ok(values)
     }
+
+    /// A step guard kept to tenths of a percent (what the flash record holds): `value`
+    /// (0..=100) rounded to the nearest tenth.
+    pub fn quantise_step_pct(value: f32) -> f32 {
+        f32::from(step_tenths(value)) / 10.0
+    }
+
+    /// Whether the step guard lets a frame ([`StreamSettings::fractions`]) follow `taken`, the
+    /// last frame taken, or `seen`, the frame just before it (dropped by the guard, or
+    /// `taken`): no axis moved by more than `max_step_pct` of its full scale from either
+    /// (always, with the guard off). So a lone wrong frame is dropped and the next good one,
+    /// near `taken`, applied; a real jump is taken at its second frame, near the first.
+    pub fn step_allowed(&self, taken: &[f32; 6], seen: &[f32; 6], frame: &[f32; 6]) -> bool {
+        if self.max_step_pct <= 0.0 {
+            return true;
+        }
+        // Counts are whole: a step exactly at the limit is within it (f32 rounding aside).
+        let limit = self.max_step_pct / 100.0 * (1.0 + 1e-4);
+        let near = |from: &[f32; 6]| {
+            (0..COUNTS).all(|a| self.full_scale[a] == 0.0 || (frame[a] - from[a]).abs() <= limit)
+        };
+        near(taken) || near(seen)
+    }
+}
+
+/// A step guard (percent, 0..=100) in tenths of a percent, rounded to the nearest (what the
+/// flash record keeps; `as` saturates and takes NaN to 0).
+pub fn step_tenths(value: f32) -> u16 {
+    (value * 10.0 + 0.5) as u16
 }
 
 /// What a byte did to a binary frame in progress.

@@ -189,6 +189,35 @@ impl Tracker {
         next
     }
 
+    /// The state a fraction `k` (`0..1`) of the way from this one to `next`, this one's step:
+    /// every axis that fraction of its step (rounded towards this one, to a unit), its
+    /// velocity the step so taken. A step shortened to the servos' rated speeds
+    /// ([`crate::servo_speed`]) keeps its direction, and the next step goes on from there,
+    /// within the limits, from the speed actually reached.
+    pub fn part_way(&self, next: &Tracker, k: f32) -> Tracker {
+        let mut out = *next;
+        for i in 0..6 {
+            let (from, to) = (self.position[i], next.position[i]);
+            if from == to {
+                continue; // not moving (or landed on its target's own f32)
+            }
+            if from == OUTSIDE || to == OUTSIDE {
+                // Beyond the range (held where it is).
+                out.pose[i] = self.pose[i];
+                out.position[i] = from;
+                out.velocity[i] = 0;
+                continue;
+            }
+            // Both within +-2^30: the step fits; `as` rounds towards zero.
+            let step = ((to - from) as f32 * k) as i32;
+            let position = from + step;
+            out.pose[i] = to_f32(position, frac_of(i));
+            out.position[i] = position;
+            out.velocity[i] = step;
+        }
+        out
+    }
+
     /// Stops at `pose` (where the platform is held, e.g. after a clamp or a stop).
     pub fn hold_at(&mut self, pose: &Pose) {
         *self = Tracker::new(pose);

@@ -31,7 +31,8 @@ echo is off, --local-echo shows typed characters here. Ctrl-] or Ctrl-C quits.
              link of your own.
   --view-port N  the view's port (0: any free port)
   --elf PATH firmware ELF (default: ${DEFAULT_ELF})
-The status line (stderr) shows the six measured servo pulse widths in microseconds.`;
+The status line (stderr) shows the six measured servo pulse widths in microseconds.
+kill -USR2 <pid> power-cycles the emulated board (its flash, and saved settings, kept).`;
 
 const CTRL_C = 0x03;
 const CTRL_RIGHT_BRACKET = 0x1d;
@@ -111,6 +112,12 @@ async function main() {
   process.on('SIGINT', () => quit(0));
   process.on('SIGTERM', () => quit(0));
   process.on('SIGHUP', () => quit(0));
+  // SIGUSR2 turns the board off and on again (its flash kept, as a real board's): a test's
+  // reset, e.g. to see saved settings come back.
+  process.on('SIGUSR2', () => {
+    board.powerCycle();
+    status.message('power cycled (SIGUSR2)');
+  });
 
   board.onServoChange(() => status.update(board));
   runInRealTime(board, status, (error) => quit(1, `\n${error.message}`));

@@ -9,11 +9,10 @@
 // the chip booted from that file starts with the build file's settings.
 
 import assert from 'node:assert/strict';
-import { execFileSync, spawn, spawnSync } from 'node:child_process';
+import { execFileSync, spawnSync } from 'node:child_process';
 import { mkdtempSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
-import { dirname, join } from 'node:path';
-import { fileURLToPath } from 'node:url';
+import { join } from 'node:path';
 import { after, before, test } from 'node:test';
 
 import { DEFAULT_ELF, EmulatedBoard } from '../src/chip/board.js';
@@ -25,9 +24,7 @@ import {
   ok,
 } from '../src/test-support/e2e-support.js';
 import { HostReference } from '../src/test-support/host-reference.js';
-
-const REPO = join(dirname(fileURLToPath(import.meta.url)), '..', '..');
-const RUNNER = join(REPO, 'emulator', 'src', 'run.js');
+import { buildTool, runProgram, startPtyRunner } from '../src/test-support/pty-runner.js';
 
 // The build file: speed limits off (stream frames pass straight through), stream full scales
 // that make the trajectory's last row exact in counts (32 mm / 32768 counts: 1/1024 mm), one
@@ -59,61 +56,19 @@ function referenceSettings() {
   return settings;
 }
 
-/** The tool's binary, built once (the path cargo reports). */
-function buildTool() {
-  const output = execFileSync(
-    'cargo',
-    ['build', '--quiet', '-p', 'hexapod', '--message-format=json'],
-    {
-      cwd: REPO,
-      encoding: 'utf8',
-      maxBuffer: 64 * 1024 * 1024,
-      stdio: ['ignore', 'pipe', 'inherit'],
-    },
-  );
-  for (const line of output.split('\n')) {
-    if (line.startsWith('{')) {
-      const message = JSON.parse(line);
-      const artifact = message.reason === 'compiler-artifact';
-      if (artifact && message.target?.name === 'hexapod' && message.executable) {
-        return message.executable;
-      }
-    }
-  }
-  throw new Error('cargo build did not report the hexapod executable');
-}
-
 let tool;
 let dir;
 let runner;
 let port;
-let runnerLog = '';
+/** Everything the runner wrote to stderr so far. */
+let runnerLog = () => '';
 const reference = () => new HostReference();
 
 before(async () => {
   firmwareBootrom(); // the ELF is built and the boot ROM cached before the runner needs them
   tool = buildTool();
   dir = mkdtempSync(join(tmpdir(), 'hexapod-cli-e2e-'));
-  runner = spawn(process.execPath, [RUNNER, '--pty', '--no-view', '--elf', DEFAULT_ELF], {
-    stdio: ['ignore', 'ignore', 'pipe'],
-  });
-  runner.stderr.setEncoding('utf8');
-  runner.stderr.on('data', (text) => {
-    runnerLog += text;
-  });
-  port = await new Promise((resolve, reject) => {
-    const timer = setTimeout(() => reject(new Error(`no pty after 60 s: ${runnerLog}`)), 60_000);
-    const look = () => {
-      const found = runnerLog.match(/is on (\/\S+)/);
-      if (found) {
-        clearTimeout(timer);
-        runner.stderr.off('data', look);
-        resolve(found[1]);
-      }
-    };
-    runner.stderr.on('data', look);
-    runner.on('exit', (code) => reject(new Error(`the runner exited (${code}): ${runnerLog}`)));
-  });
+  ({ runner, port, log: runnerLog } = await startPtyRunner());
 });
 
 after(() => {
@@ -125,18 +80,7 @@ after(() => {
 
 /** Runs the tool (asynchronously, so the runner keeps emulating); resolves to its outcome. */
 function hexapod(args) {
-  return new Promise((resolve) => {
-    const child = spawn(tool, args, { cwd: dir });
-    let stdout = '';
-    let stderr = '';
-    child.stdout.on('data', (d) => {
-      stdout += d;
-    });
-    child.stderr.on('data', (d) => {
-      stderr += d;
-    });
-    child.on('close', (status) => resolve({ status, stdout, stderr }));
-  });
+  return runProgram(tool, args, { cwd: dir });
 }
 
 /** `--port PORT` with a time-out for an emulator that may run slower than real time. */
@@ -146,7 +90,9 @@ function onPort() {
 
 /** The pins' widths the runner printed last (`servos us: ...`). */
 function pinsUs() {
-  const lines = runnerLog.split('\n').filter((line) => line.startsWith('servos us:'));
+  const lines = runnerLog()
+    .split('\n')
+    .filter((line) => line.startsWith('servos us:'));
   return numbersIn(lines.at(-1).replace(/\|.*$/, ''));
 }
 
@@ -175,9 +121,9 @@ test('apply a build file through the pty: every setting on the board, saved', as
     '# payload_com_x_mm: 0.000',
     '# payload_com_z_mm: 20.000',
     '# servo3: trim_us=1510.00 rate_us_rad=509.296 dir=reversed min_us=1100.00 max_us=1900.00 ' +
-      'torque_kgcm=25.00',
+      'torque_kgcm=25.00 speed_s_60deg=off',
     '# servo4: trim_us=1500.00 rate_us_rad=509.296 dir=normal min_us=1100.00 max_us=1900.00 ' +
-      'torque_kgcm=20.00',
+      'torque_kgcm=20.00 speed_s_60deg=off',
     '# saved: yes (these settings are the ones saved in flash)',
   ]) {
     assert.ok(config.stdout.split('\n').includes(line), `${line} in ${config.stdout}`);
@@ -336,7 +282,7 @@ test('uf2 --settings: the chip booted from the file starts with the build file s
     'stream.z_mm: 16.000',
     'payload_g: 1500.0',
     'servo3: trim_us=1510.00 rate_us_rad=509.296 dir=reversed min_us=1100.00 max_us=1900.00 ' +
-      'torque_kgcm=25.00',
+      'torque_kgcm=25.00 speed_s_60deg=off',
     'saved: yes (these settings are the ones saved in flash)',
   ]) {
     assert.ok(config.includes(line), `${line} in ${JSON.stringify(config)}`);

@@ -378,6 +378,7 @@ linkTest('config lists every documented setting with its documented default', (l
     'stream.axis4: roll',
     'stream.axis5: pitch',
     'stream.axis6: yaw',
+    'stream.max_step_pct: off',
     'estop_pin: off',
     'estop_action: freeze',
     'power_pin: off',
@@ -385,9 +386,12 @@ linkTest('config lists every documented setting with its documented default', (l
     'payload_com_x_mm: 0.000',
     'payload_com_y_mm: 0.000',
     'payload_com_z_mm: 0.000',
+    'pivot_x_mm: 0.000',
+    'pivot_y_mm: 0.000',
+    'pivot_z_mm: 0.000',
     ...[1, 2, 3, 4, 5, 6].map(
       (n) =>
-        `servo${n}: trim_us=1500.00 rate_us_rad=${(1600 / Math.PI).toFixed(3)} dir=${n % 2 ? 'reversed' : 'normal'} min_us=1100.00 max_us=1900.00 torque_kgcm=off`,
+        `servo${n}: trim_us=1500.00 rate_us_rad=${(1600 / Math.PI).toFixed(3)} dir=${n % 2 ? 'reversed' : 'normal'} min_us=1100.00 max_us=1900.00 torque_kgcm=off speed_s_60deg=off`,
     ),
     // Then how they stand against the saved ones: a new board has nothing saved.
     'saved: none (nothing saved in flash: the defaults at power-up)',

@@ -12,15 +12,13 @@
 // is reported.
 
 import assert from 'node:assert/strict';
-import { execFileSync, spawn, spawnSync } from 'node:child_process';
+import { spawnSync } from 'node:child_process';
 import { createSocket } from 'node:dgram';
 import { mkdtempSync, readFileSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
-import { dirname, join } from 'node:path';
-import { fileURLToPath } from 'node:url';
+import { join } from 'node:path';
 import { after, before, test } from 'node:test';
 
-import { DEFAULT_ELF } from '../src/chip/board.js';
 import {
   COUNT_US,
   defaultSettings,
@@ -28,9 +26,8 @@ import {
   numbersIn,
 } from '../src/test-support/e2e-support.js';
 import { HostReference } from '../src/test-support/host-reference.js';
+import { buildTool, REPO, runProgram, startPtyRunner } from '../src/test-support/pty-runner.js';
 
-const REPO = join(dirname(fileURLToPath(import.meta.url)), '..', '..');
-const RUNNER = join(REPO, 'emulator', 'src', 'run.js');
 const FLIGHT = join(REPO, 'cli', 'sim', 'jsbsim-flight.py');
 // Twice real time (the washout runs on the simulation's clock), 30 telemetry lines per
 // simulated second: 60 a second on the wall, below the board's 100 Hz frames here, so each
@@ -40,37 +37,10 @@ const TELEMETRY_HZ = 30;
 const END_S = 50;
 const FRAME_HZ = 100;
 
-function buildTool() {
-  const output = execFileSync(
-    'cargo',
-    ['build', '--quiet', '-p', 'hexapod', '--message-format=json'],
-    {
-      cwd: REPO,
-      encoding: 'utf8',
-      maxBuffer: 64 * 1024 * 1024,
-      stdio: ['ignore', 'pipe', 'inherit'],
-    },
-  );
-  for (const line of output.split('\n')) {
-    if (line.startsWith('{')) {
-      const message = JSON.parse(line);
-      if (
-        message.reason === 'compiler-artifact' &&
-        message.target?.name === 'hexapod' &&
-        message.executable
-      ) {
-        return message.executable;
-      }
-    }
-  }
-  throw new Error('cargo build did not report the hexapod executable');
-}
-
 let tool;
 let dir;
 let runner;
 let port;
-let runnerLog = '';
 /** Every pin reading the runner printed: `{ at: ms (wall), us: [six widths] }`. */
 const pins = [];
 
@@ -86,35 +56,19 @@ before(async () => {
   firmwareBootrom();
   tool = buildTool();
   dir = mkdtempSync(join(tmpdir(), 'hexapod-cue-e2e-'));
-  runner = spawn(process.execPath, [RUNNER, '--pty', '--no-view', '--elf', DEFAULT_ELF], {
-    stdio: ['ignore', 'ignore', 'pipe'],
-  });
-  runner.stderr.setEncoding('utf8');
   let partial = '';
-  runner.stderr.on('data', (text) => {
-    runnerLog += text;
-    const at = Date.now();
-    const lines = (partial + text).split('\n');
-    partial = lines.pop();
-    for (const line of lines) {
-      if (line.startsWith('servos us:')) {
-        pins.push({ at, us: numbersIn(line.replace(/\|.*$/, '')) });
+  ({ runner, port } = await startPtyRunner({
+    onText: (text) => {
+      const at = Date.now();
+      const lines = (partial + text).split('\n');
+      partial = lines.pop();
+      for (const line of lines) {
+        if (line.startsWith('servos us:')) {
+          pins.push({ at, us: numbersIn(line.replace(/\|.*$/, '')) });
+        }
       }
-    }
-  });
-  port = await new Promise((resolve, reject) => {
-    const timer = setTimeout(() => reject(new Error(`no pty after 60 s: ${runnerLog}`)), 60_000);
-    const look = () => {
-      const found = runnerLog.match(/is on (\/\S+)/);
-      if (found) {
-        clearTimeout(timer);
-        runner.stderr.off('data', look);
-        resolve(found[1]);
-      }
-    };
-    runner.stderr.on('data', look);
-    runner.on('exit', (code) => reject(new Error(`the runner exited (${code}): ${runnerLog}`)));
-  });
+    },
+  }));
 });
 
 after(() => {
@@ -131,30 +85,7 @@ after(() => {
  * @param {(line: string, at: number) => void} [onLine]
  */
 function run(program, args, onLine = () => {}) {
-  return new Promise((resolve) => {
-    const child = spawn(program, args, { cwd: dir });
-    let stdout = '';
-    let stderr = '';
-    const take = (chunk, append) => {
-      append(chunk);
-      for (const line of String(chunk).split('\n')) {
-        if (line) {
-          onLine(line, Date.now());
-        }
-      }
-    };
-    child.stdout.on('data', (d) =>
-      take(d, (c) => {
-        stdout += c;
-      }),
-    );
-    child.stderr.on('data', (d) =>
-      take(d, (c) => {
-        stderr += c;
-      }),
-    );
-    child.on('close', (status) => resolve({ status, stdout, stderr }));
-  });
+  return runProgram(program, args, { cwd: dir, onLine });
 }
 
 /** A UDP port free on the loopback now. */

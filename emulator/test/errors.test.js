@@ -224,6 +224,16 @@ const PARSE_CASES = [
     /^servo2\.torque_kgcm 700 is outside 0\.01\.\.600 kgf cm \(or 0\/off\)$/,
   ],
   ['out-of-range', 'set payload_g -5', /^payload_g -5 is outside 0\.\.100000 g$/],
+  [
+    'out-of-range',
+    'set servos.speed_s_60deg 3',
+    /^servos\.speed_s_60deg 3 is outside 0\.01\.\.2\.55 s\/60deg \(or 0\/off\)$/,
+  ],
+  [
+    'bad-value',
+    'set servo2.speed_s_60deg 0.125',
+    /^servo2\.speed_s_60deg: '0\.125' is not a number of hundredths \(at most two decimals: /,
+  ],
 ];
 
 // One board for these: each refusal must leave it exactly as it was (which each checks), so

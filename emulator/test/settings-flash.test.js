@@ -36,13 +36,16 @@ before(() => {
 
 const SECTOR_BYTES = 4096;
 /**
- * The record (control/src/record.rs), format 4: 240 bytes, UART0's baud rate at 228, sequence
- * number at 232, CRC-32 at 236.
+ * The record (control/src/record.rs), format 5: 252 bytes, UART0's baud rate at 228, the pivot
+ * at 232, sequence number at 244, CRC-32 at 248 (each servo's speed rating in its block's byte
+ * 17).
  */
-const RECORD_BYTES = 240;
+const RECORD_BYTES = 252;
+const FORMAT_VERSION = 5;
 const BAUD_AT = 228;
-const SEQUENCE_AT = 232;
-const CRC_AT = 236;
+const PIVOT_AT = 232;
+const SEQUENCE_AT = 244;
+const CRC_AT = 248;
 const NOTHING_SAVED = '# warning: no settings saved in flash; using the defaults';
 const USING_DEFAULTS = /^# warning: .*using the defaults$/;
 const OTHER_COPY = new RegExp(
@@ -75,7 +78,7 @@ function sectorState(board, sector) {
   const view = new DataView(page.buffer);
   const good =
     String.fromCharCode(...page.subarray(0, 4)) === 'HXPS' &&
-    view.getUint16(4, true) === 4 &&
+    view.getUint16(4, true) === FORMAT_VERSION &&
     view.getUint32(CRC_AT, true) === crc32(page.subarray(0, CRC_AT));
   return good ? { sequence: view.getUint32(SEQUENCE_AT, true) } : 'unusable';
 }
@@ -129,8 +132,11 @@ test('save keeps the settings across a power cycle; the pins start at the saved 
   ok(board, 'set servo4.trim_us 1480.64');
   ok(board, 'set servo6.dir reversed');
   ok(board, 'set rod_mm 122');
+  ok(board, 'set pivot_z_mm 80'); // where the record puts it: checked below
   ok(board, 'set frame_hz 100');
+  ok(board, 'set stream.max_step_pct 7.5'); // in the record's bytes 10..12
   ok(board, 'set baud 230400'); // a link setting, saved too
+  ok(board, 'set servo3.speed_s_60deg 0.12'); // format 5's speed rating
   board.runMs(5);
   assert.equal(config(board).saved, 'none', 'changed, but still nothing saved');
   ok(board, 'save');
@@ -141,6 +147,13 @@ test('save keeps the settings across a power cycle; the pins start at the saved 
     ['erase', 'program'],
   );
 
+  const { offset } = board.settingsStorage;
+  const pivot = new DataView(board.flash.read(offset, 256).buffer, PIVOT_AT, 12);
+  assert.deepEqual(
+    [0, 4, 8].map((at) => pivot.getFloat32(at, true)),
+    [0, 0, 80],
+  );
+
   const warnings = powerCycle(board).filter((l) => l.startsWith('# warning'));
   assert.deepEqual(warnings, [], 'the last save loads without a word');
   const after = config(board);
@@ -148,6 +161,12 @@ test('save keeps the settings across a power cycle; the pins start at the saved 
   // The same settings, UART0 at the saved rate (echo, the link's own, turned off by boot).
   assert.deepEqual(after.settings, saved.settings);
   assert.ok(saved.settings.includes('baud: 230400'), JSON.stringify(saved.settings));
+  assert.ok(saved.settings.includes('pivot_z_mm: 80.000'), JSON.stringify(saved.settings));
+  assert.ok(
+    saved.settings.some((l) => /^servo3: .* speed_s_60deg=0\.12$/.test(l)),
+    JSON.stringify(saved.settings),
+  );
+  assert.ok(saved.settings.includes('stream.max_step_pct: 7.5'), JSON.stringify(saved.settings));
   assert.ok(Math.abs(board.baud - 230400) / 230400 < 0.01, `UART0 at ${board.baud} baud`);
   // At power-up every servo gets its home pulse: its saved trim
   // (docs/geometry-and-calibration.md, "Calibration"), at the saved frame rate.
@@ -186,8 +205,9 @@ test('save while moving is error:busy and writes nothing', () => {
 
 /**
  * Every step of a save a power cut can fall on, with what the documented layout says the next
- * power-up loads: the old settings until the record is complete to its last byte (240 bytes,
- * the baud rate at 228, the sequence number at 232 and the CRC last), the new ones from then on.
+ * power-up loads: the old settings until the record is complete to its last byte (252 bytes,
+ * the baud rate at 228, the pivot at 232, the sequence number at 244 and the CRC last), the new
+ * ones from then on.
  */
 const CUTS = [
   { routine: 'erase', bytes: 0, loads: 'old', what: 'before the erase' },
@@ -198,6 +218,7 @@ const CUTS = [
   { routine: 'program', bytes: 4, loads: 'old', what: 'after the magic' },
   { routine: 'program', bytes: 100, mask: 0xa5, loads: 'old', what: 'mid-program' },
   { routine: 'program', bytes: BAUD_AT + 1, loads: 'old', what: 'mid baud rate' },
+  { routine: 'program', bytes: PIVOT_AT + 6, loads: 'old', what: 'mid pivot' },
   { routine: 'program', bytes: SEQUENCE_AT, loads: 'old', what: 'before the sequence number' },
   { routine: 'program', bytes: SEQUENCE_AT + 2, loads: 'old', what: 'mid sequence number' },
   { routine: 'program', bytes: CRC_AT, loads: 'old', what: 'before the CRC' },

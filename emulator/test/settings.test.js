@@ -105,6 +105,12 @@ test('set changes exactly the named setting, as config lists it (units and decim
     // Ratings are kept to hundredths of a kgf cm (docs/settings.md).
     ['servo4.torque_kgcm 12.345', 'servo4.torque_kgcm', '12.35'],
     ['servo4.torque_kgcm off', 'servo4.torque_kgcm', 'off'],
+    // Speed ratings too, as given (more decimals are refused: errors.test.js).
+    ['servo3.speed_s_60deg 0.12', 'servo3.speed_s_60deg', '0.12'],
+    ['servo3.speed_s_60deg off', 'servo3.speed_s_60deg', 'off'],
+    // The step guard is kept to tenths of a percent (docs/settings.md).
+    ['stream.max_step_pct 12.34', 'stream.max_step_pct', '12.3'],
+    ['stream.max_step_pct off', 'stream.max_step_pct', 'off'],
   ];
   let expected = config(board);
   for (const [args, name, shown] of changes) {

@@ -10,9 +10,11 @@ import { before, test } from 'node:test';
 
 import {
   assertPins,
+  bootQuiet,
   bootTerminal,
   defaultSettings,
   firmwareBootrom,
+  ok,
   runFrames,
   status,
 } from '../src/test-support/e2e-support.js';
@@ -64,4 +66,54 @@ test('a text stream survives any byte: damaged frames counted, never applied or 
   const counts = status(board).stream;
   assert.equal(counts.damaged, damage.length, JSON.stringify(counts));
   assert.equal(counts.frames, whole, JSON.stringify(counts));
+});
+
+test('the step guard (pass-through): a frame with a lost digit is dropped and counted, the next good one applied', () => {
+  const board = bootQuiet(bootrom);
+  for (const line of ['set speed_mm_s off', 'set speed_deg_s off', 'set stream.max_step_pct 10']) {
+    ok(board, line);
+  }
+  const heave = (count) => ((count - 128) / 128) * 15; // mm, default z full scale
+  const pins = (count) => {
+    const [answer] = reference.solve(defaultSettings(), [[0, 0, heave(count), 0, 0, 0]]);
+    assert.ok(answer.ok);
+    return answer.pulse_us;
+  };
+  board.sendBytes(frame(140));
+  runFrames(board, 2);
+  assertPins(board, pins(140), 'on the first frame');
+  board.sendBytes(frame(14)); // "140" lost its last digit: 98 % of full scale away
+  runFrames(board, 2);
+  assertPins(board, pins(140), 'the lost digit is not applied');
+  board.sendBytes(frame(145));
+  runFrames(board, 2);
+  assertPins(board, pins(145), 'the next good frame is applied');
+  const counts = status(board).stream;
+  assert.deepEqual(
+    [counts.frames, counts.applied, counts.damaged],
+    [2, 2, 1],
+    JSON.stringify(counts),
+  );
+  // Off again (the default), the same lost digit reaches the pins.
+  ok(board, 'set stream.max_step_pct off');
+  board.sendBytes(frame(14));
+  runFrames(board, 2);
+  assertPins(board, pins(14), 'without the guard');
+});
+
+test('status after a stream has ended: idle, with how long since its last frame, until the next frame', () => {
+  const board = bootQuiet(bootrom);
+  ok(board, 'set speed_mm_s off');
+  ok(board, 'set speed_deg_s off');
+  board.sendBytes(frame(140));
+  runFrames(board, 50); // 1 s after the frame
+  assert.equal(status(board).state, 'streaming (pass-through)');
+  runFrames(board, 100); // 3 s after it
+  assert.match(
+    status(board).state,
+    /^idle \(stream: no frame for 3\.\d s; holding its last pose, the next frame resumes it\)$/,
+  );
+  board.sendBytes(frame(141));
+  runFrames(board, 2);
+  assert.equal(status(board).state, 'streaming (pass-through)');
 });

@@ -112,6 +112,11 @@ test('the USB port enumerates as a CDC ACM serial port named as the firmware', (
   const named = (name) => replies.match(new RegExp(`pub const ${name}: &str = "([^"]+)";`))[1];
   assert.equal(string(device[14]), named('USB_MANUFACTURER'));
   assert.equal(string(device[15]), named('USB_PRODUCT'));
+  // The IDs the host tool finds boards by (`hexapod boards`), little-endian at offsets 8 and 10.
+  const id = (name) =>
+    Number(replies.match(new RegExp(`pub const ${name}: u16 = (0x[0-9A-Fa-f]+);`))[1]);
+  assert.equal(device[8] | (device[9] << 8), id('USB_VID'));
+  assert.equal(device[10] | (device[11] << 8), id('USB_PID'));
 
   // A communication interface of the ACM subclass, and a data interface with a bulk IN and a
   // bulk OUT endpoint of 64 bytes: what /dev/ttyACM0 and COMx drivers bind to.

@@ -58,13 +58,19 @@ test("the board's geometry and config listings are read as docs/ documents them"
       minUs: 1100,
       maxUs: 1900,
       torqueKgcm: null,
+      speedS60deg: null,
     });
   });
   board.request('set servo2.torque_kgcm 2.5', { timeoutMs: 2000 });
+  board.request('set servo5.speed_s_60deg 0.15', { timeoutMs: 2000 });
   const [rated] = read(board.request('config', { timeoutMs: 2000 }).lines);
   assert.deepEqual(
     rated.config.servos.map((servo) => servo.torqueKgcm),
     [null, 2.5, null, null, null, null],
+  );
+  assert.deepEqual(
+    rated.config.servos.map((servo) => servo.speedS60deg),
+    [null, null, null, null, 0.15, null],
   );
 
   // A changed setting shows in the next listing.
@@ -86,6 +92,7 @@ test('which commands change which listing', () => {
   assert.deepEqual(listingsChangedBy('SET base_half_angle_deg 15'), ['geometry']);
   assert.deepEqual(listingsChangedBy('set servo3.trim_us 1520'), ['config']);
   assert.deepEqual(listingsChangedBy('set servos.rate_us_rad 600'), ['config']);
+  assert.deepEqual(listingsChangedBy('set pivot_z_mm 100'), ['config']);
   assert.deepEqual(listingsChangedBy('defaults'), ['geometry', 'config']);
   assert.deepEqual(listingsChangedBy('set speed_mm_s 10'), []);
   assert.deepEqual(listingsChangedBy('pose 0 0 5 0 0 0'), []);

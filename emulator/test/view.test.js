@@ -141,6 +141,22 @@ test('the 3D view shows the pose the pins carry, tilts with a roll, and says whe
     );
   });
 
+  await t.test(
+    'with a pivot set, the readout is the pose about it (config carries it)',
+    async () => {
+      // 5 degrees of pitch about a point 100 mm up: about the platform's centre these pins would
+      // read x = -8.7 mm, z = 0.4 mm (docs/settings.md, "The pivot").
+      await typeLine(page, 'set pivot_z_mm 100');
+      await typeLine(page, 'pose 0 0 0 0 5 0');
+      await waitForPose(page, [0, 0, 0, 0, 5, 0], 0.05, SETTLE_TIMEOUT_MS);
+      await page.waitForTimeout(300);
+      const pose = await readPose(page);
+      [0, 0, 0, 0, 5, 0].forEach((v, i) =>
+        assert.ok(Math.abs(pose[i] - v) <= 0.05, `pose ${pose}`),
+      );
+    },
+  );
+
   await t.test('when the emulator stops the page shows it, without a script error', async () => {
     const before = await readPose(page);
     runner.kill('SIGINT'); // as Ctrl-C would

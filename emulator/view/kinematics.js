@@ -59,6 +59,16 @@ export class Kinematics {
     };
   }
 
+  /**
+   * The board's `config` listing's pivot (`pivot_x_mm` ...: the rotation centre, platform frame,
+   * mm; 0 where the listing has none), so that the pose found is in the convention of the poses
+   * the board is sent. Returns null, or why the core refused it.
+   */
+  setPivot(config) {
+    const pivot = ['x', 'y', 'z'].map((axis) => Number(config.settings[`pivot_${axis}_mm`] ?? 0));
+    return this.wasm.view_set_pivot(...pivot) === 0 ? null : `pivot ${pivot} refused`;
+  }
+
   /** The board's `config` listing: the six servo mappings. Returns the servos refused. */
   setServos(config) {
     const refused = [];
@@ -73,8 +83,9 @@ export class Kinematics {
 
   /**
    * Six pulse widths (us; null for a pin without pulses) -> `{ status, armDeg, poseMm: [x, y,
-   * z], poseDeg: [roll, pitch, yaw], tips, joints, iterations, rodErrorMm }`. After 'no
-   * solution' the pose and joints are the last ones found.
+   * z], poseDeg: [roll, pitch, yaw], tips, joints, originMm, iterations, rodErrorMm }`
+   * (`originMm`: the platform frame's origin, base frame, where the plate goes; with a pivot
+   * not `(x, y, h0 + z)`). After 'no solution' the pose and joints are the last ones found.
    */
   solve(widthsUs) {
     const w = widthsUs.map((v) => (v === null ? NaN : v));
@@ -88,6 +99,7 @@ export class Kinematics {
       poseDeg: [3, 4, 5].map((k) => this.wasm.view_pose(k)),
       tips: point(this.wasm.view_tip_mm),
       joints: point(this.wasm.view_joint_mm),
+      originMm: [0, 1, 2].map((k) => this.wasm.view_origin_mm(k)),
       iterations: this.wasm.view_iterations(),
       rodErrorMm: this.wasm.view_rod_error_mm(),
     };

@@ -147,6 +147,7 @@ function applyGeometry() {
 function applyConfig() {
   if (state.kinematics && state.config) {
     state.servosRefused = state.kinematics.setServos(state.config);
+    state.kinematics.setPivot(state.config);
     const hz = state.config.settings.frame_hz;
     $('frame-rate').textContent = hz ? `frame_hz ${hz}` : '';
   }

@@ -1,7 +1,8 @@
 // The 3D picture (three.js): base, servos, arms at the measured angles, rods, platform at the
 // pose the forward kinematics found, leg numbers. Base frame as in the documented geometry: origin
 // at the centre of the servo shafts' plane, z up, lengths in mm; the platform frame is placed by
-// the pose (x, y, h0 + z; R = Rz(yaw) Ry(pitch) Rx(roll), eq. 1). It draws only what it is given
+// the pose (its origin as the kinematics gives it: (x, y, h0 + z), moved by c - R c about a
+// pivot c; R = Rz(yaw) Ry(pitch) Rx(roll), eq. 1). It draws only what it is given
 // (kinematics.js computes every point) and renders on demand: after new data or a camera move.
 
 import {
@@ -268,7 +269,7 @@ export class PlatformScene {
    * rods to the platform joints and the plate at the pose found; in red, at the last pose found,
    * when there is no solution. `solved` false and no pose yet hides the platform.
    */
-  update({ tips, joints, poseMm, poseDeg, solved, hasPose }) {
+  update({ tips, joints, originMm, poseDeg, solved, hasPose }) {
     const m = this.model;
     if (!m) {
       return;
@@ -291,9 +292,8 @@ export class PlatformScene {
       m.platformJoints[i].position.copy(jointPoints[i]);
     });
     m.platformFrame.visible = hasPose;
-    const [x, y, z] = poseMm;
     const [roll, pitch, yaw] = poseDeg.map((d) => (d * Math.PI) / 180);
-    m.platformFrame.position.set(x, y, this.homeHeightMm + z);
+    m.platformFrame.position.set(...originMm);
     m.platformFrame.rotation.set(roll, pitch, yaw, 'ZYX');
     m.plateTop.color.set(solved ? PLATFORM_COLOUR : NO_SOLUTION_COLOUR);
     m.plateSide.color.set(solved ? PLATFORM_SIDE_COLOUR : NO_SOLUTION_COLOUR);

@@ -61,11 +61,9 @@ use usbd_serial::{SerialPort, USB_CLASS_CDC};
 
 use crate::serial::{Received, LONGEST_STEP_BYTES};
 
-/// The USB IDs: the pid.codes test vendor and product (0x1209:0x0001), for open-source devices
-/// in development, until the project has a product ID of its own (pid.codes gives them to open
-/// hardware for free). A CDC ACM device needs no driver on Linux, macOS or Windows 10 and later,
-/// whatever its IDs.
-const VID_PID: UsbVidPid = UsbVidPid(0x1209, 0x0001);
+/// The USB IDs (`control::report::USB_VID`, `USB_PID`: the pid.codes test vendor and product,
+/// by which the host tool finds boards).
+const VID_PID: UsbVidPid = UsbVidPid(control::report::USB_VID, control::report::USB_PID);
 /// Control endpoint 0's packet size: the largest a full-speed device may use (rp2040-hal
 /// recommends it; smaller sizes trip a Windows enumeration quirk).
 const EP0_PACKET_BYTES: u8 = 64;

@@ -3,7 +3,8 @@
 //! The tests drive the real firmware (RP2040 boot ROM floats) in the emulator and compare the
 //! pulse widths measured on its pins with what the host build of `kinematics-core` (libm)
 //! computes for the same pose and settings. This program is that host computation; it uses
-//! only `kinematics-core` (not the `control` crate, whose behaviour is under test).
+//! only `kinematics-core` (not the `control` crate, whose behaviour is under test), and for
+//! `f64` the independent f64 reference of `host-tests`.
 //!
 //! It reads commands from stdin, one per line, and answers each with one line of JSON:
 //!
@@ -13,6 +14,13 @@
 //!     -> {"ok":true} or {"ok":false,"error":"..."}             (the geometry used from now on)
 //! servo <1-6> <trim_us> <rate_us_rad> <normal|reversed> <min_us> <max_us>
 //!     -> {"ok":true}                                            (that servo from now on)
+//! pivot <x_mm> <y_mm> <z_mm>
+//!     -> {"ok":true} or {"ok":false,"error":"..."}   (the rotation centre, platform frame,
+//!         from now on, whatever the layout)
+//! f64 <x_mm> <y_mm> <z_mm> <roll_deg> <pitch_deg> <yaw_deg>
+//!     -> {"ok":true,"arm_deg":[6],"pulse_us":[6]} | {"ok":false,"code":"unreachable"}
+//!         (not the core: `host_tests::platform`'s f64 chain of frames about the pivot and a
+//!         numeric root of each rod closure, eq. 13, 14 in f64; no servo limits)
 //! solve <x_mm> <y_mm> <z_mm> <roll_deg> <pitch_deg> <yaw_deg>
 //!     -> {"ok":true,"arm_deg":[6],"pulse_us":[6]}
 //!      | {"ok":false,"code":"unreachable","leg":n}
@@ -52,6 +60,8 @@
 use std::fmt::Write as _;
 use std::io::{self, BufRead, Write};
 
+use host_tests::platform::RefArms;
+use host_tests::reference::RefPose;
 use kinematics_core::forward;
 use kinematics_core::geometry::PairedLayout;
 use kinematics_core::ik::{self, IkError};
@@ -68,6 +78,8 @@ struct Reference {
     payload: Payload,
     /// Torque ratings, kgf cm (0: not rated).
     ratings_kgcm: [f32; LEGS],
+    /// The rotation centre (platform frame), mm.
+    pivot_mm: Vec3,
 }
 
 /// Why a pose fails the `limits` test.
@@ -219,6 +231,7 @@ impl Reference {
             servos: ServoSet::default(),
             payload: Payload::point(0.0, Vec3::zeros()),
             ratings_kgcm: [0.0; LEGS],
+            pivot_mm: Vec3::zeros(),
         }
     }
 
@@ -240,6 +253,15 @@ impl Reference {
             Some((&"torque", rest)) => numbers::<6>(rest).map(|v| self.torque(v)),
             Some((&"fk", rest)) => numbers::<12>(rest).map(|v| self.fk(v)),
             Some((&"limits", rest)) => numbers::<6>(rest).map(|v| self.limits(v)),
+            Some((&"pivot", rest)) => numbers::<3>(rest).and_then(|[x, y, z]| {
+                let pivot = Vec3::new(x, y, z);
+                self.solver
+                    .set_rotation_centre_mm(pivot)
+                    .map_err(|e| format!("pivot: {e}"))?;
+                self.pivot_mm = pivot;
+                Ok("{\"ok\":true}".to_owned())
+            }),
+            Some((&"f64", rest)) => numbers::<6>(rest).map(|v| self.f64_pulses(v)),
             _ => Err(format!("unknown request '{line}'")),
         };
         result.unwrap_or_else(|e| error(&e))
@@ -258,7 +280,9 @@ impl Reference {
         let solver = layout
             .build()
             .and_then(ik::Solver::new)
-            .map_err(|e| format!("geometry: {e}"))?;
+            .map_err(|e| format!("geometry: {e}"))?
+            .with_rotation_centre_mm(self.pivot_mm)
+            .map_err(|e| format!("pivot: {e}"))?;
         self.layout = layout;
         self.solver = solver;
         Ok("{\"ok\":true}".to_owned())
@@ -286,6 +310,38 @@ impl Reference {
             max_us,
         };
         Ok("{\"ok\":true}".to_owned())
+    }
+
+    /// The f64 reference's arm angles and pulses (the core's geometry and pivot as inputs
+    /// only): the chain of frames about the pivot, each rod closure's root, eq. 13, 14.
+    fn f64_pulses(&self, v: [f32; 6]) -> String {
+        let arms = RefArms::from_solver(&self.solver);
+        let [x, y, z, roll, pitch, yaw] = v.map(f64::from);
+        let pose = RefPose::from_degrees(x, y, z, roll, pitch, yaw);
+        let Some(alpha) = arms.arm_angles(&pose) else {
+            return "{\"ok\":false,\"code\":\"unreachable\"}".to_owned();
+        };
+        let pulse: Vec<String> = (0..LEGS)
+            .map(|i| {
+                let servo = &self.servos.0[i];
+                let sign = match servo.direction {
+                    Direction::Normal => 1.0,
+                    Direction::Reversed => -1.0,
+                };
+                let w = f64::from(servo.home_us)
+                    + sign * f64::from(servo.rate_us_per_rad) * (alpha[i] - arms.alpha0[i]);
+                format!("{w}")
+            })
+            .collect();
+        let arm: Vec<String> = alpha
+            .iter()
+            .map(|a| format!("{}", a.to_degrees()))
+            .collect();
+        format!(
+            "{{\"ok\":true,\"arm_deg\":[{}],\"pulse_us\":[{}]}}",
+            arm.join(","),
+            pulse.join(",")
+        )
     }
 
     fn solve(&self, [x, y, z, roll, pitch, yaw]: [f32; 6]) -> String {

@@ -32,18 +32,21 @@
 //! Two paths compute the same equations. Every usual build (a planar platform within the
 //! bounds of module `fixed`) and pose takes the fixed-point path: integer instructions only,
 //! from the rotation to the pulses, with `M`'s fixed-point sine and cosine, square root and arc
-//! tangent (by default the core's own: then the host and the chip compute the same bits). Other
-//! builds and poses take the float path, `f32` arithmetic through `M`. Each has its own home
-//! angles, so each gives exactly the home pulses at home.
+//! tangent (by default the core's own: then the host and the chip compute the same bits); a leg
+//! whose vector and build are within smaller bounds (every leg of every usual pose) computes
+//! eq. 9's terms in 32-bit words, any other in 64-bit words. Other builds and poses take the
+//! float path, `f32` arithmetic through `M`. Each has its own home angles, so each gives
+//! exactly the home pulses at home.
 
 use core::f32::consts::PI;
 use core::fmt;
 
 use crate::configuration::{check_centre, Anchors, ConfigurationError};
 use crate::fixed::{
-    from_fixed, from_fixed32, leading_zeros, mul_mm, rotate_mm, square, square_mm, to_fixed,
-    to_fixed_sq, wide_mul, ARM_FRAC, MAX_FIXED_MM, MAX_FIXED_ROD_TERM_MM2, MAX_FIXED_TWO_ARM_MM,
-    MAX_ROTATION_ENTRY, MM_FRAC, ROT_FRAC,
+    from_fixed, from_fixed32, leading_zeros, mul_mm, mul_mm_narrow, rotate_mm_split, split13,
+    split15, square, square_mm, square_mm_narrow, to_fixed, to_fixed_sq, wide_mul, ARM_FRAC,
+    MAX_FIXED_MM, MAX_FIXED_ROD_TERM_MM2, MAX_FIXED_TWO_ARM_MM, MAX_NARROW_ROD_TERM_MM2,
+    MAX_NARROW_TWO_ARM_MM, MAX_ROTATION_ENTRY, MM_FRAC, NARROW_LEG_Q, NARROW_SQ_FRAC, ROT_FRAC,
 };
 use crate::geometry::{Geometry, GeometryError};
 use crate::math::{is_zero, Libm, Math, Real};
@@ -214,15 +217,20 @@ struct FloatTable {
 /// One leg's constants for the fixed-point path (module `fixed`).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 struct FixedLeg {
-    /// `p_i` (x, y; `z = 0`), 2^-20 mm (`fixed::MM_FRAC`).
-    platform_q: [i32; 2],
+    /// `p_i` (x, y; `z = 0`) in steps of 2^-20 mm (`fixed::MM_FRAC`), each split at bit 15
+    /// (`fixed::split15`) for `fixed::rotate_mm_split`.
+    platform_split: [[i32; 2]; 2],
     /// `(0, 0, h0) - b_i`, 2^-20 mm.
     offset_q: [i32; 3],
     /// `2a cos(beta)`, `2a sin(beta)`, 2^-20 mm.
     n_q: [i32; 2],
+    /// `n_q`, each split at bit 13 (`fixed::split13`) for the 32-bit path's products.
+    n_split: [[i32; 2]; 2],
     /// Home arm angle alpha0 (eq. 12) as this path finds it, in steps of 2^-28 rad
     /// (`fixed::ARM_FRAC`): home stays exact on it.
     alpha0_q: i32,
+    /// `alpha0_q` wrapped into `(-pi, pi]`, for the offsets from home.
+    alpha0_wrapped_q: i32,
 }
 
 /// Where the rotation centre `c` is, for the fixed-point path.
@@ -246,6 +254,13 @@ struct FixedTable {
     rod_term_q: i64,
     /// `2a`, 2^-20 mm (`fixed::MM_FRAC`).
     two_arm_q: i32,
+    /// `two_arm_q` split at bit 13 (`fixed::split13`) for the 32-bit path's products.
+    two_arm_split: [i32; 2],
+    /// `s^2 - a^2` in steps of 2^-15 mm^2 (`fixed::NARROW_SQ_FRAC`), where the build allows the
+    /// 32-bit path (`0 <= s^2 - a^2 < fixed::MAX_NARROW_ROD_TERM_MM2`,
+    /// `2a < fixed::MAX_NARROW_TWO_ARM_MM`: every usual build); `None`: every leg takes the
+    /// 64-bit path.
+    narrow_rod_term_q: Option<i32>,
     centre: FixedCentre,
     legs: [FixedLeg; LEGS],
 }
@@ -266,9 +281,10 @@ pub struct Solver {
 }
 
 /// The pose's part of eq. 2, 3 in fixed point: the first two columns of `R` (`fixed::ROT_FRAC`
-/// fraction bits) and the translation `(x, y, z)` (with the centre's `c - R c`; `fixed::MM_FRAC`).
+/// fraction bits, each entry split at bit 15 for `fixed::rotate_mm_split`) and the translation
+/// `(x, y, z)` (with the centre's `c - R c`; `fixed::MM_FRAC`).
 struct FixedPose {
-    rows: [[i32; 2]; 3],
+    rows: [[[i32; 2]; 2]; 3],
     position: [i32; 3],
 }
 
@@ -366,6 +382,57 @@ fn scale_terms(terms: [i64; 3]) -> [i32; 3] {
     [scale(terms[0]), scale(terms[1]), scale(terms[2])]
 }
 
+/// `l` (eq. 2, 3) of one leg in steps of 2^-20 mm: `R p` rounded to nearest (halves up), then
+/// the translation, exactly.
+#[inline(always)]
+fn leg_vector(c: &FixedLeg, fixed: &FixedPose) -> [i32; 3] {
+    let (rows, position, p) = (&fixed.rows, &fixed.position, c.platform_split);
+    [
+        rotate_mm_split(rows[0], p) + position[0] + c.offset_q[0],
+        rotate_mm_split(rows[1], p) + position[1] + c.offset_q[1],
+        rotate_mm_split(rows[2], p) + position[2] + c.offset_q[2],
+    ]
+}
+
+/// The root of eq. 9 from its scaled terms `[M, L - N, L + N]` (each within 2^29): the
+/// half-angle in steps of 2^-29 rad, which is the arm angle in steps of 2^-28 rad; `None` if
+/// the leg cannot reach.
+#[inline(always)]
+fn half_angle<M: Math>([m, l_minus_n, l_plus_n]: [i32; 3]) -> Option<i32> {
+    // D < 0: |L| > sqrt(M^2 + N^2), no arm angle reaches (eq. 9 has no root).
+    let discriminant = square(m) - wide_mul(l_minus_n, l_plus_n);
+    if discriminant < 0 {
+        return None;
+    }
+    // |M|, |L +- N| <= 2^29: D < 2^59, sqrt(D) < 2^29.5, and the sums below fit.
+    let root = M::sqrt_fixed(discriminant as u64) as i32;
+    // The form that cannot be 0/0 (module docs); alpha = 2 atan2(..) is the half-angle in
+    // steps of 2^-29 rad read in steps of 2^-28.
+    Some(if m >= 0 {
+        M::atan2_fixed(l_minus_n, m + root)
+    } else {
+        M::atan2_fixed(m - root, l_plus_n)
+    })
+}
+
+/// [`scale_terms`] for terms that fit an `i32` (the 32-bit path's, steps of 2^-15 mm^2): the
+/// largest magnitude moved into `[2^28, 2^29]` by one power of two (exactly when shifted up,
+/// rounded to nearest when shifted down, by at most 3 bits).
+#[inline(always)]
+fn scale_terms32(terms: [i32; 3]) -> [i32; 3] {
+    // `t ^ (t >> 31)` is `|t|`, or `|t| - 1` for a negative one (see `scale_terms`).
+    let magnitude_bits = |t: i32| (t ^ (t >> 31)) as u32;
+    let bits = magnitude_bits(terms[0]) | magnitude_bits(terms[1]) | magnitude_bits(terms[2]);
+    let width = 32 - leading_zeros(bits);
+    if width <= 29 {
+        // (All zero stay zero.)
+        let up = 29 - width;
+        return terms.map(|t| t << up);
+    }
+    let shift = width - 29;
+    terms.map(|t| ((t >> (shift - 1)) + 1) >> 1)
+}
+
 impl Solver {
     /// The IK of `geometry` with `libm`'s sine and cosine: see [`Solver::new_with`].
     pub fn new(geometry: Geometry) -> Result<Solver, GeometryError> {
@@ -416,9 +483,14 @@ impl Solver {
             });
         let fixed = fixed_point.then(|| {
             let two_arm_q = to_fixed(two_arm_mm, MM_FRAC);
+            let narrow = (0.0..MAX_NARROW_ROD_TERM_MM2).contains(&rod_term_mm2)
+                && two_arm_mm < MAX_NARROW_TWO_ARM_MM;
             FixedTable {
                 rod_term_q: to_fixed_sq(rod_term_mm2),
                 two_arm_q,
+                two_arm_split: split13(two_arm_q),
+                narrow_rod_term_q: narrow
+                    .then(|| libm::round(rod_term_mm2 * f64::from(1u32 << NARROW_SQ_FRAC)) as i32),
                 centre: FixedCentre::Origin,
                 legs: core::array::from_fn(|i| {
                     let (leg, c) = (&legs[i], &float.legs[i]);
@@ -427,14 +499,18 @@ impl Solver {
                     // machine, like the rest of the fixed-point path.
                     let (sin_q, cos_q) = M::sin_cos_fixed(leg.beta_rad);
                     let round = |v: i64| ((v + (1 << (ROT_FRAC - 1))) >> ROT_FRAC) as i32;
+                    let n_q = [
+                        round(wide_mul(two_arm_q, cos_q)),
+                        round(wide_mul(two_arm_q, sin_q)),
+                    ];
                     FixedLeg {
-                        platform_q: [0, 1].map(|k| to_fixed(c.platform_mm[k], MM_FRAC)),
+                        platform_split: [0, 1]
+                            .map(|k| split15(to_fixed(c.platform_mm[k], MM_FRAC))),
                         offset_q: [0, 1, 2].map(|k| to_fixed(c.offset_mm[k], MM_FRAC)),
-                        n_q: [
-                            round(wide_mul(two_arm_q, cos_q)),
-                            round(wide_mul(two_arm_q, sin_q)),
-                        ],
+                        n_q,
+                        n_split: n_q.map(split13),
                         alpha0_q: 0,
+                        alpha0_wrapped_q: 0,
                     }
                 }),
             }
@@ -466,6 +542,7 @@ impl Solver {
                     let mut table = table;
                     for (c, alpha0) in table.legs.iter_mut().zip(alpha0) {
                         c.alpha0_q = alpha0;
+                        c.alpha0_wrapped_q = wrap_fixed(alpha0);
                     }
                     Some(table)
                 }
@@ -546,8 +623,8 @@ impl Solver {
         if let Some((table, fixed)) = self.fixed_pose::<M>(pose) {
             let alpha = table.arm_angles::<M>(&fixed).map_err(unreachable)?;
             return Ok(core::array::from_fn(|i| {
-                let alpha0 = table.legs[i].alpha0_q;
-                arm_rad_fixed(alpha0, offset_fixed(alpha[i], wrap_fixed(alpha0)))
+                let c = &table.legs[i];
+                arm_rad_fixed(c.alpha0_q, offset_fixed(alpha[i], c.alpha0_wrapped_q))
             }));
         }
         let mut alpha = self
@@ -581,15 +658,17 @@ impl Solver {
         let mut pulse_us = [0.0f32; LEGS];
         if let Some((table, fixed)) = self.fixed_pose::<M>(pose) {
             let alpha = table.arm_angles::<M>(&fixed).map_err(unreachable)?;
+            // Every pulse and angle first, then the limits (the first servo beyond them is
+            // named, as before): the conversions run without an exit path's values held.
+            for (i, (servo, c)) in servos.0.iter().zip(&table.legs).enumerate() {
+                let offset = offset_fixed(alpha[i], c.alpha0_wrapped_q);
+                pulse_us[i] = servo.pulse_us_for_fixed_offset::<M>(offset);
+                arm_rad[i] = arm_rad_fixed(c.alpha0_q, offset);
+            }
             for (i, servo) in servos.0.iter().enumerate() {
-                let alpha0 = table.legs[i].alpha0_q;
-                let offset = offset_fixed(alpha[i], wrap_fixed(alpha0));
-                let pulse = servo.pulse_us_for_fixed_offset::<M>(offset);
-                if !servo.allows(pulse) {
-                    return Err(limit(i, servo, pulse));
+                if !servo.allows(pulse_us[i]) {
+                    return Err(limit(i, servo, pulse_us[i]));
                 }
-                pulse_us[i] = pulse;
-                arm_rad[i] = arm_rad_fixed(alpha0, offset);
             }
         } else {
             let alpha = self
@@ -645,7 +724,12 @@ impl FixedTable {
         if !(bounded(&r[0]) && bounded(&r[1]) && bounded(&r[2])) {
             return None;
         }
-        let mut position = position.map(|v| to_fixed(v, MM_FRAC));
+        // (Written out: `map` here is a call of its own on the chip.)
+        let mut position = [
+            to_fixed(position[0], MM_FRAC),
+            to_fixed(position[1], MM_FRAC),
+            to_fixed(position[2], MM_FRAC),
+        ];
         if let Some(c) = centre {
             // About the rotation centre c: q = T + c + R (p - c) = (T + c - R c) + R p, with
             // R c exact and rounded once to 2^-20 mm (|c_k| < 384 mm: no overflow).
@@ -660,7 +744,7 @@ impl FixedTable {
             }
         }
         Some(FixedPose {
-            rows: r.map(|row| [row[0], row[1]]),
+            rows: r.map(|row| [split15(row[0]), split15(row[1])]),
             position,
         })
     }
@@ -670,9 +754,11 @@ impl FixedTable {
     /// reach.
     ///
     /// Per leg: `l = R p + (x, y, z) + ((0, 0, h0) - b)` (eq. 2, 3) in steps of 2^-20 mm (`R p`
-    /// exact, rounded once); `|l|^2`, `L`, `N`, `M` of eq. 9 in steps of 2^-36 mm^2 (exact
-    /// products cut once); then `M`, `L - N`, `L + N` scaled by one power of two to about 29
-    /// bits (the root depends only on their ratios), the discriminant
+    /// exact, rounded once); `|l|^2`, `L`, `N`, `M` of eq. 9 in 32-bit words, in steps of
+    /// 2^-15 mm^2 (products rounded once: [`FixedTable::narrow_terms`], every usual leg), or
+    /// beyond that path's bounds in 64-bit words, in steps of 2^-36 mm^2 (exact products cut
+    /// once: [`FixedTable::wide_terms`]); then `M`, `L - N`, `L + N` scaled by one power of two
+    /// to about 29 bits (the root depends only on their ratios), the discriminant
     /// `D = M^2 - (L - N)(L + N) = M^2 + N^2 - L^2` exactly, and the half-angle root (module
     /// docs) from `M`'s fixed-point square root and arc tangent ([`Math::sqrt_fixed`],
     /// [`Math::atan2_fixed`]: by default the core's integer routines, so the host runs exactly
@@ -682,35 +768,66 @@ impl FixedTable {
     fn arm_angles<M: Math>(&self, fixed: &FixedPose) -> Result<[i32; LEGS], u8> {
         let mut alpha = [0i32; LEGS];
         for (i, c) in self.legs.iter().enumerate() {
-            // l (eq. 2, 3) in 2^-20 mm: R p rounded to nearest (halves up), then the
-            // translation, exactly.
-            let (rows, position) = (&fixed.rows, &fixed.position);
-            let l_x = rotate_mm(rows[0], c.platform_q) + position[0] + c.offset_q[0];
-            let l_y = rotate_mm(rows[1], c.platform_q) + position[1] + c.offset_q[1];
-            let l_z = rotate_mm(rows[2], c.platform_q) + position[2] + c.offset_q[2];
-            // L = |l|^2 - (s^2 - a^2), N = 2a (cos(beta) l_x + sin(beta) l_y), M = 2a l_z
-            // (eq. 9): products of two 2^-20 mm numbers, cut to 2^-36 mm^2.
-            let leg_sq = square_mm(l_x) + square_mm(l_y) + square_mm(l_z);
-            let big_l = leg_sq - self.rod_term_q;
-            let big_n = mul_mm(c.n_q[0], l_x) + mul_mm(c.n_q[1], l_y);
-            let big_m = mul_mm(self.two_arm_q, l_z);
-            let [m, l_minus_n, l_plus_n] = scale_terms([big_m, big_l - big_n, big_l + big_n]);
-            // D < 0: |L| > sqrt(M^2 + N^2), no arm angle reaches (eq. 9 has no root).
-            let discriminant = square(m) - wide_mul(l_minus_n, l_plus_n);
-            if discriminant < 0 {
-                return Err(i as u8 + 1);
-            }
-            // |M|, |L +- N| <= 2^29: D < 2^59, sqrt(D) < 2^29.5, and the sums below fit.
-            let root = M::sqrt_fixed(discriminant as u64) as i32;
-            // The form that cannot be 0/0 (module docs); alpha = 2 atan2(..) is the half-angle
-            // in steps of 2^-29 rad read in steps of 2^-28.
-            alpha[i] = if m >= 0 {
-                M::atan2_fixed(l_minus_n, m + root)
-            } else {
-                M::atan2_fixed(m - root, l_plus_n)
+            let l = leg_vector(c, fixed);
+            let terms = match self.narrow_terms(c, l) {
+                Some(terms) => terms,
+                None => self.wide_terms(c, l),
             };
+            alpha[i] = half_angle::<M>(terms).ok_or(i as u8 + 1)?;
         }
         Ok(alpha)
+    }
+
+    /// The usual way to `M`, `L - N` and `L + N` of eq. 9 for one leg `l` (steps of 2^-20 mm),
+    /// in 32-bit words ([`scale_terms32`]), where the build allows it and every `|l_k|` is below
+    /// 256 mm (`fixed::NARROW_LEG_Q`), `|l|^2` below 2^16 mm^2 and `L +- N` within an `i32`;
+    /// `None` otherwise (the leg then takes [`FixedTable::wide_terms`]: far outside any usual
+    /// pose, or a build with a long arm or rod).
+    ///
+    /// Why each step stays in range: `|l|^2` is a sum of three squares (`fixed::square_mm_narrow`,
+    /// each below 2^31 + 2^17 steps of 2^-15 mm^2), taken in 64 bits and required below 2^31;
+    /// `s^2 - a^2` is in `[0, 2^31)` steps, so `L` fits; `|n_k| <= 2a < 128 mm` and
+    /// `|l_k| < 256 mm` keep each product of `N` and `M` below 2^30 steps (within 2^30 - 11
+    /// rounded), so `N` fits; `L - N` and `L + N` are checked. The terms are then exact
+    /// products rounded to 2^-15 mm^2 (within 0.51 of a step each), against the 2^-36 mm^2 of
+    /// the 64-bit path: the rounding of `l` to 2^-21 mm already moves `L` by more.
+    #[inline(always)]
+    fn narrow_terms(&self, c: &FixedLeg, l: [i32; 3]) -> Option<[i32; 3]> {
+        let rod_term = self.narrow_rod_term_q?;
+        let [l_x, l_y, l_z] = l;
+        if l_x.unsigned_abs() | l_y.unsigned_abs() | l_z.unsigned_abs() >= NARROW_LEG_Q {
+            return None;
+        }
+        let leg_sq = u64::from(square_mm_narrow(l_x))
+            + u64::from(square_mm_narrow(l_y))
+            + u64::from(square_mm_narrow(l_z));
+        if leg_sq >= 1 << 31 {
+            return None;
+        }
+        let big_l = leg_sq as i32 - rod_term;
+        let big_n = mul_mm_narrow(c.n_split[0], l_x) + mul_mm_narrow(c.n_split[1], l_y);
+        let big_m = mul_mm_narrow(self.two_arm_split, l_z);
+        Some(scale_terms32([
+            big_m,
+            big_l.checked_sub(big_n)?,
+            big_l.checked_add(big_n)?,
+        ]))
+    }
+
+    /// `M`, `L - N` and `L + N` of eq. 9 for one leg `l` (steps of 2^-20 mm) in 64-bit words,
+    /// for every leg within the bounds of module `fixed` (the legs
+    /// [`FixedTable::narrow_terms`] leaves out): `|l|^2`, `L`, `N`, `M` in steps of 2^-36 mm^2
+    /// (exact products cut once), then scaled ([`scale_terms`]).
+    #[inline(never)]
+    fn wide_terms(&self, c: &FixedLeg, l: [i32; 3]) -> [i32; 3] {
+        let [l_x, l_y, l_z] = l;
+        // L = |l|^2 - (s^2 - a^2), N = 2a (cos(beta) l_x + sin(beta) l_y), M = 2a l_z
+        // (eq. 9): products of two 2^-20 mm numbers, cut to 2^-36 mm^2.
+        let leg_sq = square_mm(l_x) + square_mm(l_y) + square_mm(l_z);
+        let big_l = leg_sq - self.rod_term_q;
+        let big_n = mul_mm(c.n_q[0], l_x) + mul_mm(c.n_q[1], l_y);
+        let big_m = mul_mm(self.two_arm_q, l_z);
+        scale_terms([big_m, big_l - big_n, big_l + big_n])
     }
 }
 
@@ -979,6 +1096,96 @@ mod tests {
             .expect("a valid geometry")
             .fixed
             .is_none());
+    }
+
+    #[test]
+    fn narrow_and_wide_terms_give_the_same_angles() {
+        use crate::geometry::PairedLayout;
+        // The default build, whose every leg of every usual pose takes the 32-bit path, and a
+        // long one (rod 250 mm, arm 60 mm) whose far-reaching legs pass 256 mm and take the
+        // 64-bit path: for every leg the 32-bit terms give (where they apply) the 64-bit
+        // terms' angle within a few steps of 2^-28 rad, and each path is taken.
+        let long = PairedLayout {
+            base_radius_mm: 150.0,
+            platform_radius_mm: 120.0,
+            arm_mm: 60.0,
+            rod_mm: 250.0,
+            ..PairedLayout::default()
+        };
+        let mut seed = 0x5eed_1234_u32;
+        let mut next = |scale: f32| {
+            let seed = xorshift(&mut seed);
+            (seed as f32 / u32::MAX as f32 * 2.0 - 1.0) * scale
+        };
+        for (g, mm, deg) in [
+            (Geometry::default(), 20.0, 15.0),
+            (long.build().unwrap(), 80.0, 25.0),
+        ] {
+            let solver = Solver::new(g).expect("a valid geometry");
+            let table = solver.fixed.expect("the fixed-point path");
+            assert!(table.narrow_rod_term_q.is_some());
+            let (mut narrow, mut wide) = (0, 0);
+            // The largest error against eq. 9 in f64 of either path, rad, where they differ,
+            // and the largest difference, in steps of 2^-28 rad.
+            let (mut worst_narrow, mut worst_wide, mut apart) = (0.0f64, 0.0f64, 0);
+            for _ in 0..3000 {
+                let pose = Pose::from_degrees(
+                    next(mm),
+                    next(mm),
+                    next(mm),
+                    next(deg),
+                    next(deg),
+                    next(deg),
+                );
+                let fixed = table.pose::<Libm>(&pose).expect("within the bounds");
+                for (leg, c) in table.legs.iter().enumerate() {
+                    let l = leg_vector(c, &fixed);
+                    let exact = half_angle::<Libm>(table.wide_terms(c, l));
+                    match table.narrow_terms(c, l) {
+                        Some(terms) => {
+                            let a = half_angle::<Libm>(terms);
+                            assert_eq!(a.is_some(), exact.is_some(), "{pose:?}");
+                            if let (Some(a), Some(b)) = (a, exact) {
+                                narrow += 1;
+                                if a != b {
+                                    let f64_rad = arm_angle_f64(solver.geometry(), &pose, leg);
+                                    let error = |q: i32| {
+                                        let d = (f64::from(q) / f64::from(1u32 << ARM_FRAC)
+                                            - f64_rad)
+                                            .abs();
+                                        d.min((d - 2.0 * core::f64::consts::PI).abs())
+                                    };
+                                    worst_narrow = worst_narrow.max(error(a));
+                                    worst_wide = worst_wide.max(error(b));
+                                    apart = apart.max((a - b).abs());
+                                }
+                            }
+                        }
+                        None => wide += usize::from(exact.is_some()),
+                    }
+                }
+            }
+            eprintln!(
+                "{narrow} legs narrow, {wide} wide; where they differ (at most {apart} steps of \
+                 2^-28 rad) narrow {worst_narrow:e} rad, wide {worst_wide:e} rad from f64"
+            );
+            assert!(narrow > 1000, "{narrow}");
+            // Where they differ (near the edge of the workspace, where the angle is most
+            // sensitive to `L`), the 32-bit path is about as far from eq. 9 in f64 as the
+            // 64-bit one (measured: 1.7e-6 and 1.5e-6 rad on the default build; the rounding
+            // of `R p` to 2^-21 mm, common to both, dominates), and within the fixed-point
+            // bound of `fixed_point_path_is_more_accurate_than_float`.
+            assert!(worst_narrow < 3e-6, "{worst_narrow:e} rad");
+            assert!(
+                worst_narrow <= 1.5 * worst_wide + 1e-7,
+                "{worst_narrow:e} vs {worst_wide:e} rad"
+            );
+            if mm > 50.0 {
+                assert!(wide > 100, "{wide} legs beyond the 32-bit bounds");
+            } else {
+                assert_eq!(wide, 0, "a usual pose left the 32-bit path");
+            }
+        }
     }
 
     #[test]

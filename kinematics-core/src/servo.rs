@@ -9,7 +9,7 @@
 use core::f32::consts::PI;
 use core::fmt;
 
-use crate::fixed::{from_fixed, from_fixed32, to_fixed, wide_mul, ARM_FRAC};
+use crate::fixed::{from_fixed, from_fixed32, mul_q30, to_fixed, wide_mul, ARM_FRAC};
 use crate::math::{abs_bits, Libm, Math, Real};
 use crate::types::LEGS;
 
@@ -133,8 +133,15 @@ impl ServoConfig {
         if abs_bits(home_us) < 4096.0f32.to_bits() && abs_bits(rate) < 8192.0f32.to_bits() {
             // |offset r| < pi 2^28 2^31 in steps of 2^-46 us, below 2^30.7 steps of 2^-16 us;
             // |W0| < 2^28 of them: the sum fits an i32.
-            let product = wide_mul(offset, to_fixed(rate, RATE_FRAC));
-            let product = ((product + (1 << 29)) >> (ARM_FRAC + RATE_FRAC - PULSE_FRAC)) as i32;
+            // Rounded to 2^-16 us: in 32-bit products for a rate below 4096 us/rad (every
+            // usual one), else in 64 bits; the same value either way.
+            const SHIFT: u32 = ARM_FRAC + RATE_FRAC - PULSE_FRAC;
+            let rate_q = to_fixed(rate, RATE_FRAC);
+            let product = if (rate_q as u32) < 1 << 30 && offset.unsigned_abs() < 1 << 30 {
+                mul_q30(offset, rate_q)
+            } else {
+                ((wide_mul(offset, rate_q) + (1 << (SHIFT - 1))) >> SHIFT) as i32
+            };
             let signed = match self.direction {
                 Direction::Normal => product,
                 Direction::Reversed => -product,

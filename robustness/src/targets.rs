@@ -260,9 +260,14 @@ fn check_decoded(bytes: &[u8]) {
         if let Err(e) = s.validate() {
             panic!("decoded settings do not validate: {e:?}");
         }
-        if bytes[4..6] == record::FORMAT_VERSION_NO_BAUD.to_le_bytes() {
-            // Format 3 is read, never written: a save writes it again in the new format.
-            assert_eq!(r.baud, control::settings::DEFAULT_BAUD);
+        if bytes[4..6] != record::FORMAT_VERSION.to_le_bytes() {
+            // Formats 3 and 4 are read, never written: a save writes them again in the new
+            // format. Neither holds a pivot or speed ratings; format 3 no baud rate either.
+            assert_eq!(r.settings.pivot_mm, [0.0; 3]);
+            assert_eq!(r.settings.servo_speed, Default::default());
+            if bytes[4..6] == record::FORMAT_VERSION_NO_BAUD.to_le_bytes() {
+                assert_eq!(r.baud, control::settings::DEFAULT_BAUD);
+            }
             assert_eq!(record::decode(&record::encode(&r)), Ok(r));
         } else {
             assert_eq!(

@@ -77,19 +77,41 @@ fn settings_record_seeds_decode() {
             // The baud rate each was written with (format 3 has none: the default rate).
             if name.ends_with("/record-custom") {
                 assert_eq!(record.baud, 921_600, "{name}");
+                assert_eq!(s.pivot_mm, [10.0, -5.0, 300.0], "{name}");
             }
             if name.ends_with("/record-default") {
                 assert_eq!(record.baud, 115_200, "{name}");
             }
-            if name.ends_with("/record-v3-custom") {
-                assert_eq!(record.baud, 115_200, "{name}");
-                // The same settings as record-custom, in the format boards in the field hold.
+            if name.ends_with("/record-custom") {
+                // Speed ratings in hundredths of a second per 60 degrees, as written.
+                assert_eq!(
+                    s.servo_speed.s_per_60deg,
+                    [0.1, 0.1, 0.12, 0.0, 2.55, 0.01],
+                    "{name}"
+                );
+            }
+            if name.ends_with("/record-v3-custom") || name.ends_with("/record-v4-custom") {
+                // Format 3 has no baud rate (the default), format 4 has it; neither a pivot
+                // nor speed ratings.
+                let baud = if name.ends_with("v3-custom") {
+                    115_200
+                } else {
+                    921_600
+                };
+                assert_eq!(record.baud, baud, "{name}");
+                // The same settings as record-custom but the pivot (the origin) and the speed
+                // ratings (none), in the formats boards in the field hold.
                 let new = seeds("settings")
                     .into_iter()
                     .find(|(n, _)| n.ends_with("/record-custom"))
                     .expect("record-custom is a seed");
                 let new = control::record::decode(&new.1).expect("record-custom decodes");
-                assert_eq!((record.sequence, s), (new.sequence, new.settings));
+                let expected = control::Settings {
+                    pivot_mm: [0.0; 3],
+                    servo_speed: Default::default(),
+                    ..new.settings
+                };
+                assert_eq!((record.sequence, s), (new.sequence, expected), "{name}");
             }
             if name.ends_with("record-default") {
                 // The first save of a board (the encoder's sequence number 1).

@@ -201,6 +201,24 @@ pub extern "C" fn view_joint_mm(leg: u32, axis: u32) -> f32 {
     with_view(|view| index(leg).map_or(f32::NAN, |i| component(&view.frame().joints_mm[i], axis)))
 }
 
+/// Sets the pivot (`config`'s `pivot_x_mm`, `pivot_y_mm`, `pivot_z_mm`: the rotation centre,
+/// platform frame, mm). Returns 0, or -1 if the core refuses it (nothing changes).
+#[no_mangle]
+pub extern "C" fn view_set_pivot(x_mm: f32, y_mm: f32, z_mm: f32) -> i32 {
+    if with_view(|view| view.set_pivot(Vec3::new(x_mm, y_mm, z_mm))) {
+        0
+    } else {
+        -1
+    }
+}
+
+/// Coordinate `axis` of the platform frame's origin at the last pose found, base frame, mm
+/// (with a pivot, not `(x, y, h0 + z)`: see [`crate::Frame::origin_mm`]).
+#[no_mangle]
+pub extern "C" fn view_origin_mm(axis: u32) -> f32 {
+    with_view(|view| component(&view.frame().origin_mm, axis))
+}
+
 fn component(v: &Vec3, axis: u32) -> f32 {
     match axis {
         0..=2 => v[axis as usize],

@@ -10,8 +10,10 @@
 //! arm tips (eq. 4-6) and platform joints (eq. 2) to draw.
 //!
 //! The geometry is the one the firmware lists in `geometry` (each leg's `b_i`, `p_i`, `beta_i`,
-//! the arm and rod lengths), rebuilt here with the core. Nothing is taken from what the firmware
-//! intended (its target or its own arm angles): only the pins.
+//! the arm and rod lengths), rebuilt here with the core, turning about the pivot `config` lists
+//! (`pivot_x_mm` ..., the firmware's rotation centre: the pose found is in the convention of
+//! the poses the board is sent). Nothing is taken from what the firmware intended (its target
+//! or its own arm angles): only the pins.
 //!
 //! Units: mm, us; radians inside, degrees for what the page shows. [`View`] is the Rust API
 //! (tested on the host); [`exports`] wraps one `View` in `extern "C"` functions of plain numbers,
@@ -68,6 +70,9 @@ pub struct Frame {
     pub tips_mm: [Vec3; LEGS],
     /// Platform joints `q_i` at `pose` (eq. 2), base frame, mm.
     pub joints_mm: [Vec3; LEGS],
+    /// The platform frame's origin at `pose`, base frame, mm: `(x, y, h0 + z) + c - R c` with
+    /// `c` the pivot (where the page places the plate).
+    pub origin_mm: Vec3,
     /// Newton iterations of the last solve (0 if it did not run).
     pub iterations: u8,
     /// Largest `| |q_i - A_i| - s |` at the pose found: how well the rods close, mm.
@@ -89,6 +94,8 @@ pub struct View {
     legs: [Option<Leg>; LEGS],
     solver: Option<Solver>,
     servos: [Option<ServoConfig>; LEGS],
+    /// The pivot (the IK's rotation centre), platform frame, mm, as `config` lists it.
+    pivot_mm: Vec3,
     /// Where the last solve ended; the next one starts there (the forward kinematics has
     /// several solutions: the one nearest the last pose is the platform's continuous motion).
     last_pose: Option<Pose>,
@@ -108,6 +115,7 @@ impl View {
             legs: [None; LEGS],
             solver: None,
             servos: [None; LEGS],
+            pivot_mm: Vec3::zeros(),
             last_pose: None,
             frame: Frame {
                 status: Status::NoGeometry,
@@ -115,6 +123,7 @@ impl View {
                 pose: Pose::HOME,
                 tips_mm: [Vec3::zeros(); LEGS],
                 joints_mm: [Vec3::zeros(); LEGS],
+                origin_mm: Vec3::zeros(),
                 iterations: 0,
                 rod_error_mm: f32::NAN,
             },
@@ -147,8 +156,28 @@ impl View {
             *out = staged.ok_or(BuildError::MissingLeg { leg: i as u8 + 1 })?;
         }
         let geometry = Geometry::new(legs, arm_mm, rod_mm).map_err(BuildError::Geometry)?;
-        self.solver = Some(Solver::new(geometry).map_err(BuildError::Geometry)?);
+        let mut solver = Solver::new(geometry).map_err(BuildError::Geometry)?;
+        // (A pivot the core refuses was refused by `set_pivot`: never stored.)
+        let _ = solver.set_rotation_centre_mm(self.pivot_mm);
+        self.solver = Some(solver);
         Ok(())
+    }
+
+    /// Sets the pivot (the rotation centre poses turn about), platform frame, mm, as `config`
+    /// lists it: the geometry (if built) turns about it from the next solve, which starts from
+    /// home. Refused (false, nothing changes) if the core refuses it (not finite, too far).
+    pub fn set_pivot(&mut self, pivot_mm: Vec3) -> bool {
+        if kinematics_core::configuration::check_centre(pivot_mm).is_err() {
+            return false;
+        }
+        if pivot_mm != self.pivot_mm {
+            self.pivot_mm = pivot_mm;
+            self.last_pose = None;
+            if let Some(solver) = &mut self.solver {
+                let _ = solver.set_rotation_centre_mm(pivot_mm);
+            }
+        }
+        true
     }
 
     /// The geometry's solver, once built.
@@ -212,6 +241,8 @@ impl View {
         let rod_mm = solver.geometry().rod_mm();
         self.frame.pose = found.pose;
         self.frame.joints_mm = state.placement.joints_mm;
+        let p = &state.placement;
+        self.frame.origin_mm = p.centre_mm - p.rotation * solver.rotation_centre_mm();
         self.frame.iterations = found.iterations;
         self.frame.rod_error_mm = state
             .rods_mm

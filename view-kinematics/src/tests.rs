@@ -104,6 +104,49 @@ fn golden_pulses_give_their_poses() {
     }
 }
 
+/// Pitch 5 degrees about a pivot 100 mm above the platform's centre: the pulses of the f64
+/// reference of `host-tests` (its chain of frames about the pivot, numeric rod closures;
+/// `pulse_reference`'s `f64` request), to 0.01 us.
+const PIVOT_PITCH_PULSES: [f32; LEGS] = [1549.79, 1450.21, 1512.26, 1618.92, 1381.08, 1487.74];
+
+#[test]
+fn with_the_pivot_config_lists_the_pose_found_is_the_pose_about_it() {
+    let mut view = default_view();
+    assert!(view.set_pivot(Vec3::new(0.0, 0.0, 100.0)));
+    assert_eq!(view.solve(PIVOT_PITCH_PULSES), Status::Solved);
+    let found = pose_in_degrees(&view.frame().pose);
+    let expected = [0.0, 0.0, 0.0, 0.0, 5.0, 0.0];
+    for k in 0..6 {
+        assert!((found[k] - expected[k]).abs() < 0.01, "{found:?}");
+    }
+    // The plate's origin has swung under the pivot by (I - R) c: (-100 sin 5, 0,
+    // 100 (1 - cos 5)) from (0, 0, h0).
+    let pitch = 5f32.to_radians();
+    let origin = [
+        -100.0 * pitch.sin(),
+        0.0,
+        118.458 + 100.0 * (1.0 - pitch.cos()),
+    ];
+    for (got, want) in view.frame().origin_mm.iter().zip(origin) {
+        assert!((got - want).abs() < 0.01, "{:?}", view.frame());
+    }
+    // Without the pivot the same pulses are that placement as a pose about the centre.
+    assert!(view.set_pivot(Vec3::zeros()));
+    assert_eq!(view.solve(PIVOT_PITCH_PULSES), Status::Solved);
+    let found = pose_in_degrees(&view.frame().pose);
+    let expected = [origin[0], 0.0, origin[2] - 118.458, 0.0, 5.0, 0.0];
+    for k in 0..6 {
+        assert!((found[k] - expected[k]).abs() < 0.01, "{found:?}");
+    }
+    // A pivot the core refuses changes nothing.
+    assert!(!view.set_pivot(Vec3::new(f32::NAN, 0.0, 0.0)));
+    assert!(!view.set_pivot(Vec3::new(0.0, 0.0, 20_000.0)));
+    assert_eq!(
+        view.solver().map(|s| s.rotation_centre_mm()),
+        Some(Vec3::zeros())
+    );
+}
+
 #[test]
 fn arm_angles_invert_eq_13_14() {
     let mut view = default_view();

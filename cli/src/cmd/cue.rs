@@ -5,11 +5,10 @@
 
 use std::io::IsTerminal;
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicBool, Ordering};
 
 use clap::Args;
 
-use super::Port;
+use super::{on_ctrl_c, Port, CTRL_C};
 use crate::cue::config;
 use crate::cue::run::{self, Counts, Options, Progress, Summary};
 use crate::error::Error;
@@ -40,9 +39,6 @@ pub struct Cmd {
     idle_exit_s: Option<f64>,
 }
 
-/// Set by the first Ctrl-C.
-static STOP: AtomicBool = AtomicBool::new(false);
-
 impl Cmd {
     /// Cues until the telemetry ends (`--idle-exit-s`) or Ctrl-C; the summary.
     pub fn run(self) -> Result<String, Error> {
@@ -53,7 +49,7 @@ impl Cmd {
             record: self.record,
             wait_s: self.wait_s,
             idle_exit_s: self.idle_exit_s,
-            stop: Some(&STOP),
+            stop: Some(&CTRL_C),
         };
         let mut link = self.port.open()?;
         on_ctrl_c();
@@ -84,29 +80,6 @@ impl Cmd {
         }
         Ok(summary(&outcome?))
     }
-}
-
-/// Ctrl-C (SIGINT) sets [`STOP`] (the loop eases home, then returns); a second one exits at
-/// once. Elsewhere than Unix, Ctrl-C keeps its usual meaning.
-fn on_ctrl_c() {
-    #[cfg(unix)]
-    {
-        extern "C" fn handler(_: libc::c_int) {
-            if STOP.swap(true, Ordering::SeqCst) {
-                // Async-signal-safe: no unwinding, no allocation.
-                unsafe { libc::_exit(130) };
-            }
-        }
-        // SAFETY: the handler only touches an atomic and calls `_exit`, both async-signal-safe.
-        unsafe {
-            libc::signal(
-                libc::SIGINT,
-                handler as extern "C" fn(libc::c_int) as libc::sighandler_t,
-            );
-        }
-    }
-    #[cfg(not(unix))]
-    let _ = &STOP.load(Ordering::Relaxed);
 }
 
 /// Ctrl-C taken.

@@ -4,6 +4,8 @@
 //! several write.
 
 pub mod apply;
+pub mod boards;
+pub mod calibrate;
 pub mod cue;
 pub mod cue_plot;
 pub mod demo;
@@ -18,6 +20,7 @@ pub mod torque;
 pub mod uf2;
 pub mod workspace;
 
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 use clap::Args;
@@ -143,4 +146,31 @@ fn wrote_build_file(path: &str, source: &str) -> String {
 /// `draw`, `workspace`, `torque`: the pictures written.
 fn wrote_pictures(paths: &[String]) -> String {
     format!("wrote {}", paths.join(", "))
+}
+
+/// Set by the first Ctrl-C once [`on_ctrl_c`] is called (`cue` eases home, `calibrate` puts
+/// back what it changed).
+static CTRL_C: AtomicBool = AtomicBool::new(false);
+
+/// Ctrl-C (SIGINT) sets [`CTRL_C`]; a second one exits at once. Elsewhere than Unix, Ctrl-C
+/// keeps its usual meaning.
+fn on_ctrl_c() {
+    #[cfg(unix)]
+    {
+        extern "C" fn handler(_: libc::c_int) {
+            if CTRL_C.swap(true, Ordering::SeqCst) {
+                // Async-signal-safe: no unwinding, no allocation.
+                unsafe { libc::_exit(130) };
+            }
+        }
+        // SAFETY: the handler only touches an atomic and calls `_exit`, both async-signal-safe.
+        unsafe {
+            libc::signal(
+                libc::SIGINT,
+                handler as extern "C" fn(libc::c_int) as libc::sighandler_t,
+            );
+        }
+    }
+    #[cfg(not(unix))]
+    let _ = &CTRL_C.load(Ordering::Relaxed);
 }

@@ -109,55 +109,56 @@ impl KeySpec {
     }
 }
 
+/// The keys of `[cue]`: the general ones, then each translation axis' filter (x y z), each
+/// rotation axis' (roll pitch yaw), then the tilt's; an axis' keys are written once here for
+/// all three of its kind.
+macro_rules! cue_keys {
+    ([$($general:expr),* $(,)?], [$($translation:literal),*], [$($rotation:literal),*],
+     [$($tilt:expr),* $(,)?]) => {
+        [
+            $($general,)*
+            $(
+                key(concat!($translation, ".scale"), 0.0, 10.0, Number),
+                key(concat!($translation, ".order"), 2.0, 3.0, Whole),
+                key(concat!($translation, ".hp_hz"), 0.01, 20.0, Number),
+                key(concat!($translation, ".zeta"), 0.1, 3.0, Number),
+                key(concat!($translation, ".hp3_hz"), 0.001, 20.0, Number),
+                key(concat!($translation, ".sign"), -1.0, 1.0, Sign),
+            )*
+            $(
+                key(concat!($rotation, ".scale"), 0.0, 10.0, Number),
+                key(concat!($rotation, ".order"), 1.0, 2.0, Whole),
+                key(concat!($rotation, ".hp_hz"), 0.01, 20.0, Number),
+                key(concat!($rotation, ".zeta"), 0.1, 3.0, Number),
+                key(concat!($rotation, ".sign"), -1.0, 1.0, Sign),
+            )*
+            $($tilt,)*
+        ]
+    };
+}
+
 /// Every key, in the order `init` would write them.
-pub const KEYS: [KeySpec; 46] = [
-    key("margin", 0.1, 1.0, Number),
-    key("knee", 0.0, 1.0, Number),
-    key("stall_s", 0.02, 10.0, Number),
-    key("ease_s", 0.1, 30.0, Number),
-    key("pivot_x_mm", -1000.0, 1000.0, Number),
-    key("pivot_y_mm", -1000.0, 1000.0, Number),
-    key("pivot_z_mm", -1000.0, 1000.0, Number),
-    key("x.scale", 0.0, 10.0, Number),
-    key("x.order", 2.0, 3.0, Whole),
-    key("x.hp_hz", 0.01, 20.0, Number),
-    key("x.zeta", 0.1, 3.0, Number),
-    key("x.hp3_hz", 0.001, 20.0, Number),
-    key("x.sign", -1.0, 1.0, Sign),
-    key("y.scale", 0.0, 10.0, Number),
-    key("y.order", 2.0, 3.0, Whole),
-    key("y.hp_hz", 0.01, 20.0, Number),
-    key("y.zeta", 0.1, 3.0, Number),
-    key("y.hp3_hz", 0.001, 20.0, Number),
-    key("y.sign", -1.0, 1.0, Sign),
-    key("z.scale", 0.0, 10.0, Number),
-    key("z.order", 2.0, 3.0, Whole),
-    key("z.hp_hz", 0.01, 20.0, Number),
-    key("z.zeta", 0.1, 3.0, Number),
-    key("z.hp3_hz", 0.001, 20.0, Number),
-    key("z.sign", -1.0, 1.0, Sign),
-    key("roll.scale", 0.0, 10.0, Number),
-    key("roll.order", 1.0, 2.0, Whole),
-    key("roll.hp_hz", 0.01, 20.0, Number),
-    key("roll.zeta", 0.1, 3.0, Number),
-    key("roll.sign", -1.0, 1.0, Sign),
-    key("pitch.scale", 0.0, 10.0, Number),
-    key("pitch.order", 1.0, 2.0, Whole),
-    key("pitch.hp_hz", 0.01, 20.0, Number),
-    key("pitch.zeta", 0.1, 3.0, Number),
-    key("pitch.sign", -1.0, 1.0, Sign),
-    key("yaw.scale", 0.0, 10.0, Number),
-    key("yaw.order", 1.0, 2.0, Whole),
-    key("yaw.hp_hz", 0.01, 20.0, Number),
-    key("yaw.zeta", 0.1, 3.0, Number),
-    key("yaw.sign", -1.0, 1.0, Sign),
-    key("tilt.scale", 0.0, 10.0, Number),
-    key("tilt.order", 1.0, 2.0, Whole),
-    key("tilt.lp_hz", 0.01, 20.0, Number),
-    key("tilt.zeta", 0.1, 3.0, Number),
-    key("tilt.rate_deg_s", 0.1, 90.0, Number),
-    key("tilt.max_deg", 0.0, 45.0, Number),
-];
+pub const KEYS: [KeySpec; 46] = cue_keys!(
+    [
+        key("margin", 0.1, 1.0, Number),
+        key("knee", 0.0, 1.0, Number),
+        key("stall_s", 0.02, 10.0, Number),
+        key("ease_s", 0.1, 30.0, Number),
+        key("pivot_x_mm", -1000.0, 1000.0, Number),
+        key("pivot_y_mm", -1000.0, 1000.0, Number),
+        key("pivot_z_mm", -1000.0, 1000.0, Number),
+    ],
+    ["x", "y", "z"],
+    ["roll", "pitch", "yaw"],
+    [
+        key("tilt.scale", 0.0, 10.0, Number),
+        key("tilt.order", 1.0, 2.0, Whole),
+        key("tilt.lp_hz", 0.01, 20.0, Number),
+        key("tilt.zeta", 0.1, 3.0, Number),
+        key("tilt.rate_deg_s", 0.1, 90.0, Number),
+        key("tilt.max_deg", 0.0, 45.0, Number),
+    ]
+);
 
 impl CueSettings {
     /// The value of a key (its name under `cue.`), if it is one.

@@ -217,6 +217,24 @@ pub fn hexapod(dir: &std::path::Path, args: &[&str]) -> Output {
         .expect("hexapod runs")
 }
 
+/// A board with both speed limits off (pass-through), as streaming programs want it, set up
+/// through the tool as a user would (`hexapod send`, run in `dir`).
+pub fn pass_through_board(dir: &std::path::Path) -> SimBoard {
+    let board = SimBoard::start();
+    let setup = hexapod(
+        dir,
+        &[
+            "send",
+            "--port",
+            &board.path,
+            "set speed_mm_s off",
+            "set speed_deg_s off",
+        ],
+    );
+    assert!(setup.status.success(), "{:?}", text(&setup));
+    board
+}
+
 /// Its standard output and error as text.
 pub fn text(output: &Output) -> (String, String) {
     (

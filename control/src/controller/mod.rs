@@ -25,9 +25,9 @@
 //!
 //! One job at a time: while [`Controller::is_busy`], the board feeds no bytes (they wait in the
 //! link's receive queue, or the USB host waits). A move checked while the platform moves, with
-//! an acceleration limit set, is a blend ([`crate::motion::blend`]): the motion goes on while
+//! an acceleration limit set and no servo speed rated, is a blend ([`crate::motion::blend`]): the motion goes on while
 //! it is checked, and it takes over at a hand-over frame planned ahead (`moves.rs`). Without an
-//! acceleration limit (or while streaming), the platform holds where it was when the command
+//! acceleration limit (or while streaming, or with servo speed ratings), the platform holds where it was when the command
 //! arrived until the check ends (a few milliseconds; at most about 150 ms on the RP2040 for the
 //! longest check), then starts from there. A refused move lets the move in progress go on.
 //! `check` does not hold anything.
@@ -46,7 +46,8 @@
 //!
 //! What their outcomes do to the platform, and the controller's other jobs, are `impl
 //! Controller` blocks of their own: `moves.rs` (moves, `check`, jumps), `streaming.rs`,
-//! `servo.rs`, `settings_change.rs`, `link_loss.rs`, `estop.rs`, `status.rs` and `notices.rs`.
+//! `servo.rs`, `servo_speed.rs` (moves and stream steps within the servos' rated speeds),
+//! `settings_change.rs`, `link_loss.rs`, `estop.rs`, `status.rs` and `notices.rs`.
 
 use core::fmt::Write;
 use core::marker::PhantomData;
@@ -67,6 +68,7 @@ use crate::store::{self, Found, Loaded, SaveError, Store};
 use self::limits::LimitsSearch;
 use self::listing::{StatusTorques, Writing};
 use self::locate::{Locate, Located};
+use self::loss_burst::LossBurst;
 use self::path::{PathCheck, Purpose};
 use self::pose_check::PoseCheck;
 use self::rebuild::Rebuild;
@@ -81,6 +83,7 @@ pub use self::stream_goal::CLAMP_STEPS;
 mod limits;
 mod listing;
 mod locate;
+mod loss_burst;
 mod path;
 mod pose_check;
 mod rebuild;
@@ -93,6 +96,7 @@ mod link_loss;
 mod moves;
 mod notices;
 mod servo;
+mod servo_speed;
 mod settings_change;
 mod status;
 mod streaming;
@@ -231,6 +235,9 @@ pub struct Controller<M: Math = Libm> {
     notices: heapless::Deque<(u32, Notice), NOTICE_QUEUE>,
     /// Sequence number of the next notice.
     next_notice: u32,
+    /// A burst of UART receive errors going on: its first loss was announced, the others are
+    /// counted for one notice when it ends.
+    uart_burst: Option<LossBurst>,
     _math: PhantomData<M>,
 }
 
@@ -287,6 +294,7 @@ impl<M: Math> Controller<M> {
             board_id: None,
             notices: heapless::Deque::new(),
             next_notice: 0,
+            uart_burst: None,
             _math: PhantomData,
         })
     }
@@ -647,7 +655,10 @@ impl<M: Math> Controller<M> {
     /// framing, parity or break error) and the board has just noticed: a warning goes to every
     /// link at once (to this one now). `at_least` bytes so far; `in_uart`: the UART's
     /// hardware lost them (it cannot tell how many). The line they cut is refused when the
-    /// board reaches the gap ([`Controller::on_rx_overflow`]).
+    /// board reaches the gap ([`Controller::on_rx_overflow`]). UART losses come in bursts (a
+    /// sender at the wrong baud rate garbles every few bytes): only the first of a burst is
+    /// announced at once, the rest counted for one notice when the burst ends
+    /// ([`BURST_QUIET_US`](loss_burst::BURST_QUIET_US) without a loss).
     pub fn on_input_lost(
         &mut self,
         session: &mut Session,
@@ -655,6 +666,9 @@ impl<M: Math> Controller<M> {
         in_uart: bool,
         out: &mut impl Write,
     ) {
+        if in_uart && self.count_in_burst(at_least) {
+            return;
+        }
         self.notify(Notice::InputLost { at_least, in_uart });
         self.write_notices(session, out);
     }
@@ -691,6 +705,7 @@ impl<M: Math> Controller<M> {
         // The frame in which the last line ended counts nothing (part of it was not silent).
         self.silence_us = Some(self.silence_us.map_or(0, |s| s.saturating_add(frame_us)));
         self.check_link();
+        self.time_burst(frame_us);
 
         if self.stream.is_some() && !self.holding {
             self.track_frame();
@@ -866,6 +881,7 @@ impl<M: Math> Controller<M> {
                         | SettingId::Servo(..)
                         | SettingId::PayloadG
                         | SettingId::PayloadCom(_)
+                        | SettingId::Pivot(_)
                 );
                 if moves_matter && self.motion.is_moving() {
                     return Err(Error::Busy);

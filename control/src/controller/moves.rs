@@ -20,8 +20,10 @@
 //! check that ends after its hand-over (or after the motion changed: a fault) is planned and
 //! checked again from the motion as it is then, with half the rate; the motion goes on
 //! meanwhile. A blend waiting for its hand-over is replaced by the next target's, which
-//! therefore takes over no later than it would. Without an acceleration limit, or while
-//! streaming, the platform holds during the check and starts from rest (the speed may jump).
+//! therefore takes over no later than it would. Without an acceleration limit, while
+//! streaming, or with servo speed ratings set (a known limit: a blend is not yet planned or
+//! measured within the ratings), the platform holds during the check and starts from rest
+//! (the speed may jump).
 
 use kinematics_core::{Math, Pose};
 
@@ -48,7 +50,9 @@ impl<M: Math> Controller<M> {
 
     pub(super) fn move_to(&mut self, target: Pose) -> Result<Begun, Error> {
         let limits = self.speed_limits();
-        let jump = !(limits.mm_per_s > 0.0 || limits.deg_per_s > 0.0);
+        // (With servo speed ratings a move takes as long as the servos need: never a jump.)
+        let jump =
+            !(limits.mm_per_s > 0.0 || limits.deg_per_s > 0.0 || self.settings.servo_speed.rated());
         self.start_path(target, limits, Purpose::Move { jump })
     }
 
@@ -67,13 +71,19 @@ impl<M: Math> Controller<M> {
             return Err(Error::NoPose(e));
         }
         let solution = self.solver.solve::<M>(&self.settings.servos, &target)?;
+        // With servo speed ratings a new target while moving does not blend (a known limit,
+        // docs/commands.md): the straight move from rest within the ratings, as below.
         let blends = purpose == Purpose::Move { jump: false }
             && (limits.mm_per_s2 > 0.0 || limits.deg_per_s2 > 0.0)
-            && !self.is_streaming();
-        let (plan, hand_over) = if blends {
-            self.blend_plan(target, limits)
+            && !self.is_streaming()
+            && !self.settings.servo_speed.rated();
+        let (plan, hand_over, servo_time) = if blends {
+            let (plan, hand_over) = self.blend_plan(target, limits);
+            (plan, hand_over, None)
         } else {
-            (self.straight_plan(target, limits), None)
+            // Within the servos' rated speeds, if they have any (`controller/servo_speed.rs`).
+            let (segment, servo_time) = self.plan_within_servo_speed(target, &solution, limits);
+            (Plan::Straight(segment), None, servo_time)
         };
         // A move checked while moving (or streaming) without a blend: the platform holds here
         // until the check ends.
@@ -86,6 +96,7 @@ impl<M: Math> Controller<M> {
             plan,
             hand_over,
             &self.settings,
+            servo_time,
         )));
         Ok(Begun::Pending)
     }
@@ -499,6 +510,61 @@ mod tests {
             assert_eq!(c.on_frame(), untouched.on_frame());
         }
         assert_eq!(*c.pose(), *untouched.pose());
+    }
+
+    #[test]
+    fn with_servo_speed_ratings_a_new_target_holds_for_its_check_then_starts_from_rest() {
+        // The known limit (docs/commands.md): with ratings set nothing is blended; the same
+        // lines without ratings blend in (the contrast, so the rule is what is pinned).
+        for rated in [true, false] {
+            let (mut c, mut link) = (quiet(), program());
+            let mut out = std::string::String::new();
+            if rated {
+                c.execute_line(&mut link, "set servos.speed_s_60deg 0.1", &mut out);
+            }
+            c.execute_line(&mut link, "set speed_mm_s 40", &mut out);
+            c.execute_line(&mut link, "set accel_mm_s2 200", &mut out);
+            c.execute_line(&mut link, "pose 0 0 10 0 0 0", &mut out);
+            assert!(!out.contains("error"), "{out}");
+            let mut poses = std::vec![*c.pose()];
+            for _ in 0..10 {
+                c.on_frame();
+                poses.push(*c.pose());
+            }
+            let here = *c.pose();
+            assert!(here.z_mm > 1.0 && c.is_moving(), "{here:?}");
+            let before = poses.len();
+            let reply = line_while_moving(&mut c, &mut link, "pose 0 0 -5 0 0 0", 6, &mut poses);
+            assert_eq!(reply, "ok\r\n");
+            let during = &poses[before..];
+            assert!(during.len() > 1, "the check took frames: {}", during.len());
+            if rated {
+                assert!(
+                    during.iter().all(|p| *p == here),
+                    "held where it was during the check: {during:?}"
+                );
+            } else {
+                assert!(
+                    during[0] != here && during[1] != during[0],
+                    "moving on during the check: {during:?}"
+                );
+            }
+            let last = poses.len() - 1;
+            c.on_frame();
+            poses.push(*c.pose());
+            let first = poses[last + 1].z_mm - poses[last].z_mm;
+            if rated {
+                // From rest, downwards: at most the acceleration of one frame
+                // (200 mm/s2 at 50 Hz: 0.08 mm per frame per frame).
+                assert!(first < 0.0 && first > -0.08 - 1e-4, "first step {first}");
+            }
+            while c.is_moving() {
+                c.on_frame();
+                poses.push(*c.pose());
+            }
+            assert_eq!(*c.pose(), Pose::from_degrees(0.0, 0.0, -5.0, 0.0, 0.0, 0.0));
+            assert!(c.fault().is_none());
+        }
     }
 
     #[test]

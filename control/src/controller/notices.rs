@@ -3,16 +3,35 @@
 //! [`Session`] remembers which it has shown. They are written by
 //! [`Controller::write_notices`](super::Controller::write_notices) and before a link's next
 //! reply; a link that is closed is shown the latest few by its banner when it opens again.
+//!
+//! UART receive errors come in bursts: the first loss of a burst is announced at once, the
+//! others are counted for one notice ([`LossBurst`](super::loss_burst::LossBurst)).
 
 use core::fmt::Write;
 
 use kinematics_core::Math;
 
+use super::loss_burst::LossBurst;
 use super::Controller;
 use crate::report::{self, Notice};
 use crate::session::Session;
 
 impl<M: Math> Controller<M> {
+    /// A UART loss of `at_least` bytes: counted (true) if a burst is going on, else the start
+    /// of one (false: announce it).
+    pub(super) fn count_in_burst(&mut self, at_least: u32) -> bool {
+        LossBurst::count(&mut self.uart_burst, at_least)
+    }
+
+    /// A servo frame of `frame_us` passed: a burst that has ended (or gone on for
+    /// [`BURST_REPORT_US`](super::loss_burst::BURST_REPORT_US)) gets its notice, if it lost
+    /// more than its first announced loss.
+    pub(super) fn time_burst(&mut self, frame_us: u32) {
+        if let Some(notice) = LossBurst::tick(&mut self.uart_burst, frame_us) {
+            self.notify(notice);
+        }
+    }
+
     /// Keeps a notice for every link to show (only the latest
     /// [`NOTICE_QUEUE`](super::NOTICE_QUEUE)).
     pub(super) fn notify(&mut self, notice: Notice) {
@@ -103,5 +122,72 @@ mod tests {
         }
         finish(&mut c, &mut usb, &mut out);
         assert_eq!(out, "home\r\nok\r\n> ");
+    }
+
+    #[test]
+    fn a_burst_of_uart_errors_gives_one_warning_at_once_and_one_with_its_count() {
+        let (mut c, mut link) = (quiet(), program());
+        let mut out = std::string::String::new();
+        // A sender at the wrong baud rate: a garbled byte every millisecond for 286 ms (the
+        // servo frames, 20 ms, come between).
+        for ms in 0..286u32 {
+            c.on_input_lost(&mut link, 1, true, &mut out);
+            if ms % 20 == 19 {
+                c.on_frame();
+                c.write_notices(&mut link, &mut out);
+            }
+        }
+        assert_eq!(
+            out, "# warning: UART receive error, input lost (at least 1 byte)\r\n",
+            "the first loss at once, the others only counted while the burst goes on"
+        );
+        // 0.2 s without a loss ends the burst: one notice with the count.
+        for _ in 0..10 {
+            c.on_frame();
+            c.write_notices(&mut link, &mut out);
+        }
+        let lines: std::vec::Vec<&str> = out.lines().collect();
+        assert_eq!(lines.len(), 2, "{out}");
+        assert_eq!(
+            lines[1],
+            "# warning: UART receive errors went on: 285 more, input lost (at least 285 bytes) \
+             in 0.28 s"
+        );
+        // The next loss is a new burst: announced at once.
+        out.clear();
+        c.on_input_lost(&mut link, 2, true, &mut out);
+        assert_eq!(
+            out,
+            "# warning: UART receive error, input lost (at least 2 bytes)\r\n"
+        );
+        // A lone loss ends its burst without a second word.
+        out.clear();
+        for _ in 0..20 {
+            c.on_frame();
+            c.write_notices(&mut link, &mut out);
+        }
+        assert_eq!(out, "");
+    }
+
+    #[test]
+    fn a_burst_that_goes_on_is_reported_every_two_seconds_and_queue_overflows_at_once() {
+        let (mut c, mut link) = (quiet(), program());
+        let mut out = std::string::String::new();
+        // 5 s of garble, 5 losses a frame.
+        for _ in 0..250 {
+            for _ in 0..5 {
+                c.on_input_lost(&mut link, 1, true, &mut out);
+            }
+            c.on_frame();
+            c.write_notices(&mut link, &mut out);
+        }
+        let lines: std::vec::Vec<&str> = out.lines().collect();
+        assert_eq!(lines.len(), 3, "{out}");
+        assert!(lines[1].contains("went on: 499 more") && lines[1].ends_with("in 2.00 s"));
+        assert!(lines[2].contains("went on: 500 more"), "{}", lines[2]);
+        // A receive queue overflow is not a UART error: announced at once, burst or not.
+        out.clear();
+        c.on_input_lost(&mut link, 40, false, &mut out);
+        assert!(out.contains("receive queue overflowed"), "{out}");
     }
 }

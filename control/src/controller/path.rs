@@ -1,17 +1,22 @@
 //! A path check: the job of a reachable target whose path (a straight line from the current
-//! pose, or a blend from the motion in progress, [`crate::motion::blend`]) is checked by the IK at up to [`crate::motion::MAX_PATH_CHECKS`] checkpoints, a few per slice
+//! pose, or a blend from the motion in progress, [`crate::motion::blend`]) is checked by the
+//! IK at up to [`crate::motion::MAX_PATH_CHECKS`] checkpoints, a few per slice
 //! ([`PoseCheck::per_slice`]). With a payload to check against ratings or to report (`check`),
 //! the target's holding torques come first, in a slice of their own. What a checked path leads
 //! to (a move, a jump, `check`'s listing, the way home) is the controller's
-//! (`controller/moves.rs`).
+//! (`controller/moves.rs`). With servo speed ratings ([`crate::servo_speed`]) the check also
+//! measures the path time from its IK solutions ([`ServoTime`]), and if the move was planned
+//! too fast for it, plans it again and checks the new plan's poses (straight moves only: with
+//! ratings a new target while moving does not blend).
 
 use kinematics_core::ik::Solution;
-use kinematics_core::{Math, Pose};
+use kinematics_core::{Math, Pose, LEGS};
 
 use super::pose_check::{PoseCheck, Torques};
 use crate::error::Error;
-use crate::motion::{Plan, PlanCheckpoints};
+use crate::motion::{Plan, PlanCheckpoints, Segment, SpeedLimits};
 use crate::payload::TorqueError;
+use crate::servo_speed::{PathTime, ServoSpeeds};
 use crate::settings::Settings;
 
 /// What a checked path is for.
@@ -73,6 +78,22 @@ pub(super) struct PathCheck {
     /// The target's holding torques: `None` until computed (the first slice, when there is a
     /// payload to check or report), then what `check` reports.
     torque: Option<Option<Torques>>,
+    /// With servo speed ratings, on the first pass over the path: its time being measured.
+    servo_time: Option<ServoTime>,
+}
+
+/// The path time of a move with servo speed ratings, measured on the first pass of its check
+/// (see [`crate::servo_speed`]), and what a new plan needs.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct ServoTime {
+    /// Measured along the path so far.
+    pub measured: PathTime,
+    /// The path time the segment was planned for, s.
+    pub planned_s: f32,
+    /// The move's own limits, before the ratings' cap.
+    pub limits: SpeedLimits,
+    /// The frame rate, Hz.
+    pub frame_hz: f32,
 }
 
 impl PathCheck {
@@ -83,6 +104,7 @@ impl PathCheck {
         plan: Plan,
         hand_over: Option<HandOver>,
         settings: &Settings,
+        servo_time: Option<ServoTime>,
     ) -> PathCheck {
         PathCheck {
             purpose,
@@ -98,6 +120,7 @@ impl PathCheck {
             } else {
                 Some(None)
             },
+            servo_time,
         }
     }
 
@@ -175,20 +198,67 @@ impl PathCheck {
         let mut solved = 0;
         while solved < check.per_slice() {
             let Some((pose, fraction)) = self.checkpoints.next() else {
-                return Some(Ok(()));
+                return if self.planned_again() {
+                    None // the new plan's poses are checked next
+                } else {
+                    Some(Ok(()))
+                };
             };
             if pose == *self.plan.target() {
-                continue; // checked when the command came and in the first slice
+                // Checked when the command came and in the first slice.
+                let arm_rad = self.solution.arm_rad;
+                self.measure(&check.settings.servo_speed, &pose, &arm_rad);
+                continue;
             }
             solved += 1;
             self.solved += 1;
-            if let Err(cause) = check.pose::<M>(&pose, torque) {
-                return Some(Err(Error::PathBlocked {
-                    percent: fraction * 100.0,
-                    cause,
-                }));
+            match check.pose::<M>(&pose, torque) {
+                Ok(solution) => {
+                    self.measure(&check.settings.servo_speed, &pose, &solution.arm_rad);
+                }
+                Err(cause) => {
+                    return Some(Err(Error::PathBlocked {
+                        percent: fraction * 100.0,
+                        cause,
+                    }))
+                }
             }
         }
         None
+    }
+
+    /// With servo speed ratings, on the first pass: the path time measured at one more pose of
+    /// the path (in order), from its IK solution's arm angles.
+    fn measure(&mut self, speeds: &ServoSpeeds, pose: &Pose, arm_rad: &[f32; LEGS]) {
+        if let Some(time) = &mut self.servo_time {
+            time.measured.visit(speeds, pose, arm_rad);
+        }
+    }
+
+    /// At the end of the first pass with servo speed ratings: if the path needs longer than the
+    /// move was planned for, the move planned again for the time measured, its checkpoints to
+    /// be checked next (true); false if the plan stands (or this was the second pass).
+    fn planned_again(&mut self) -> bool {
+        let Some(time) = self.servo_time.take() else {
+            return false;
+        };
+        let measured_s = time.measured.time_s();
+        if measured_s <= time.planned_s {
+            return false;
+        }
+        // Only straight moves are measured (with ratings a move never blends,
+        // `controller/moves.rs`).
+        let Plan::Straight(planned) = self.plan else {
+            return false;
+        };
+        let (start, target) = (*planned.start(), *planned.target());
+        let limits = ServoSpeeds::capped_limits(time.limits, &start, &target, measured_s);
+        let segment = Segment::plan(start, target, limits, time.frame_hz);
+        if segment == planned {
+            return false;
+        }
+        self.plan = Plan::Straight(segment);
+        self.checkpoints = self.plan.checkpoints();
+        true
     }
 }

@@ -50,7 +50,7 @@ impl Rebuild {
                 Err(e) => return Some(Err(SettingError::BadGeometry(e).into())),
             },
             Stage::Solver(geometry) => match ik::Solver::new_with::<M>(geometry.clone()) {
-                Ok(solver) => Stage::HeldPose(solver),
+                Ok(solver) => Stage::HeldPose(self.candidate.about_pivot(solver)),
                 Err(e) => return Some(Err(SettingError::BadGeometry(e).into())),
             },
             Stage::HeldPose(_) | Stage::HeldTorque(..) => return Some(Ok(())),

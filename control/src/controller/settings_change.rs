@@ -26,7 +26,9 @@ impl<M: Math> Controller<M> {
             self.job = Some(Job::Rebuild(Rebuild::new(candidate)));
             return Ok(Begun::Pending);
         }
-        self.hold_with(candidate, self.solver.clone())
+        // A new pivot: the same geometry, turning about another point.
+        let solver = candidate.about_pivot(self.solver.clone());
+        self.hold_with(candidate, solver)
     }
 
     /// The last step of a settings change: the pose being held with the new settings and
@@ -37,11 +39,16 @@ impl<M: Math> Controller<M> {
         candidate: Settings,
         solver: ik::Solver,
     ) -> Result<Begun, Error> {
-        let torque_changed =
-            candidate.payload != self.settings.payload || candidate.layout != self.settings.layout;
+        // A new pivot keeps the pose's numbers, so it moves the platform (away from home) or,
+        // with pulses set by `servo`, changes the pose they are.
+        let pivot_changed = candidate.pivot_mm != self.settings.pivot_mm;
+        let torque_changed = candidate.payload != self.settings.payload
+            || candidate.layout != self.settings.layout
+            || pivot_changed;
         if self.direct.is_some() {
             let pulses_changed = candidate.servos != self.settings.servos
-                || candidate.layout != self.settings.layout;
+                || candidate.layout != self.settings.layout
+                || pivot_changed;
             if !(pulses_changed || (torque_changed && candidate.payload.checked())) {
                 self.commit_settings(candidate, solver, self.solution);
                 return Ok(Begun::Answered);

@@ -28,6 +28,12 @@ pub(super) struct Streaming {
     pub goal: Pose,
     /// Where the tracker is and how fast it goes.
     pub tracker: Tracker,
+    /// The step guard's memory ([`crate::stream::StreamSettings::step_allowed`]): the last
+    /// frame taken and the last well-formed frame, each axis' share of its full scale.
+    pub taken: [f32; 6],
+    pub seen: [f32; 6],
+    /// [`frame_ticks`](super::Controller) when the last frame came (for `status`).
+    pub last_frame_tick: u32,
 }
 
 /// A clamp in progress: bisection on the straight line from `from` (which can be driven) to

@@ -4,10 +4,11 @@
 //! pose on the straight line from the current pose to it, found by bisection
 //! ([`CLAMP_STEPS`](super::CLAMP_STEPS) IK solutions, as a job a slice per pass: so a clamped
 //! frame takes effect a few passes, well under a millisecond, later), and counted. With every
-//! speed and acceleration limit off the pose is applied at once (pass-through, like a jump:
-//! [`Controller::take_new_pulses`]);
+//! speed and acceleration limit off (and no servo speed rating) the pose is applied at once
+//! (pass-through, like a jump: [`Controller::take_new_pulses`]);
 //! otherwise each axis follows it at the servo frame rate within the limits
-//! ([`crate::tracker`]); a step that would leave the workspace (the axes' own paths to a
+//! ([`crate::tracker`]), each step shortened to the servos' rated speeds if they have any
+//! (`controller/servo_speed.rs`); a step that would leave the workspace (the axes' own paths to a
 //! reachable goal can) stops the tracker where it is, counted as a clamp too. An accepted
 //! move (`pose`, `move`, `nudge`, `home`) or `stop` ends the stream (while a move's path is
 //! checked the stream holds, as a move in progress does; a refused one lets it go on); the
@@ -72,14 +73,35 @@ impl<M: Math> Controller<M> {
         }
     }
 
+    /// True if stream targets are applied as they come (pass-through): every speed and
+    /// acceleration limit off, and no servo speed rating (a rated stream is tracked, one
+    /// step per frame, so that each step can be kept to the ratings).
+    pub(super) fn passes_through(&self) -> bool {
+        self.track_limits() == TrackLimits::OFF && !self.settings.servo_speed.rated()
+    }
+
     /// A whole stream frame arrived: its pose becomes the stream's target (applied by
     /// [`Controller::apply_stream`]).
     pub(super) fn on_stream_frame(&mut self, frame: Frame) {
         let counts = &mut self.stream_counts;
-        let Ok(target) = self.settings.stream.to_pose(frame) else {
+        let Ok(fractions) = self.settings.stream.fractions(frame) else {
             counts.damaged = counts.damaged.wrapping_add(1);
             return;
         };
+        // The step guard (off by default): a frame too far from the last one taken (a lost
+        // digit) is dropped as damaged, unless the one before it agrees (a real jump).
+        if let Some(stream) = self.stream.as_mut() {
+            let allowed =
+                self.settings
+                    .stream
+                    .step_allowed(&stream.taken, &stream.seen, &fractions);
+            stream.seen = fractions;
+            if !allowed {
+                counts.damaged = counts.damaged.wrapping_add(1);
+                return;
+            }
+        }
+        let target = self.settings.stream.pose_of(&fractions);
         counts.frames = counts.frames.wrapping_add(1);
         // No pose to start from (pulses set with servo that correspond to none) is refused
         // like the e-stop. (The board feeds no bytes while a job runs; refused all the same if
@@ -95,6 +117,8 @@ impl<M: Math> Controller<M> {
             Some(stream) => {
                 stream.target = target;
                 stream.fresh = true;
+                stream.taken = fractions;
+                stream.last_frame_tick = self.frame_ticks;
             }
             None => {
                 // The stream starts (again) from where the platform is; a move in progress ends,
@@ -107,6 +131,9 @@ impl<M: Math> Controller<M> {
                     fresh: true,
                     goal: here,
                     tracker: Tracker::new(&here),
+                    taken: fractions,
+                    seen: fractions,
+                    last_frame_tick: self.frame_ticks,
                 });
             }
         }
@@ -119,8 +146,8 @@ impl<M: Math> Controller<M> {
             return;
         };
         let limits = self.track_limits();
-        if limits == TrackLimits::OFF {
-            return; // pass-through: applied as frames come
+        if limits == TrackLimits::OFF && !self.settings.servo_speed.rated() {
+            return; // pass-through (`passes_through`): applied as frames come
         }
         let dt_s = 1.0 / f32::from(self.settings.frame_hz.max(1));
         let next = stream.tracker.step::<M>(&stream.goal, &limits, dt_s);
@@ -128,7 +155,12 @@ impl<M: Math> Controller<M> {
             return; // settled: the pulses are solved already
         }
         match self.solver.solve::<M>(&self.settings.servos, &next.pose()) {
-            Ok(solution) => {
+            Ok(mut solution) => {
+                // (Shortened to the servos' rated speeds, if any.)
+                let mut next = next;
+                if self.settings.servo_speed.rated() {
+                    self.step_within_servo_speed(&stream.tracker, &mut next, &mut solution);
+                }
                 self.motion = Motion::new(next.pose());
                 self.solution = solution;
                 stream.tracker = next;
@@ -165,7 +197,7 @@ impl<M: Math> Controller<M> {
         let Some(mut stream) = self.stream else {
             return;
         };
-        if self.track_limits() == TrackLimits::OFF {
+        if self.passes_through() {
             if let Some(solution) = solution {
                 self.motion = Motion::new(pose);
                 self.solution = solution;
@@ -184,5 +216,86 @@ impl<M: Math> Controller<M> {
         if self.stream.take().is_some() {
             self.motion = Motion::new(*self.motion.pose());
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::controller::test_support::*;
+    use crate::controller::Controller;
+    use crate::session::Session;
+
+    /// Feeds a SimTools text frame (8 bits, axes x y z roll pitch yaw) with heave count `z`
+    /// and applies it as the board does.
+    fn send(c: &mut Controller, link: &mut Session, frame: &str) {
+        let mut out = std::string::String::new();
+        for &b in frame.as_bytes() {
+            c.on_byte(link, b, &mut out);
+        }
+        c.apply_stream();
+        assert_eq!(out, "", "frames get no reply");
+    }
+
+    /// Heave, mm, of count `z` at the default full scale (15 mm), by the documented formula.
+    fn heave(z: f32) -> f32 {
+        (z - 128.0) / 128.0 * 15.0
+    }
+
+    fn pass_through(guard: &str) -> (Controller, Session) {
+        let (mut c, mut link) = (quiet(), program());
+        for line in ["set speed_mm_s off", "set speed_deg_s off"] {
+            assert_eq!(run(&mut c, &mut link, line), "ok\r\n");
+        }
+        let line = std::format!("set stream.max_step_pct {guard}");
+        assert_eq!(run(&mut c, &mut link, &line), "ok\r\n");
+        (c, link)
+    }
+
+    #[test]
+    fn the_step_guard_drops_a_lost_digit_and_takes_the_next_good_frame() {
+        let (mut c, mut link) = pass_through("10");
+        send(&mut c, &mut link, "128,128,140,128,128,128X");
+        assert!((c.pose().z_mm - heave(140.0)).abs() < 1e-4);
+        // "140" lost its "0": 14 is 126 counts (98 % of full scale) away.
+        send(&mut c, &mut link, "128,128,14,128,128,128X");
+        assert!((c.pose().z_mm - heave(140.0)).abs() < 1e-4, "not applied");
+        let counts = c.stream_counts();
+        assert_eq!((counts.frames, counts.damaged), (1, 1));
+        // The next good frame is near the last one taken: applied.
+        send(&mut c, &mut link, "128,128,142,128,128,128X");
+        assert!((c.pose().z_mm - heave(142.0)).abs() < 1e-4);
+        // A step at the limit (12.8 counts is 10 %: 12 counts) is taken, one above it is not.
+        send(&mut c, &mut link, "128,128,154,128,128,128X");
+        assert!((c.pose().z_mm - heave(154.0)).abs() < 1e-4);
+        send(&mut c, &mut link, "128,128,168,128,128,128X");
+        assert!((c.pose().z_mm - heave(154.0)).abs() < 1e-4);
+        // A real jump: its second frame agrees with its first, and is taken.
+        send(&mut c, &mut link, "128,128,168,128,128,128X");
+        assert!((c.pose().z_mm - heave(168.0)).abs() < 1e-4);
+        let counts = c.stream_counts();
+        assert_eq!((counts.frames, counts.applied, counts.damaged), (4, 4, 2));
+    }
+
+    #[test]
+    fn without_the_guard_a_lost_digit_is_applied_and_off_is_the_default() {
+        assert_eq!(quiet().settings().stream.max_step_pct, 0.0);
+        let (mut c, mut link) = pass_through("off");
+        send(&mut c, &mut link, "128,128,140,128,128,128X");
+        send(&mut c, &mut link, "128,128,14,128,128,128X");
+        assert!((c.pose().z_mm - heave(14.0)).abs() < 1e-4);
+        assert_eq!(c.stream_counts().damaged, 0);
+    }
+
+    #[test]
+    fn the_guard_checks_every_axis_against_its_own_full_scale() {
+        let (mut c, mut link) = pass_through("5");
+        send(&mut c, &mut link, "128,128,128,128,128,128X");
+        // Yaw (full scale 20 deg) by 7 counts (5.5 %): dropped; roll by 6 (4.7 %): taken.
+        send(&mut c, &mut link, "128,128,128,128,128,135X");
+        send(&mut c, &mut link, "128,128,128,134,128,128X");
+        let counts = c.stream_counts();
+        assert_eq!((counts.applied, counts.damaged), (2, 1));
+        assert!((c.pose().roll_rad.to_degrees() - 6.0 / 128.0 * 15.0).abs() < 1e-3);
+        assert_eq!(c.pose().yaw_rad, 0.0);
     }
 }

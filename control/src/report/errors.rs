@@ -181,7 +181,7 @@ impl Code {
             Code::PoseNotFinite => "a computed target coordinate is not finite (cannot happen from typed numbers; kept for completeness)",
             Code::PathBlocked => "the straight path leaves the workspace, a servo limit or a torque rating (says where and why)",
             Code::PoseConflict => "with the new setting the held pose could not be driven (or held: torque ratings)",
-            Code::Busy => "frame rate, geometry, servo or payload settings, `defaults`, `save` or `servo` while moving",
+            Code::Busy => "frame rate, geometry, servo, payload or pivot settings, `defaults`, `save` or `servo` while moving",
             Code::SettingConflict => "two settings that must differ would be equal (an axis on two stream counts, one GPIO for both pins)",
             Code::Estop => "a move while the emergency stop is open or latched (says which: close the input, then `reset`)",
             Code::SaveFailed => "the flash did not keep what `save` wrote (it read back differently) or refused the write; the settings saved before are kept",
@@ -568,6 +568,9 @@ impl Display for SettingError {
                         f.write_str("off or a free GPIO:")?;
                         FREE_GPIOS.iter().try_for_each(|p| write!(f, " {p}"))
                     }
+                    Expected::Hundredths => f.write_str(
+                        "a number of hundredths (at most two decimals: the flash keeps hundredths, so the value saved comes back as given)",
+                    ),
                 }
             }
             SettingError::NotOneOf {

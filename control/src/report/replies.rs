@@ -31,6 +31,13 @@ pub const VERSION: &str = env!("CARGO_PKG_VERSION");
 pub const USB_MANUFACTURER: &str = "hexapod-fw";
 /// The product the board names to a USB host, beside [`USB_MANUFACTURER`].
 pub const USB_PRODUCT: &str = "hexapod control";
+/// The board's USB vendor ID: the pid.codes test vendor, for open-source devices in
+/// development, until the project has a product ID of its own (pid.codes gives them to open
+/// hardware for free). A CDC ACM device needs no driver on Linux, macOS or Windows 10 and
+/// later, whatever its IDs. The host tool finds boards by it and [`USB_PID`] (`hexapod boards`).
+pub const USB_VID: u16 = 0x1209;
+/// The board's USB product ID, beside [`USB_VID`]: pid.codes' test product.
+pub const USB_PID: u16 = 0x0001;
 
 /// Writes `ok` (the success reply).
 pub fn write_ok(out: &mut impl Write) {
@@ -216,6 +223,12 @@ pub enum MotionReport {
         /// Each axis follows within the speed and acceleration limits (not pass-through).
         tracking: bool,
     },
+    /// A stream no frame has come for in a while (it has come to rest): holding its last
+    /// pose; the next frame takes it up again.
+    StreamIdle {
+        /// Seconds since its last frame.
+        quiet_s: f32,
+    },
     /// Holding pulses set one servo at a time (`servo`).
     Direct,
 }
@@ -228,7 +241,8 @@ pub struct StreamCounts {
     /// Frames whose pose became the target (the others were superseded by a newer one before
     /// they were applied: the newest frame wins).
     pub applied: u32,
-    /// Frames dropped as damaged (wrong length or trailer, garbage, counts that do not fit).
+    /// Frames dropped as damaged (wrong length or trailer, garbage, counts that do not fit, a
+    /// step larger than the step guard allows).
     pub damaged: u32,
     /// Targets or steps moved back inside the workspace.
     pub clamped: u32,
@@ -302,6 +316,16 @@ pub enum Notice {
         /// The UART's hardware lost them (an overrun or a line error), not a receive queue.
         in_uart: bool,
     },
+    /// More UART receive errors in the burst whose first loss was announced
+    /// ([`Notice::InputLost`]): counted, not announced one by one.
+    InputLostBurst {
+        /// Losses after the first.
+        losses: u32,
+        /// Bytes they lost, at least.
+        at_least: u32,
+        /// Over how long, s (from the burst's start, or its last report, to its last loss).
+        over_s: f32,
+    },
     /// The settings given at start-up were invalid; the defaults are used.
     SettingsRejected(Error),
     /// The emergency-stop input opened.
@@ -352,6 +376,18 @@ pub fn write_notice(out: &mut impl Write, notice: &Notice) {
             format_args!(
                 "warning: UART receive error, input lost (at least {})",
                 Bytes(*at_least)
+            ),
+        ),
+        Notice::InputLostBurst {
+            losses,
+            at_least,
+            over_s,
+        } => line(
+            out,
+            format_args!(
+                "warning: UART receive errors went on: {losses} more, input lost (at least {}) in {} s",
+                Bytes(*at_least),
+                Fixed(*over_s, 2)
             ),
         ),
         Notice::SettingsRejected(e) => line(
@@ -411,7 +447,7 @@ impl Display for Unusable<'_> {
             DecodeError::UnsupportedVersion(v) => write!(
                 f,
                 "written in format version {v}; this firmware reads versions \
-                 {FORMAT_VERSION_NO_BAUD} and {FORMAT_VERSION}"
+                 {FORMAT_VERSION_NO_BAUD} to {FORMAT_VERSION}"
             ),
             DecodeError::BadChecksum => f.write_str("damaged: checksum mismatch"),
             DecodeError::BadMagic | DecodeError::TooShort => {
@@ -728,6 +764,13 @@ fn status_line(out: &mut impl Write, s: &StatusReport, index: usize) -> bool {
             MotionReport::Streaming { tracking: false } => {
                 line(out, format_args!("state: streaming (pass-through)"))
             }
+            MotionReport::StreamIdle { quiet_s } => line(
+                out,
+                format_args!(
+                    "state: idle (stream: no frame for {} s; holding its last pose, the next frame resumes it)",
+                    Fixed(quiet_s, 1)
+                ),
+            ),
             MotionReport::Direct => {
                 line(out, format_args!("state: direct (pulses set with servo)"))
             }

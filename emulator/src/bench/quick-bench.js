@@ -73,31 +73,13 @@ if (which === 'ik') {
 
 /** The cycles of `frames` tracker frames towards each pose, per function. */
 function profileTracker(list, frames) {
-  const ROM_END = 0x4000;
   const MARKER_GPIO = 16;
   const board = new EmulatedBoard({ elf: BENCH_ELF });
   board.waitForLine(/^bench ready/, { timeoutMs: 1000 });
   const ranges = symbolRanges(BENCH_ELF, () => true)
     .filter((r) => r.end > r.start)
     .sort((a, b) => a.start - b.start);
-  const nameOf = (pc) => {
-    if (pc < ROM_END) {
-      return 'boot ROM';
-    }
-    let lo = 0;
-    let hi = ranges.length - 1;
-    while (lo <= hi) {
-      const mid = (lo + hi) >> 1;
-      if (ranges[mid].end <= pc) {
-        lo = mid + 1;
-      } else if (ranges[mid].start > pc) {
-        hi = mid - 1;
-      } else {
-        return ranges[mid].name;
-      }
-    }
-    return `? ${pc.toString(16)}`;
-  };
+  const nameOf = functionNames(BENCH_ELF);
   let high = false;
   board.mcu.gpio[MARKER_GPIO].addListener((state) => {
     high = state === 1;
@@ -145,14 +127,9 @@ function profileTracker(list, frames) {
     });
   }
   const perFrame = list.length * frames;
-  const sorted = [...rows].sort((a, b) => b[1] - a[1]);
-  const total = sorted.reduce((sum, [, c]) => sum + c, 0);
-  console.log(
-    `per frame (${perFrame} frames, empty brackets included): ${fmt(total / perFrame)} cycles`,
-  );
-  for (const [name, cycles] of sorted) {
-    console.log(`${fmt(cycles / perFrame).padStart(8)}  ${name}`);
-  }
+  printPerFunction(rows, perFrame, (total) => {
+    return `per frame (${perFrame} frames, empty brackets included): ${fmt(total)} cycles`;
+  });
   console.log('inclusive (with what they call):');
   for (const [name, cycles] of inclusive) {
     console.log(`${fmt(cycles / perFrame).padStart(8)}  ${name}`);
@@ -214,12 +191,24 @@ function profilePoseLines(count) {
       throw new Error(`${line}: ${reply}`);
     }
   }
+  printPerFunction(
+    rows,
+    count,
+    (total) =>
+      `per line (${count} lines, ${(bytes / count).toFixed(1)} bytes each): ${fmt(total)} cycles`,
+    40,
+  );
+}
+
+/**
+ * Prints cycles per function (`rows`: name -> cycles) divided by `per`, most first (the first
+ * `limit`), under a heading `heading(total / per)`.
+ */
+function printPerFunction(rows, per, heading, limit = Infinity) {
   const sorted = [...rows].sort((a, b) => b[1] - a[1]);
   const total = sorted.reduce((sum, [, c]) => sum + c, 0);
-  console.log(
-    `per line (${count} lines, ${(bytes / count).toFixed(1)} bytes each): ${fmt(total / count)} cycles`,
-  );
-  for (const [name, cycles] of sorted.slice(0, 40)) {
-    console.log(`${fmt(cycles / count).padStart(8)}  ${name}`);
+  console.log(heading(total / per));
+  for (const [name, cycles] of sorted.slice(0, limit)) {
+    console.log(`${fmt(cycles / per).padStart(8)}  ${name}`);
   }
 }

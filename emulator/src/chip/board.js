@@ -364,6 +364,15 @@ export class EmulatedBoard {
     this.sendBytes(`${text}\n`);
   }
 
+  /**
+   * Sends bytes that each arrive with a UART framing error (what a sender at another baud rate
+   * produces), paced at the firmware's baud rate.
+   */
+  sendGarbled(data) {
+    const bytes = typeof data === 'string' ? Buffer.from(data, 'latin1') : data;
+    this.input.sendWithFramingErrors(bytes);
+  }
+
   /** See `SerialLink.waitForLine` (UART0). */
   waitForLine(matcher, options) {
     return this.uart.waitForLine(matcher, options);

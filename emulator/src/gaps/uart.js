@@ -41,8 +41,9 @@
 //      MIS != 0. A receiver or transmitter that UARTCR disables stops (bytes arriving then
 //      are ignored and counted; a byte being shifted out completes).
 //    Not modelled (no emulated line can produce them): framing/parity/break errors from the
-//    wire (`feedByte` accepts FE/PE/BE bits in 8..10 to inject them), sending breaks, modem
-//    lines and flow control, loopback (UARTCR.LBE fails the run), IrDA, DMA requests (as
+//    wire (`feedByte` accepts FE/PE/BE bits in 8..10 to inject them, and
+//    `PacedUartInput.sendWithFramingErrors` sends bytes flagged FE, as a sender at another
+//    rate does), sending breaks, modem lines and flow control, loopback (UARTCR.LBE fails the run), IrDA, DMA requests (as
 //    rp2040js: TX always requested while enabled, RX never). Received bytes enter the FIFO
 //    at the end of their stop bit (a PL011 stores them at its middle: half a bit earlier).
 // 3. Receive timing: `uart.feedByte()` in rp2040js puts a byte into the RX FIFO at once. A
@@ -489,8 +490,20 @@ export class PacedUartInput {
 
   /** Queues bytes; each reaches the RX FIFO one byte time after the previous one. */
   send(bytes) {
+    this.queueEntries(bytes, 0);
+  }
+
+  /**
+   * Queues bytes that arrive with a framing error (FE, bit 8 of a FIFO entry), as a sender at
+   * another baud rate (or line noise) produces: each one the firmware must count as lost.
+   */
+  sendWithFramingErrors(bytes) {
+    this.queueEntries(bytes, 0x100);
+  }
+
+  queueEntries(bytes, errorBits) {
     for (const byte of bytes) {
-      this.queue.push(byte & 0xff);
+      this.queue.push((byte & 0xff) | errorBits);
     }
     if (!this.scheduled && this.pending > 0) {
       // A byte takes one byte time on the wire, counted from now or from the previous byte.

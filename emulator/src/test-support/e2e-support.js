@@ -62,7 +62,8 @@ export function defaultSettings() {
       arm_mm: 20,
       rod_mm: 120,
     },
-    // Even servos normal, odd reversed; 1600/pi us/rad; 1100..1900 us; not rated.
+    // Even servos normal, odd reversed; 1600/pi us/rad; 1100..1900 us; not rated (torque or
+    // speed).
     servos: SERVOS.map((n) => ({
       trim_us: 1500,
       rate_us_rad: 1600 / Math.PI,
@@ -71,6 +72,8 @@ export function defaultSettings() {
       max_us: 1900,
       /** @type {number | 'off'} */
       torque_kgcm: 'off',
+      /** @type {number | 'off'} */
+      speed_s_60deg: 'off',
     })),
     // No payload.
     payload: { payload_g: 0, payload_com_x_mm: 0, payload_com_y_mm: 0, payload_com_z_mm: 0 },

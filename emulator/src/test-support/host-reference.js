@@ -57,19 +57,21 @@ function orZero(value) {
 }
 
 /**
- * Settings as the reference takes them: the paired layout, six servos and the payload, in the
- * units and names `set` uses. `servos[i]` is servo i + 1:
+ * Settings as the reference takes them: the paired layout, six servos, the payload and the
+ * pivot, in the units and names `set` uses. `servos[i]` is servo i + 1:
  * `{ trim_us, rate_us_rad, dir, min_us, max_us, torque_kgcm }`; `payload` (optional) is
- * `{ payload_g, payload_com_x_mm, payload_com_y_mm, payload_com_z_mm }`.
+ * `{ payload_g, payload_com_x_mm, payload_com_y_mm, payload_com_z_mm }`; `pivot` (optional)
+ * `{ pivot_x_mm, pivot_y_mm, pivot_z_mm }`.
  */
 /**
  * @param {{ layout: Record<string, number>, servos: Record<string, number | string>[],
- *   payload?: Record<string, number> }} settings
+ *   payload?: Record<string, number>, pivot?: Record<string, number> }} settings
  */
-export function configLines({ layout, servos, payload = {} }) {
+export function configLines({ layout, servos, payload = {}, pivot = {} }) {
   const l = layout;
   const p = payload;
   return [
+    `pivot ${orZero(pivot.pivot_x_mm)} ${orZero(pivot.pivot_y_mm)} ${orZero(pivot.pivot_z_mm)}`,
     `layout ${l.base_radius_mm} ${l.base_half_angle_deg} ${l.platform_radius_mm} ${l.platform_half_angle_deg} ${l.arm_mm} ${l.rod_mm}`,
     ...servos.map(
       (s, i) => `servo ${i + 1} ${s.trim_us} ${s.rate_us_rad} ${s.dir} ${s.min_us} ${s.max_us}`,
@@ -124,6 +126,18 @@ export class HostReference {
     return this.runWith(
       settings,
       poses.map((pose) => `solve ${pose.join(' ')}`),
+    );
+  }
+
+  /**
+   * Not the core: the independent f64 reference (`host-tests`' chain of frames about the
+   * pivot, each rod closure's numeric root, eq. 13, 14 in f64) for each pose:
+   * `{ ok: true, arm_deg, pulse_us }` or `{ ok: false, code: 'unreachable' }`.
+   */
+  f64(settings, poses) {
+    return this.runWith(
+      settings,
+      poses.map((pose) => `f64 ${pose.join(' ')}`),
     );
   }
 

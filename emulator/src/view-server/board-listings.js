@@ -2,7 +2,7 @@
 // `geometry` (layout, arm and rod lengths in mm, home height in mm, per leg the shaft centre b
 // and platform joint p in mm, the arm-plane angle beta and home arm angle alpha0 in degrees)
 // and `config` (every `# name: value` setting; per servo trim, rate in us/rad, direction,
-// limits in us and torque rating in kgf cm). The 3D view draws from these, so it shows the
+// limits in us, torque rating in kgf cm and speed rating in s per 60 degrees). The 3D view draws from these, so it shows the
 // build the firmware uses, not the documented defaults. Whoever asked for the listing (a user,
 // the view), it is read the same way; a listing counts only once its final `ok` has arrived,
 // so a refused or cut one changes nothing.
@@ -22,7 +22,8 @@ const CONFIG_START = /^# frame_hz: (\d+)$/;
 const SETTING = /^# ([a-z][a-z0-9_.]*): (\S+)$/;
 const SERVO = new RegExp(
   String.raw`^# servo([1-6]): trim_us=(${NUMBER}) rate_us_rad=(${NUMBER}) dir=(normal|reversed) ` +
-    String.raw`min_us=(${NUMBER}) max_us=(${NUMBER}) torque_kgcm=(off|${NUMBER})$`,
+    String.raw`min_us=(${NUMBER}) max_us=(${NUMBER}) torque_kgcm=(off|${NUMBER})` +
+    String.raw`(?: speed_s_60deg=(off|${NUMBER}))?$`,
 );
 const OK = /^ok\b/;
 const ERROR = /^error:/;
@@ -33,8 +34,8 @@ const ERROR = /^error:/;
  * - `{ kind: 'geometry', geometry: { layout, armMm, rodMm, homeHeightMm, legs: [{ leg, baseMm:
  *   [x, y, z], platformMm: [x, y, z], betaDeg, alpha0Deg }] } }` (legs 1..6 in order);
  * - `{ kind: 'config', config: { settings: { frame_hz: '50', ... }, servos: [{ servo, trimUs,
- *   rateUsRad, dir: 'normal' | 'reversed', minUs, maxUs, torqueKgcm }] } }` (servos 1..6 in
- *   order; torqueKgcm null when the servo is not rated);
+ *   rateUsRad, dir: 'normal' | 'reversed', minUs, maxUs, torqueKgcm, speedS60deg }] } }` (servos
+ *   1..6 in order; torqueKgcm, speedS60deg null when the servo is not rated);
  * otherwise null. Lines that belong to neither (echo, prompts, notices) are skipped.
  */
 export class ListingReader {
@@ -103,6 +104,7 @@ export class ListingReader {
         minUs: Number(match[5]),
         maxUs: Number(match[6]),
         torqueKgcm: match[7] === 'off' ? null : Number(match[7]),
+        speedS60deg: match[8] === undefined || match[8] === 'off' ? null : Number(match[8]),
       };
     } else if ((match = SETTING.exec(text))) {
       open.settings[match[1]] = match[2];
@@ -128,7 +130,7 @@ export class ListingReader {
 
 /**
  * Which listings a command line can change, so the view asks for them again: `[]`, or some of
- * `'geometry'` and `'config'` (`defaults`; `set` of a geometry or servo setting).
+ * `'geometry'` and `'config'` (`defaults`; `set` of a geometry, servo or pivot setting).
  */
 export function listingsChangedBy(line) {
   const words = line
@@ -144,7 +146,7 @@ export function listingsChangedBy(line) {
   if (/^(base_|platform_|arm_mm$|rod_mm$)/.test(words[1])) {
     return ['geometry'];
   }
-  if (/^servo/.test(words[1])) {
+  if (/^(servo|pivot_)/.test(words[1])) {
     return ['config'];
   }
   return [];

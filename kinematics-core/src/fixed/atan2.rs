@@ -66,6 +66,17 @@ const fn arc_tangents() -> [u32; 65] {
 const HALF_PI_Q32: i64 = table::round(PI / 2.0 * (1u64 << 32) as f64);
 const PI_Q32: i64 = table::round(PI * (1u64 << 32) as f64);
 
+/// A constant angle `c` (steps of 2^-32 rad) plus 4 (the rounding to 2^-29) as
+/// `c + 4 = 8 whole + part`: then `(c + 4 + phi) >> 3 = whole + ((part + phi) >> 3)` and
+/// `(c + 4 - phi) >> 3 = whole - ((phi + 7 - part) >> 3)`, exactly, in 32-bit words.
+const fn rounding_split(c: i64) -> (i32, u32) {
+    (((c + 4) >> 3) as i32, ((c + 4) & 7) as u32)
+}
+const ROUNDED_ZERO: (i32, u32) = rounding_split(0);
+const ROUNDED_HALF_PI: (i32, u32) = rounding_split(HALF_PI_Q32);
+const ROUNDED_PI: (i32, u32) = rounding_split(PI_Q32);
+const ROUNDED_PI_MINUS_HALF_PI: (i32, u32) = rounding_split(PI_Q32 - HALF_PI_Q32);
+
 /// `atan2(y, x)`: the angle of the vector `(x, y)` in rad, in steps of 2^-29, within
 /// `(-pi, pi]` (`pi` for `y = 0`, `x < 0`), 0 for `(0, 0)`. Any `i32`s (see the module docs for
 /// the method and the error bound).
@@ -76,14 +87,22 @@ pub fn atan2(y: i32, x: i32) -> i32 {
     if a == 0 {
         return 0;
     }
-    // The angle of (|x|, |y|) in steps of 2^-32 rad, then the quadrant.
-    let phi = i64::from(atan_of_ratio(a, b));
-    let mut theta = if swap { HALF_PI_Q32 - phi } else { phi };
-    if x < 0 {
-        theta = PI_Q32 - theta;
-    }
-    // Rounded as a magnitude, so atan2(-y, x) = -atan2(y, x) exactly.
-    let rounded = ((theta + 4) >> 3) as i32;
+    // The angle of (|x|, |y|) in steps of 2^-32 rad, then the quadrant: `theta` is `phi`,
+    // `pi/2 - phi`, `pi - phi` or `pi/2 + phi` (y >= 0 and x >= 0, the octant past the
+    // diagonal, x < 0, both), rounded to 2^-29 rad as a magnitude (so atan2(-y, x) =
+    // -atan2(y, x) exactly): `(theta + 4) >> 3`, in 32-bit words (`theta` may pass 2^32).
+    let phi = atan_of_ratio(a, b);
+    let ((whole, part), add) = match (swap, x < 0) {
+        (false, false) => (ROUNDED_ZERO, true),
+        (true, false) => (ROUNDED_HALF_PI, false),
+        (false, true) => (ROUNDED_PI, false),
+        (true, true) => (ROUNDED_PI_MINUS_HALF_PI, true),
+    };
+    let rounded = if add {
+        whole + ((part + phi) >> 3) as i32
+    } else {
+        whole - ((phi + 7 - part) >> 3) as i32
+    };
     if y < 0 {
         -rounded
     } else {
@@ -152,6 +171,40 @@ mod tests {
     fn error_steps(y: i32, x: i32) -> f64 {
         let exact = libm::atan2(f64::from(y), f64::from(x)) * (1u64 << 29) as f64;
         (f64::from(atan2(y, x)) - exact).abs()
+    }
+
+    #[test]
+    fn quadrants_rounded_in_32_bits_as_in_64() {
+        // The quadrant and the rounding in 32-bit words give what `theta` in 64 bits gives.
+        let in_64_bits = |y: i32, x: i32| {
+            let (ax, ay) = (x.unsigned_abs(), y.unsigned_abs());
+            let swap = ay > ax;
+            let (a, b) = if swap { (ay, ax) } else { (ax, ay) };
+            if a == 0 {
+                return 0;
+            }
+            let phi = i64::from(atan_of_ratio(a, b));
+            let mut theta = if swap { HALF_PI_Q32 - phi } else { phi };
+            if x < 0 {
+                theta = PI_Q32 - theta;
+            }
+            let rounded = ((theta + 4) >> 3) as i32;
+            if y < 0 {
+                -rounded
+            } else {
+                rounded
+            }
+        };
+        let mut seed = 0x7a7a_0001_u32;
+        let mut next = || crate::test_support::xorshift(&mut seed) as i32;
+        for i in 0..300_000 {
+            let (y, x) = if i < 40_000 {
+                (i % 200 - 100, i / 200 - 100)
+            } else {
+                (next() >> (i % 31), next() >> (i / 7 % 31))
+            };
+            assert_eq!(atan2(y, x), in_64_bits(y, x), "({y}, {x})");
+        }
     }
 
     #[test]

@@ -5,7 +5,9 @@
 //! - lengths, mm: `i32` in steps of 2^-[`MM_FRAC`] mm (2^-20 mm, about 1e-6 mm);
 //! - rotation matrix entries (no unit) and sines and cosines: `i32` in steps of
 //!   2^-[`ROT_FRAC`];
-//! - squared lengths, mm^2: `i64` in steps of 2^-[`SQ_FRAC`] mm^2 (2^-36 mm^2);
+//! - squared lengths, mm^2: `i64` in steps of 2^-[`SQ_FRAC`] mm^2 (2^-36 mm^2), or, on the
+//!   IK's 32-bit path (every usual leg: the `NARROW_*` bounds), `i32` in steps of
+//!   2^-[`NARROW_SQ_FRAC`] mm^2 (2^-15 mm^2);
 //! - angles, rad: `i32` in steps of 2^-[`ANGLE_FRAC`] rad (the half-angles of eq. 9), which
 //!   are the arm angles in steps of 2^-[`ARM_FRAC`] rad.
 //!
@@ -45,6 +47,22 @@ pub(crate) const MAX_FIXED_TWO_ARM_MM: f32 = 2.0 * MAX_FIXED_MM;
 /// Bound (exclusive) on `|s^2 - a^2|` for the fixed-point part, mm^2 (a rod up to ~6 m):
 /// `|L +- N| < 2^23 + 4e7 + 2^21 < 2^26 mm^2`, which is 2^62 steps of [`SQ_FRAC`].
 pub(crate) const MAX_FIXED_ROD_TERM_MM2: f32 = 4.0e7;
+/// Fraction bits of the squared lengths (mm^2) of the IK's 32-bit path (the usual one, see
+/// [`crate::ik`]): steps of 2^-15 mm^2 (3.1e-5 mm^2), so that `|l|^2` below 2^16 mm^2 (a leg
+/// shorter than 256 mm) fits 31 bits. Each product there is within 0.51 of a step, while the
+/// rounding of `l` itself to 2^-21 mm already moves `|l|^2` by up to `|l|` 2^-20 mm^2 (3.7
+/// steps for a 120 mm leg): the coarser step costs the arm angle nothing measurable.
+pub(crate) const NARROW_SQ_FRAC: u32 = 15;
+/// Bound (exclusive) on each coordinate of `l` for the 32-bit path, in steps of 2^-[`MM_FRAC`]
+/// mm: 256 mm. A larger one takes the 64-bit path.
+pub(crate) const NARROW_LEG_Q: u32 = 1 << 28;
+/// Bound (exclusive) on `2a` (and so on `|n_i|`) for the 32-bit path, mm: 128 mm, so that
+/// `|N|, |M| < 2a |l_k| < 2^15 mm^2` (2^30 steps) each. A larger arm takes the 64-bit path.
+pub(crate) const MAX_NARROW_TWO_ARM_MM: f32 = 128.0;
+/// Bound (exclusive) on `s^2 - a^2` for the 32-bit path, mm^2 (it must also be `>= 0`): 2^16
+/// mm^2, 2^31 steps of 2^-[`NARROW_SQ_FRAC`], so `L = |l|^2 - (s^2 - a^2)` fits an `i32`.
+pub(crate) const MAX_NARROW_ROD_TERM_MM2: f64 = 65536.0;
+
 /// Fraction bits of an angle from [`atan2`] (rad): `|angle| <= pi` fits an `i32`.
 pub(crate) const ANGLE_FRAC: u32 = 29;
 /// Fraction bits of an arm angle `alpha = 2 atan2(...)` (eq. 9; rad): the same integer as its
@@ -142,6 +160,19 @@ pub(crate) fn umul64(a: u32, b: u32) -> u64 {
         + u64::from(a_lo * b_lo)
 }
 
+/// [`rotate_mm_split`] of factors not yet split (the tests' form).
+#[cfg(test)]
+pub(crate) fn rotate_mm(row: [i32; 2], p_mm: [i32; 2]) -> i32 {
+    rotate_mm_split(row.map(split15), p_mm.map(split15))
+}
+
+/// `v` split at bit 15: `[v >> 15, v & 0x7fff]` (`v = hi 2^15 + lo`, `0 <= lo < 2^15`), the
+/// factors of [`rotate_mm_split`].
+#[inline(always)]
+pub(crate) const fn split15(v: i32) -> [i32; 2] {
+    [v >> 15, v & 0x7fff]
+}
+
 /// `R_k0 p_0 + R_k1 p_1` for a row `(R_k0, R_k1)` in steps of 2^-[`ROT_FRAC`] (below
 /// [`MAX_ROTATION_ENTRY`]) and a point `(p_0, p_1)` in steps of 2^-[`MM_FRAC`] mm (below
 /// [`MAX_FIXED_MM`]), rounded to the nearest 2^-[`MM_FRAC`] mm (halves up), in 32-bit
@@ -149,13 +180,14 @@ pub(crate) fn umul64(a: u32, b: u32) -> u64 {
 /// products exact in steps of 2^-35 mm with the low one cut to that, the two columns' fractions
 /// halved before they are summed (so the sum fits 32 bits): off from the exact sum's rounding
 /// only within 2^-13 of a step of a tie (below 2^-33 mm in all).
+///
+/// Both factors come split ([`split15`]): the IK splits each pose's rows once and each leg's
+/// point when the solver is built, not in every product.
 #[inline(always)]
-pub(crate) fn rotate_mm(row: [i32; 2], p_mm: [i32; 2]) -> i32 {
+pub(crate) fn rotate_mm_split(row: [[i32; 2]; 2], p_mm: [[i32; 2]; 2]) -> i32 {
     // |R_hi| <= 2^15 + 2^11, |p_hi| < 2^13.6, the lows below 2^15: every product and the
     // fraction (below 2^30.6) fit 32 bits.
-    let part = |r: i32, p: i32| {
-        let (r_hi, r_lo) = (r >> 15, r & 0x7fff);
-        let (p_hi, p_lo) = (p >> 15, p & 0x7fff);
+    let part = |[r_hi, r_lo]: [i32; 2], [p_hi, p_lo]: [i32; 2]| {
         (
             r_hi * p_hi,
             r_hi * p_lo + r_lo * p_hi + ((r_lo * p_lo) >> 15),
@@ -164,6 +196,20 @@ pub(crate) fn rotate_mm(row: [i32; 2], p_mm: [i32; 2]) -> i32 {
     let (whole_0, fraction_0) = part(row[0], p_mm[0]);
     let (whole_1, fraction_1) = part(row[1], p_mm[1]);
     whole_0 + whole_1 + (((fraction_0 >> 1) + (fraction_1 >> 1) + (1 << 13)) >> 14)
+}
+
+/// `a * b / 2^30` rounded to nearest (halves up), exactly as `(a b + 2^29) >> 30` in 64 bits,
+/// for `|a| < 2^30` and `0 <= b < 2^30`, from four 32-bit products (a 64-bit product costs
+/// several times as much on the M0+): with `a = a_hi 2^15 + a_lo`, `b = b_hi 2^15 + b_lo` (the
+/// lows in `[0, 2^15)`), `a b = a_hi b_hi 2^30 + (a_hi b_lo + a_lo b_hi) 2^15 + a_lo b_lo`, and
+/// `floor((x 2^15 + y) / 2^30) = floor((x + floor(y / 2^15)) / 2^15)`; the middle sum stays
+/// below 2^31 - 2^16.
+#[inline(always)]
+pub(crate) fn mul_q30(a: i32, b: i32) -> i32 {
+    let [a_hi, a_lo] = split15(a);
+    let [b_hi, b_lo] = split15(b);
+    let low = ((a_lo * b_lo) as u32 + (1 << 29)) >> 15;
+    a_hi * b_hi + ((a_hi * b_lo + a_lo * b_hi + low as i32) >> 15)
 }
 
 /// `a * a` exactly, from three 16 x 16 -> 32-bit products (see [`wide_mul`]).
@@ -185,6 +231,39 @@ pub(crate) fn square_mm(a: i32) -> i64 {
 #[inline(always)]
 pub(crate) fn mul_mm(a: i32, b: i32) -> i64 {
     wide_mul(a, b) >> (2 * MM_FRAC - SQ_FRAC)
+}
+
+/// The square of a length `a` in steps of 2^-[`MM_FRAC`] mm, `|a| < 2^28` (256 mm), in steps of
+/// 2^-[`NARROW_SQ_FRAC`] mm^2, rounded to nearest within 0.51 of a step, from three 32-bit
+/// products (the IK's 32-bit path). With `|a| = h 2^13 + r` (`h < 2^15`, `r < 2^13`):
+/// `a^2 / 2^25 = 2 h^2 + (h r + r^2 / 2^14) / 2^11`; `2 h^2 < 2^31`, `h r < 2^28`, and the
+/// result is below 2^31 + 2^17.
+#[inline(always)]
+pub(crate) fn square_mm_narrow(a: i32) -> u32 {
+    let u = a.unsigned_abs();
+    let (hi, lo) = (u >> 13, u & 0x1fff);
+    2 * hi * hi + ((hi * lo + ((lo * lo) >> 14) + (1 << 10)) >> 11)
+}
+
+/// The product of two lengths in steps of 2^-[`MM_FRAC`] mm, `|a| < 2^27` (128 mm) and
+/// `|b| < 2^28` (256 mm), in steps of 2^-[`NARROW_SQ_FRAC`] mm^2, rounded to nearest within
+/// 0.51 of a step, from four 32-bit products (the IK's 32-bit path). With `a = h_a 2^13 + r_a`
+/// (`h_a` signed, `|h_a| <= 2^14`, `0 <= r_a < 2^13`) and `b` alike (`|h_b| <= 2^15`):
+/// `a b / 2^25 = 2 h_a h_b + (h_a r_b + r_a h_b + r_a r_b / 2^13) / 2^12`, every product and
+/// sum below 2^30 in magnitude, the result within 2^30 + 2^17.
+/// `a` comes split ([`split13`]): the IK splits its constant factors (`2a`, `n_i`) once, when
+/// the solver is built.
+#[inline(always)]
+pub(crate) fn mul_mm_narrow([a_hi, a_lo]: [i32; 2], b: i32) -> i32 {
+    let [b_hi, b_lo] = split13(b);
+    2 * a_hi * b_hi + ((a_hi * b_lo + a_lo * b_hi + ((a_lo * b_lo) >> 13) + (1 << 11)) >> 12)
+}
+
+/// `v` split at bit 13: `[v >> 13, v & 0x1fff]` (`v = hi 2^13 + lo`, `0 <= lo < 2^13`), the
+/// factors of [`mul_mm_narrow`].
+#[inline(always)]
+pub(crate) const fn split13(v: i32) -> [i32; 2] {
+    [v >> 13, v & 0x1fff]
 }
 
 /// The leading zeros of every byte value (8 for 0).
@@ -235,11 +314,11 @@ pub(crate) fn normalise(m: u32) -> (u32, u32) {
 /// the exponent field, which is then right.
 #[inline(always)]
 fn pack(sign: u32, m: u32, sticky: bool, exponent: u32) -> f32 {
-    let mut mantissa = m >> 8;
+    // Up exactly when the cut bits are above half, or at half with sticky bits or an odd
+    // mantissa: `rest + (odd | sticky) >= 0x81`, without a branch (the sum is below 0x180).
+    let mantissa = m >> 8;
     let rest = m & 0xff;
-    if rest > 0x80 || (rest == 0x80 && (sticky || mantissa & 1 == 1)) {
-        mantissa += 1;
-    }
+    let mantissa = mantissa + ((rest + ((mantissa & 1) | u32::from(sticky)) + 0x7f) >> 8);
     f32::from_bits(sign | ((exponent << 23) + mantissa - (1 << 23)))
 }
 
@@ -378,6 +457,55 @@ mod tests {
             worst = worst.max((f64::from(rotate_mm(row, p)) - exact).abs());
         }
         assert!(worst <= 0.5 + 1.0 / 8192.0, "{worst} steps");
+    }
+
+    #[test]
+    fn q30_products_are_exactly_rounded() {
+        let mut seed = 0x0bad_cafe_u32;
+        let mut next = || xorshift(&mut seed);
+        let (a_max, b_max) = ((1i32 << 30) - 1, (1i32 << 30) - 1);
+        let exact = |a: i32, b: i32| ((i64::from(a) * i64::from(b) + (1 << 29)) >> 30) as i32;
+        for a in [a_max, -a_max, 0, 1, -1, 1 << 15, -(1 << 15), 0x7fff] {
+            for b in [b_max, 0, 1, 0x7fff, 1 << 15, 1 << 29] {
+                assert_eq!(mul_q30(a, b), exact(a, b), "{a} * {b}");
+            }
+        }
+        for _ in 0..200_000 {
+            let a = (next() as i32 >> 2) >> (next() % 16);
+            let b = (next() >> 2) as i32 >> (next() % 16);
+            assert_eq!(mul_q30(a, b), exact(a, b), "{a} * {b}");
+        }
+    }
+
+    #[test]
+    fn narrow_products_round_to_nearest() {
+        // Against the exact products (i64), over random lengths within the bounds and at their
+        // extremes: within half a step and 2^-7 of one (the bound of the docs is 0.51).
+        let mut seed = 0x1357_9bdf_u32;
+        let mut next = || xorshift(&mut seed);
+        let (a_max, b_max) = ((1i32 << 27) - 1, (1i32 << 28) - 1);
+        let step = f64::from(1u32 << (2 * MM_FRAC - NARROW_SQ_FRAC));
+        let (mut worst_square, mut worst_product) = (0.0f64, 0.0f64);
+        for i in 0..400_000u32 {
+            let (a, b) = if i < 16 {
+                let sign = |bit: u32, v: i32| if i >> bit & 1 == 0 { v } else { -v };
+                (sign(0, a_max >> (i >> 2 & 1)), sign(1, b_max >> (i >> 3)))
+            } else {
+                let shift = next() % 28;
+                (
+                    ((next() as i32) >> 4) >> (shift % 27),
+                    ((next() as i32) >> 3) >> shift,
+                )
+            };
+            let square = (i64::from(b) * i64::from(b)) as f64 / step;
+            worst_square = worst_square.max((f64::from(square_mm_narrow(b)) - square).abs());
+            let product = (i64::from(a) * i64::from(b)) as f64 / step;
+            worst_product =
+                worst_product.max((f64::from(mul_mm_narrow(split13(a), b)) - product).abs());
+        }
+        assert!(worst_square <= 0.51, "square: {worst_square} steps");
+        assert!(worst_product <= 0.51, "product: {worst_product} steps");
+        assert!(worst_square > 0.4 && worst_product > 0.4, "rounding seen");
     }
 
     #[test]
