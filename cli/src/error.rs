@@ -99,6 +99,13 @@ pub enum Error {
         /// Why.
         why: String,
     },
+    /// `view`: the page's address cannot be listened on, or its files are not there.
+    View {
+        /// What it was doing (`listen on 127.0.0.1:2040`).
+        doing: String,
+        /// Why.
+        why: String,
+    },
     /// A stream that ended with rows refused, frames lost or notices (the summary says which).
     StreamTrouble {
         /// The trajectory.
@@ -609,6 +616,7 @@ impl Display for Error {
             ),
             Error::Elf { path, why } => write!(f, "{path}: {why}"),
             Error::Option { option, why } => write!(f, "{option}: {why}"),
+            Error::View { doing, why } => write!(f, "cannot {doing}: {why}"),
             Error::Pose { pose, why } => write!(f, "pose {pose}: {why}"),
             Error::NoPayload { source } => write!(
                 f,

@@ -6,7 +6,7 @@
 //! | module | job |
 //! | --- | --- |
 //! | `main.rs` | the table of contents: each subcommand with its help line, dispatched to its `Cmd::run` |
-//! | `cmd/<subcommand>.rs` | one per subcommand (`init`, `apply`, `pull`, `calibrate`, `boards`, `describe`, `workspace`, `torque`, `draw`, `send`, `shell`, `stream`, `demo`, `cue`, `cue_plot`, `uf2`): its options (a clap `Cmd`), its `run`, its own words (the summary it prints) |
+//! | `cmd/<subcommand>.rs` | one per subcommand (`init`, `apply`, `pull`, `calibrate`, `boards`, `describe`, `workspace`, `torque`, `draw`, `send`, `shell`, `stream`, `demo`, `cue`, `cue_plot`, `uf2`, `view`): its options (a clap `Cmd`), its `run`, its own words (the summary it prints) |
 //! | `cmd/mod.rs` | the options several share (a board's port and link, picture formats, stream options, Ctrl-C taken as a flag: `cue`, `calibrate`) and the summaries several write |
 //! | `error.rs` | `Error`, the one error type, each variant worded in its `Display` (the file, line and key or field, or the port); `board_words`: a refusal as the board writes it |
 //! | `messages.rs` | how the outcome is written (mechanism, no content): the summary on standard output, the error after `hexapod: ` on standard error, a reply's lines as the board wrote them |
@@ -26,6 +26,7 @@
 //! | `plot.rs` | axes with round ticks and units, legends, colour scales, on a `picture::Scene` |
 //! | `picture.rs` | a scene of lines, polygons, circles and text; SVG by hand; PNG by `resvg` with DejaVu Sans embedded (`dejavu` crate); `write_scene` writes the files asked for |
 //! | `cue/` | the work of `cue` and `cue-plot` (docs/cueing.md): `washout.rs` the classical washout filter (specific force and rates at the pilot's head -> high-pass, double integration; low-pass -> rate-limited tilt coordination; rates -> high-pass, integration), each channel a transfer function stepped by the trapezoidal rule at the telemetry's own time step; `reach.rs` the pivot and the limits (soft limit per axis within a margin of `workspace::Limits`' reach and the board's full scales, then the board's IK on the whole pose); `telemetry.rs` the UDP line format JSBSim and FlightGear send (`cli/sim/`), bad lines dropped and counted (why, worded on `error::BadLine`); `config.rs` the build file's `[cue]` table (`build_file` passes it by), each key's range and meaning; `run.rs` the loop (newest cue first, easing home on a stall, the end of the telemetry or Ctrl-C), reporting its progress to `cmd/cue.rs`, which words it; `record.rs` the CSV record and its plot with its labels (what the platform delivers, from the poses sent) |
+//! | `view/` | `view`: the live 3D view for a board on a cable (`mod.rs`: the wire's arithmetic; `follow.rs`: one thread owns the link and follows the board with `pulses`, the page's typed lines and jog commands between queries, the listings passed on as the board wrote them; `pages.rs`: the pages' event queues and what a newcomer gets first; `http.rs`: the page's server on `std::net`, the same addresses as `./dev run`'s, the page embedded by `build.rs` from `emulator/view/`, three.js, xterm.js and the WebAssembly read from the checkout; `json.rs`: the little JSON they exchange) |
 //! | `flash_image.rs`, `uf2.rs`, `elf.rs` | `uf2`: the ELF's load segments, and with `--settings` the settings sectors (found by the `_settings_start`/`_settings_end` symbols `memory.x` defines) as `Store::empty().prepare` writes them |
 //!
 //! No module imports one that imports it back: `error` is a leaf, the library's modules never
@@ -53,4 +54,5 @@ pub mod streamer;
 pub mod torque_plot;
 pub mod trajectory;
 pub mod uf2;
+pub mod view;
 pub mod workspace_plot;

@@ -9,7 +9,7 @@ use clap::{Parser, Subcommand};
 
 use hexapod::cmd::{
     apply, boards, calibrate, cue, cue_plot, demo, describe, draw, init, pull, send, shell, stream,
-    torque, uf2, workspace,
+    torque, uf2, view, workspace,
 };
 use hexapod::messages;
 
@@ -64,6 +64,9 @@ enum Command {
     Send(send::Cmd),
     /// Talk to a board line by line: type commands, read replies (Ctrl-D quits)
     Shell(shell::Cmd),
+    /// The live 3D view of a board (a web page on 127.0.0.1): the platform drawn from its own
+    /// geometry and the pulses it outputs, jogging, home, stop and a terminal on the same link
+    View(view::Cmd),
 
     /// Stream a trajectory (CSV: time,x,y,z,roll,pitch,yaw in s, mm, degrees) at its own
     /// timing; every row is checked against the board's settings before anything is sent
@@ -98,6 +101,7 @@ fn main() -> ExitCode {
         Command::Draw(cmd) => cmd.run(),
         Command::Send(cmd) => cmd.run(),
         Command::Shell(cmd) => cmd.run(),
+        Command::View(cmd) => cmd.run(),
         Command::Stream(cmd) => cmd.run(),
         Command::Demo(cmd) => cmd.run(),
         Command::Cue(cmd) => cmd.run(),

@@ -56,6 +56,8 @@ pub enum Verb {
     Reset,
     /// `status` (or `?`).
     Status,
+    /// `pulses`.
+    Pulses,
     /// `geometry`.
     Geometry,
     /// `config`.
@@ -72,7 +74,7 @@ pub enum Verb {
 
 impl Verb {
     /// Every command word.
-    pub const ALL: [Verb; 16] = [
+    pub const ALL: [Verb; 17] = [
         Verb::Pose,
         Verb::Move,
         Verb::Nudge,
@@ -83,6 +85,7 @@ impl Verb {
         Verb::Servo,
         Verb::Reset,
         Verb::Status,
+        Verb::Pulses,
         Verb::Geometry,
         Verb::Config,
         Verb::Set,
@@ -104,6 +107,7 @@ impl Verb {
             Verb::Servo => "servo",
             Verb::Reset => "reset",
             Verb::Status => "status",
+            Verb::Pulses => "pulses",
             Verb::Geometry => "geometry",
             Verb::Config => "config",
             Verb::Set => "set",
@@ -258,6 +262,9 @@ pub enum Command {
     Reset,
     /// `status` or `?`.
     Status,
+    /// `pulses`: the six pulse widths on the pins now, one short line (for a host that
+    /// follows the platform).
+    Pulses,
     /// `geometry`.
     Geometry,
     /// `config`.
@@ -417,6 +424,7 @@ pub fn parse(line: &str) -> Result<Command, ParseError> {
         Verb::Stop => simple(Command::Stop, &mut words),
         Verb::Reset => simple(Command::Reset, &mut words),
         Verb::Status => simple(Command::Status, &mut words),
+        Verb::Pulses => simple(Command::Pulses, &mut words),
         Verb::Geometry => simple(Command::Geometry, &mut words),
         Verb::Config => simple(Command::Config, &mut words),
         Verb::Help => simple(Command::Help, &mut words),
@@ -591,6 +599,7 @@ mod tests {
             ("reset", Command::Reset),
             ("status", Command::Status),
             ("?", Command::Status),
+            ("pulses", Command::Pulses),
             ("geometry", Command::Geometry),
             ("config", Command::Config),
             ("HELP", Command::Help),

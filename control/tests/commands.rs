@@ -333,12 +333,53 @@ fn config_values_can_be_set_back_unchanged() {
 }
 
 #[test]
+fn pulses_is_one_short_line_of_what_the_pins_carry() {
+    let mut s = Host::quiet();
+    // At home: the trims, one data line, and the whole answer fits the budget docs/commands.md
+    // gives (63 bytes with its `ok`: what `hexapod view` counts on over UART0).
+    let out = s.feed(b"pulses\n");
+    assert_eq!(
+        out,
+        "# pulse_us: 1500.00 1500.00 1500.00 1500.00 1500.00 1500.00\r\nok\r\n"
+    );
+    assert_eq!(out.replace("\r\n", "\n").len(), 63);
+
+    // During a move it follows the frames: each answer is the pulses of the frame before it,
+    // the very widths on_frame hands the PWM.
+    s.ok("pose 10 -5 8 4 -3 6");
+    let mut seen = Vec::new();
+    for _ in 0..20 {
+        let written = s.frames(3)[2];
+        let data = s.ok("pulses");
+        assert_eq!(data.len(), 1, "{data:?}");
+        let shown = six(data[0].strip_prefix("# pulse_us: ").unwrap());
+        for (a, b) in shown.iter().zip(written) {
+            assert!(close(*a, b, 0.006), "{shown:?} vs {written:?}");
+        }
+        seen.push(shown);
+    }
+    assert!(
+        seen.windows(2).any(|w| w[0] != w[1]),
+        "never moved: {seen:?}"
+    );
+    s.run_until_idle();
+    s.frames(1);
+    // At rest the pulses are the status' pulses (the pose's IK).
+    assert_eq!(
+        s.ok("pulses")[0],
+        format!("# pulse_us: {}", s.status_field("pulse_us"))
+    );
+    // It moves nothing and changes nothing: still idle, same target.
+    assert_eq!(s.status_field("state"), "idle");
+}
+
+#[test]
 fn help_lists_every_command() {
     let mut s = Host::quiet();
     let help = s.ok("help").join("\n");
     for cmd in [
-        "pose", "move", "nudge", "check", "home", "stop", "reset", "status", "?", "geometry",
-        "config", "set", "defaults", "save", "help",
+        "pose", "move", "nudge", "check", "home", "stop", "reset", "status", "?", "pulses",
+        "geometry", "config", "set", "defaults", "save", "help",
     ] {
         assert!(
             help.contains(&format!("  {cmd} "))

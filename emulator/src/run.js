@@ -26,9 +26,10 @@ echo is off, --local-echo shows typed characters here. Ctrl-] or Ctrl-C quits.
              greets the port before you connect: press Enter for a prompt. Ctrl-C quits.
   --no-view  do not serve the live 3D view (by default its address is printed at start:
              http://127.0.0.1:${DEFAULT_VIEW_PORT}/, or a free port if that one is taken).
-             The view sends whole lines on the same serial link (its page's, and
-             \`geometry\` / \`config\` to read the board's settings): use --no-view for a
-             link of your own.
+             The page's terminal shares your link (lines typed there go to the board on it);
+             the view's own questions (\`geometry\`, \`config\`) and the page's jog
+             buttons use the other link (UART0, or with --uart the USB port), never yours:
+             use --no-view to have that link free.
   --view-port N  the view's port (0: any free port)
   --elf PATH firmware ELF (default: ${DEFAULT_ELF})
 The status line (stderr) shows the six measured servo pulse widths in microseconds.
@@ -72,7 +73,8 @@ async function main() {
   const board = new EmulatedBoard({
     elf: options.elf,
     bootrom: loadBootrom({ log: (message) => process.stderr.write(`${message}\n`) }),
-    usb: !options.uart,
+    // With the view, the USB port is there with --uart too: the view's own link.
+    usb: !options.uart || !options['no-view'],
   });
   // The serial link on this terminal: the USB port's, as a Pico owner uses it, or UART0's.
   const serial = options.uart ? board.uart : board.usb;
@@ -87,7 +89,9 @@ async function main() {
         onOutput: (listener) => serial.onOutput(listener),
       }
     : serial;
-  const view = input && (await startView(board, serial, input, options, status));
+  // The view's questions go on the other link, so your terminal never sees them.
+  const queries = options.uart ? board.usb : board.uart;
+  const view = input && (await startView(board, serial, queries, input, options, status));
   const connection = options.pty
     ? new PtyConnection(link, name, status)
     : new TerminalConnection(link, { echo: options['local-echo'] });
@@ -124,7 +128,7 @@ async function main() {
 }
 
 /** Starts the 3D view's server and prints its address; exits with a message if it cannot. */
-async function startView(board, serial, input, options, status) {
+async function startView(board, serial, queries, input, options, status) {
   const port = Number(options['view-port']);
   if (!Number.isInteger(port) || port < 0 || port > 65535) {
     console.error(`--view-port: not a port number: ${options['view-port']}\n\n${USAGE}`);
@@ -134,6 +138,7 @@ async function startView(board, serial, input, options, status) {
     const view = await startViewServer({
       board,
       serial,
+      queries,
       input,
       port,
       link: options.pty ? 'pty' : 'terminal',

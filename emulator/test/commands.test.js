@@ -83,7 +83,8 @@ test('at power-up every servo gets its home pulse (the reference at the home pos
 linkTest('help lists every command, all on # lines, then ok', (link) => {
   const board = link.quiet(bootrom);
   const text = ok(board, 'help').join('\n');
-  const commands = ['pose', 'move', 'nudge', 'check', 'home', 'stop', 'status', '?', 'geometry'];
+  const commands = ['pose', 'move', 'nudge', 'check', 'home', 'stop', 'status', '?', 'pulses'];
+  commands.push('geometry');
   for (const command of [...commands, 'config', 'set', 'defaults', 'save', 'help']) {
     assert.ok(text.includes(command), `help does not mention ${command}`);
   }
@@ -203,6 +204,54 @@ linkTest(
     assertPins(board, solve(twice).pulse_us, 'after two nudges');
   },
 );
+
+linkTest('pulses: one short line, the widths the pins carry, at rest and while moving', (link) => {
+  const board = link.quiet(bootrom);
+  const widths = (line) => {
+    assert.match(line, /^pulse_us: (\d+\.\d{2} ){5}\d+\.\d{2}$/);
+    return line.slice('pulse_us: '.length).split(' ').map(Number);
+  };
+  const [home] = ok(board, 'pulses');
+  // The budget `hexapod view` counts on (docs/commands.md): 63 bytes with its `ok`.
+  assert.equal(`# ${home}\nok\n`.length, 63);
+  assertPins(board, widths(home), 'at home');
+  assertPins(
+    board,
+    DEFAULTS.servos.map((servo) => servo.trim_us),
+    'home = trims',
+  );
+  // While a move runs, each answer is one frame's six widths as the pins carried them.
+  ok(board, 'set speed_mm_s 20');
+  const answers = [];
+  const recorded = capture(
+    board,
+    () => {
+      ok(board, 'pose 15 0 0 0 0 0');
+      for (let i = 0; i < 12; i++) {
+        board.runMs(30);
+        answers.push(widths(ok(board, 'pulses')[0]));
+      }
+    },
+    2,
+  );
+  const frames = recorded[0].map((_, k) => recorded.map((servo) => servo[k]?.widthNanos / 1000));
+  for (const answer of answers) {
+    const seen = frames.some((frame) =>
+      frame.every((us, i) => Math.abs(us - answer[i]) <= COUNT_US + 0.005),
+    );
+    assert.ok(seen, `pulses ${answer} is no frame the pins carried`);
+  }
+  assert.ok(new Set(answers.map(String)).size > 5, `it did not follow: ${answers.join(' | ')}`);
+  assert.match(status(board).state, /^moving/, 'the answers came during the move');
+  // Asked in lock-step, as `hexapod view` does, in emulated time (UART0's wire modelled at
+  // 115,200 baud: 70 bytes a round trip, 6.1 ms): at least 10 a second on UART0, 30 on USB.
+  const started = board.nanos;
+  for (let i = 0; i < 20; i++) {
+    widths(ok(board, 'pulses')[0]);
+  }
+  const perSecond = 20 / ((board.nanos - started) / 1e9);
+  assert.ok(perSecond >= (link.name === 'USB' ? 30 : 10), `${perSecond.toFixed(1)} a second`);
+});
 
 linkTest('home returns to the home pulses', (link) => {
   const board = link.quiet(bootrom);

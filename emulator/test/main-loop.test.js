@@ -165,6 +165,7 @@ test('every long command class back to back at 333 Hz, echo on: no stall, replie
     ['set speed_mm_s 1', 'ok'],
     ['pose 20 0 0 0 0 0', 'ok'], // 1,000 path checks, then a slow move
     ['move x=-20', 'ok'], // checked while moving: holds, then turns back
+    ['pulses', 'ok'], // the short query `hexapod view` repeats, while moving
     ['defaults', 'error:busy'],
     ['pose 0 0 80 0 0 0', 'error:unreachable'],
     ['set speed_mm_s off', 'ok'],

@@ -1,13 +1,14 @@
 // The view's plumbing without a browser: reading the board's listings out of its real output,
 // two hosts sharing one UART (the shell terminal's keystrokes, the page's whole lines), and the
-// view server's stream, typed lines and refusals, against the real firmware in emulated time.
+// view server's stream, typed lines, its own link's commands and refusals, against the real
+// firmware in emulated time.
 // Expected values come from docs/ (defaults, line editing), not from the code under test.
 
 import assert from 'node:assert/strict';
 import { request } from 'node:http';
 import { before, test } from 'node:test';
 
-import { ListingReader, listingsChangedBy } from '../src/view-server/board-listings.js';
+import { ListingReader, listingsChangedBy } from '../view/board-listings.js';
 import { EmulatedBoard } from '../src/chip/board.js';
 import { bootedBoard, firmwareBootrom } from '../src/test-support/e2e-support.js';
 import { SharedInput } from '../src/view-server/shared-input.js';
@@ -208,6 +209,19 @@ function events(port) {
   };
 }
 
+/** Runs the emulated board until `promise` settles (an HTTP answer that needs the board). */
+async function whileRunning(board, promise) {
+  let settled = false;
+  const result = promise.finally(() => {
+    settled = true;
+  });
+  while (!settled) {
+    board.runMs(5);
+    await new Promise((wake) => setTimeout(wake, 5));
+  }
+  return result;
+}
+
 // (Each wait for an event loops until it comes: a listing the server never sends fails here,
 // after a generous minute, instead of hanging the run.)
 const STREAM_TEST = { timeout: 60_000 };
@@ -216,11 +230,18 @@ test(
   'the view server streams pins and listings, takes typed lines, and refuses strangers',
   STREAM_TEST,
   async (t) => {
-    const board = new EmulatedBoard({ bootrom });
-    const input = new SharedInput(board);
-    const view = await startViewServer({ board, input, port: 0 });
+    // As `./dev run` has it: the terminal on the USB port, the view's own questions on UART0.
+    const board = new EmulatedBoard({ bootrom, usb: true });
+    const input = new SharedInput(board.usb);
+    const view = await startViewServer({
+      board,
+      serial: board.usb,
+      queries: board.uart,
+      input,
+      port: 0,
+    });
     t.after(() => view.close('test over'));
-    board.boot(); // the banner: the view asks for the listings
+    board.boot(); // the banner on UART0: the view asks for the listings there
     board.runMs(200);
     const stream = events(view.port);
     t.after(() => stream.close());
@@ -229,14 +250,11 @@ test(
     assert.equal((await stream.next('geometry', { board })).armMm, 20);
     assert.equal((await stream.next('config', { board })).servos.length, 6);
     // The output comes in batches at most 60 a second of wall time: a loaded machine may cut it
-    // anywhere, so gather batches until the banner and the view's question have both come.
+    // anywhere, so gather batches until the USB port's banner and prompt have come.
     let uart = '';
-    while (!/hexapod control[^]*> geometry/.test(uart)) {
+    while (!/hexapod control[^]*> /.test(uart)) {
       uart += (await stream.next('uart', { board })).text;
-      assert.ok(
-        uart.length < 100_000,
-        `no banner then '> geometry' in ${JSON.stringify(uart.slice(0, 300))}`,
-      );
+      assert.ok(uart.length < 100_000, `no banner in ${JSON.stringify(uart.slice(0, 300))}`);
     }
     const home = await stream.next('pins', { board });
     assert.deepEqual(home.live, [true, true, true, true, true, true]);
@@ -266,6 +284,42 @@ test(
       pins = await stream.next('pins', { board });
     } while (pins.widthNs[0] > 1450_000);
     assert.ok(pins.widthNs[1] > 1550_000, `${pins.widthNs}`);
+
+    // The page's own commands go on the view's link and come back as the board's reply.
+    const command = (line) =>
+      whileRunning(
+        board,
+        http(view.port, {
+          method: 'POST',
+          path: '/command',
+          headers: json,
+          body: JSON.stringify({ line }),
+        }),
+      ).then(({ status, body }) => {
+        assert.equal(status, 200, body);
+        return JSON.parse(body);
+      });
+    assert.deepEqual(await command('move z=2'), { reply: 'ok', data: [] });
+    const refusal = await command('pose 0 0 80 0 0 0');
+    assert.match(refusal.reply, /^error:unreachable /);
+    const pulses = await command('pulses');
+    assert.equal(pulses.reply, 'ok');
+    assert.match(pulses.data[0], /^# pulse_us: (\d+\.\d\d ?){6}$/);
+    // A servo setting through it makes the view read `config` again.
+    assert.deepEqual(await command('stop'), { reply: 'ok', data: [] });
+    assert.equal((await command('set servo1.trim_us 1510')).reply, 'ok');
+    let config;
+    do {
+      config = await stream.next('config', { board });
+    } while (config.servos[0].trimUs !== 1510);
+
+    // None of the view's questions, nor the page's commands, showed on the terminal's link.
+    board.runMs(100);
+    const terminal = Buffer.from(board.usb.outputBytes).toString('latin1');
+    for (const word of ['geometry', '# layout:', 'config', 'move z=2', 'pulse_us', 'unreachable']) {
+      assert.ok(!terminal.includes(word), `'${word}' on the terminal: ${JSON.stringify(terminal)}`);
+    }
+    assert.match(terminal, /set rod_mm 125\r?\nok/);
 
     // Strangers: another origin, a form post, a foreign Host (DNS rebinding), files outside.
     const origin = { ...json, Origin: 'http://evil.example' };

@@ -1,9 +1,14 @@
-// The live view's page: connects to the runner's event stream (emulator/src/view-server/view-server.js),
-// runs every pin update through the project's kinematics (kinematics.js, WebAssembly) and shows
-// the result: the 3D picture (scene.js), the readout (pulses in us, arm angles in deg, the pose
-// in mm and deg) and the board's serial output (terminal.js). When the emulator stops it says
-// so and keeps the last picture.
+// The live view's page: connects to its server's event stream (the emulator's,
+// emulator/src/view-server/view-server.js, or the host tool's for a board on a cable,
+// `hexapod view`), runs every pin update through the project's kinematics (kinematics.js,
+// WebAssembly) and shows the result: the 3D picture (scene.js), the readout (pulses in us, arm
+// angles in deg, the pose in mm and deg), the board's serial output (terminal.js) and the jog
+// panel (jog.js). When the emulator (or the board's link) stops it says so and keeps the last
+// picture. The board's listings come parsed (`geometry`, `config` events) or as the board's
+// lines (`listing` events), read here with the same reader (board-listings.js).
 
+import { ListingReader } from './board-listings.js';
+import { JogPanel } from './jog.js';
 import { Kinematics } from './kinematics.js';
 import { PlatformScene } from './scene.js';
 import { PageTerminal } from './terminal.js';
@@ -22,6 +27,7 @@ const state = {
   cameraSet: false,
   asking: new Set(),
   stopped: null,
+  source: 'emulator',
 };
 
 const scene = new PlatformScene($('stage'));
@@ -31,6 +37,13 @@ const terminal = new PageTerminal({
   input: $('line'),
   note: $('send-note'),
 });
+const jog = new JogPanel({
+  container: $('jog'),
+  note: $('jog-note'),
+  home: $('jog-home'),
+  stop: $('jog-stop'),
+});
+const reader = new ListingReader();
 buildPinRows();
 for (const button of /** @type {NodeListOf<HTMLElement>} */ (
   document.querySelectorAll('[data-camera]')
@@ -47,7 +60,18 @@ connect();
 
 function connect() {
   const events = new EventSource('/events');
-  events.addEventListener('hello', () => {
+  events.addEventListener('hello', (event) => {
+    const hello = JSON.parse(event.data);
+    state.source = hello.source ?? 'emulator';
+    if (state.source === 'board') {
+      $('title-source').textContent = `live view of the board on ${hello.port}`;
+      document.title = `hexapod-fw · ${hello.port}`;
+      $('clock-name').textContent = 'link up';
+      $('how').textContent =
+        "Drawn from the pulse widths the board reports (its `pulses` answer), through the board's " +
+        "servo settings and the project's own forward kinematics (in WebAssembly). " +
+        'Drag to orbit, scroll to zoom.';
+    }
     state.stopped = null;
     linkState('live', 'live');
     overlay(null);
@@ -59,15 +83,17 @@ function connect() {
     }
     refresh();
   });
-  events.addEventListener('geometry', (event) => {
-    state.geometry = JSON.parse(event.data);
-    state.asking.delete('geometry');
-    applyGeometry();
-  });
-  events.addEventListener('config', (event) => {
-    state.config = JSON.parse(event.data);
-    state.asking.delete('config');
-    applyConfig();
+  events.addEventListener('geometry', (event) => gotGeometry(JSON.parse(event.data)));
+  events.addEventListener('config', (event) => gotConfig(JSON.parse(event.data)));
+  events.addEventListener('listing', (event) => {
+    for (const line of JSON.parse(event.data).lines) {
+      const listing = reader.line(line);
+      if (listing?.kind === 'geometry') {
+        gotGeometry(listing.geometry);
+      } else if (listing?.kind === 'config') {
+        gotConfig(listing.config);
+      }
+    }
   });
   events.addEventListener('pins', (event) => {
     state.pins = JSON.parse(event.data);
@@ -85,7 +111,29 @@ function connect() {
   });
 }
 
+function gotGeometry(geometry) {
+  state.geometry = geometry;
+  state.asking.delete('geometry');
+  applyGeometry();
+  jog.refreshLimits(); // the reach changes with the geometry
+}
+
+function gotConfig(config) {
+  state.config = config;
+  state.asking.delete('config');
+  applyConfig();
+  jog.refreshLimits(); // ... and with the servos' limits
+}
+
 function showStopped() {
+  if (state.source === 'board') {
+    linkState('stopped', 'link stopped');
+    overlay(
+      `The link to the board stopped: ${state.stopped}. The picture shows the last pulses ` +
+        'seen. Start hexapod view again; this page reconnects by itself.',
+    );
+    return;
+  }
   linkState('stopped', 'emulator stopped');
   overlay(
     `The emulator stopped: ${state.stopped}. The picture shows the last pins seen. ` +
@@ -160,7 +208,9 @@ function refresh() {
   if (!pins) {
     return;
   }
-  $('emulated-time').textContent = `${(pins.nanos / 1e9).toFixed(1)} s`;
+  $('emulated-time').textContent =
+    `${(pins.nanos / 1e9).toFixed(1)} s` +
+    (pins.rateHz ? `, ${pins.rateHz.toFixed(0)} updates/s` : '');
   const widthsUs = pins.widthNs.map((ns, i) => (ns === null || !pins.live[i] ? null : ns / 1000));
   widthsUs.forEach((us, i) => {
     $(`pulse-${i + 1}`).textContent = us === null ? '–' : us.toFixed(2);
@@ -179,6 +229,9 @@ function refresh() {
   AXES.forEach((axis, i) => {
     $(`pose-${axis}`).textContent = state.hasPose ? pose[i].toFixed(3) : '–';
   });
+  if (solved) {
+    jog.showPose(pose);
+  }
   const status = $('fk-status');
   status.className = `status ${solved ? 'solved' : 'bad'}`;
   status.textContent = describe(frame);

@@ -7,6 +7,7 @@
 #![no_std]
 
 pub mod board;
+mod ram_code;
 pub mod rom_math;
 
 pub use board::Board;

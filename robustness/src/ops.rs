@@ -217,6 +217,8 @@ pub enum Cmd {
     Set(u8, Value),
     /// Printable text as typed.
     Text(String),
+    /// `pulses` (last, so the fuzzers' seeds keep their meaning).
+    Pulses,
 }
 
 /// How words are separated.
@@ -285,6 +287,7 @@ impl Cmd {
             Cmd::Stop => "stop".into(),
             Cmd::Status => "status".into(),
             Cmd::Query => "?".into(),
+            Cmd::Pulses => "pulses".into(),
             Cmd::Geometry => "geometry".into(),
             Cmd::Config => "config".into(),
             Cmd::Help => "help".into(),

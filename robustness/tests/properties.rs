@@ -57,6 +57,7 @@ fn cmd() -> impl Strategy<Value = Cmd> {
         2 => Just(Cmd::Stop),
         1 => Just(Cmd::Status),
         1 => Just(Cmd::Query),
+        1 => Just(Cmd::Pulses),
         1 => Just(Cmd::Geometry),
         1 => Just(Cmd::Config),
         1 => Just(Cmd::Help),

@@ -18,6 +18,7 @@ pub mod shell;
 pub mod stream;
 pub mod torque;
 pub mod uf2;
+pub mod view;
 pub mod workspace;
 
 use std::sync::atomic::{AtomicBool, Ordering};

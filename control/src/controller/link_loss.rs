@@ -37,7 +37,10 @@ impl<M: Math> Controller<M> {
     /// (once per silence).
     pub(super) fn check_link(&mut self) {
         let timeout_s = self.settings.link_timeout_s;
-        if timeout_s <= 0.0 || self.link_loss_handled {
+        // `timeout_s <= 0.0` by its bits, as every servo frame asks (a float comparison is a
+        // library call on the RP2040): zero, negative or a negative NaN. (A positive NaN is
+        // not `<= 0.0` either.)
+        if timeout_s.to_bits() as i32 <= 0 || self.link_loss_handled {
             return;
         }
         // A command being carried out is a sign of life; and one job at a time.

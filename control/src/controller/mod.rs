@@ -834,6 +834,8 @@ impl<M: Math> Controller<M> {
                     Ok(self.list(Listing::Status(report)))
                 }
             }
+            // What the PWM outputs now: the same guard as on_frame's.
+            Command::Pulses => Ok(self.list(Listing::Pulses(self.safe_pulses()))),
             Command::Limits => {
                 if let Some(Err(e)) = self.direct {
                     return Err(Error::NoPose(e));

@@ -7,9 +7,9 @@
 use kinematics_core::ik::Solution;
 use kinematics_core::{Math, Pose};
 
-use super::pose_check::PoseCheck;
+use super::pose_check::{PoseCheck, CHECKS_PER_SLICE};
 use crate::report::StreamCounts;
-use crate::tracker::Tracker;
+use crate::tracker::{TrackLimits, Tracker};
 
 /// Halvings of a clamp's bisection: the clamped pose is within 1/64 of the way from the
 /// current pose to the target (a clamp costs 1 + 6 IK solutions, the 6 as the controller's
@@ -34,6 +34,23 @@ pub(super) struct Streaming {
     pub seen: [f32; 6],
     /// [`frame_ticks`](super::Controller) when the last frame came (for `status`).
     pub last_frame_tick: u32,
+    /// The tracker's limits and frame time as the settings give them, worked out once per
+    /// change of the settings (`None` until the first frame needs them), not every frame.
+    pub timing: Option<TrackTiming>,
+}
+
+/// The tracker's limits and frame time from the settings of one
+/// [`Controller::settings_generation`](super::Controller::settings_generation): converting
+/// them is float arithmetic (library calls on the RP2040), which a servo frame need not repeat.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct TrackTiming {
+    /// The settings generation they were worked out for.
+    pub generation: u32,
+    pub limits: TrackLimits,
+    /// Every limit off: stream frames are applied as they come (pass-through).
+    pub pass_through: bool,
+    /// A servo frame, s.
+    pub frame_s: f32,
 }
 
 /// A clamp in progress: bisection on the straight line from `from` (which can be driven) to
@@ -48,6 +65,14 @@ pub(super) struct Clamp {
     /// checked against the ratings (the first slice); if they are within them, `to` is the
     /// goal, else the bisection goes on.
     unchecked: Option<Solution>,
+    /// The halvings check the holding torques of each pose (one pose a slice). Otherwise, with
+    /// ratings, the bisection first finds the reach alone (IK solutions only, as without
+    /// ratings), then checks the furthest pose's torques, a slice of its own (`held`): within
+    /// the ratings, that pose is the goal (the servo limits were the boundary: one torque check
+    /// instead of one per halving, where each costs several IK solutions); beyond them, the
+    /// bisection starts again with the torques of each pose. A target within reach but beyond
+    /// the ratings starts with them.
+    torques_each: bool,
     /// Fractions of the way known to be drivable and not.
     reachable: f32,
     unreachable: f32,
@@ -65,6 +90,7 @@ impl Clamp {
             from,
             span: core::array::from_fn(|i| b[i] - a[i]),
             to,
+            torques_each: unchecked.is_some(),
             unchecked,
             reachable: 0.0,
             unreachable: 1.0,
@@ -82,9 +108,10 @@ impl Clamp {
 
     /// A slice of a clamp: the target's holding torques if they are to be checked (then the
     /// target is the goal if they are within the ratings; else it counts as clamped), else
-    /// [`PoseCheck::per_slice`] more halvings of the bisection (each pose within reach and,
-    /// with ratings, within them). `Some` when it is done: the goal and its solution (`None`:
-    /// where the bisection started, whose solution is the current one).
+    /// more halvings of the bisection ([`PoseCheck::per_slice`] with each pose's torques,
+    /// [`CHECKS_PER_SLICE`] by the reach alone), or the torques of the furthest pose the reach
+    /// alone allows (see `torques_each`). `Some` when it is done: the goal and its solution
+    /// (`None`: where the bisection started, whose solution is the current one).
     pub fn step<M: Math>(
         &mut self,
         check: PoseCheck<'_>,
@@ -102,14 +129,38 @@ impl Clamp {
             counts.clamped = counts.clamped.wrapping_add(1);
             return None;
         }
-        for _ in 0..check.per_slice() {
+        let each = torque && self.torques_each;
+        if self.steps >= CLAMP_STEPS && torque && !each {
+            // The reach is found: the furthest pose's torques, a slice of their own.
+            if let Some((pose, solution)) = self.best {
+                let held =
+                    check
+                        .settings
+                        .payload
+                        .check::<M>(check.solver, &pose, &solution.arm_rad);
+                if held.is_err() {
+                    *self = Clamp {
+                        torques_each: true,
+                        ..Clamp::new(self.from, self.to, None)
+                    };
+                    return None;
+                }
+            }
+            return Some(self.goal());
+        }
+        let per_slice = if each {
+            check.per_slice()
+        } else {
+            CHECKS_PER_SLICE
+        };
+        for _ in 0..per_slice {
             if self.steps >= CLAMP_STEPS {
                 break;
             }
             self.steps += 1;
             let t = 0.5 * (self.reachable + self.unreachable);
             let pose = self.at(t);
-            match check.pose::<M>(&pose, torque) {
+            match check.pose::<M>(&pose, each) {
                 Ok(solution) => {
                     self.reachable = t;
                     self.best = Some((pose, solution));
@@ -117,9 +168,14 @@ impl Clamp {
                 Err(_) => self.unreachable = t,
             }
         }
-        (self.steps >= CLAMP_STEPS).then(|| {
-            self.best
-                .map_or((self.from, None), |(pose, solution)| (pose, Some(solution)))
-        })
+        // (With ratings, the reach alone is done in the next slice, by its torques.)
+        (self.steps >= CLAMP_STEPS && (each || !torque)).then(|| self.goal())
+    }
+
+    /// The bisection's result: the furthest drivable pose found and its solution, or where it
+    /// started (`None`: the current solution).
+    fn goal(&self) -> (Pose, Option<Solution>) {
+        self.best
+            .map_or((self.from, None), |(pose, solution)| (pose, Some(solution)))
     }
 }

@@ -20,7 +20,7 @@
 use kinematics_core::ik::Solution;
 use kinematics_core::{Math, Pose};
 
-use super::stream_goal::{Clamp, Streaming};
+use super::stream_goal::{Clamp, Streaming, TrackTiming};
 use super::{Controller, Job};
 use crate::motion::Motion;
 use crate::stream::Frame;
@@ -134,36 +134,74 @@ impl<M: Math> Controller<M> {
                     taken: fractions,
                     seen: fractions,
                     last_frame_tick: self.frame_ticks,
+                    timing: None,
                 });
             }
         }
     }
 
+    /// The stream's tracker limits and frame time (see [`TrackTiming`]), worked out again only
+    /// if the settings changed since; `None` without a stream.
+    fn track_timing(&mut self) -> Option<TrackTiming> {
+        let generation = self.generation;
+        let cached = self.stream.as_ref()?.timing;
+        if let Some(timing) = cached.filter(|t| t.generation == generation) {
+            return Some(timing);
+        }
+        let limits = self.track_limits();
+        let timing = TrackTiming {
+            generation,
+            limits,
+            pass_through: limits == TrackLimits::OFF && !self.settings.servo_speed.rated(),
+            frame_s: 1.0 / f32::from(self.settings.frame_hz.max(1)),
+        };
+        self.stream.as_mut()?.timing = Some(timing);
+        Some(timing)
+    }
+
     /// One servo frame of a stream: the tracker steps towards its goal; a step that cannot be
-    /// driven is clamped and the tracker stops there.
+    /// driven is clamped and the tracker stops there. (The stream is worked on in place: a
+    /// copy of its state, in and out, costs a frame hundreds of cycles.)
     pub(super) fn track_frame(&mut self) {
-        let Some(mut stream) = self.stream else {
+        let Some(timing) = self.track_timing() else {
             return;
         };
-        let limits = self.track_limits();
-        if limits == TrackLimits::OFF && !self.settings.servo_speed.rated() {
-            return; // pass-through (`passes_through`): applied as frames come
+        if timing.pass_through {
+            return; // pass-through: applied as frames come
         }
-        let dt_s = 1.0 / f32::from(self.settings.frame_hz.max(1));
-        let next = stream.tracker.step::<M>(&stream.goal, &limits, dt_s);
-        if next.pose() == *self.motion.pose() && next == stream.tracker {
-            return; // settled: the pulses are solved already
+        let Some(stream) = self.stream.as_mut() else {
+            return;
+        };
+        // With servo speed ratings the step may be shortened: the tracker before it, kept.
+        let before = if self.settings.servo_speed.rated() {
+            Some(stream.tracker)
+        } else {
+            None
+        };
+        // Stepped in place: if its pose cannot be driven, the tracker is reset below anyway.
+        stream.tracker = stream
+            .tracker
+            .step::<M>(&stream.goal, &timing.limits, timing.frame_s);
+        let next = stream.tracker.pose();
+        if same_bits(&next, self.motion.pose()) {
+            // Settled (or a step too small to change the pose): this pose's pulses are
+            // solved already.
+            return;
         }
-        match self.solver.solve::<M>(&self.settings.servos, &next.pose()) {
+        match self.solver.solve::<M>(&self.settings.servos, &next) {
             Ok(mut solution) => {
-                // (Shortened to the servos' rated speeds, if any.)
                 let mut next = next;
-                if self.settings.servo_speed.rated() {
-                    self.step_within_servo_speed(&stream.tracker, &mut next, &mut solution);
+                if let Some(before) = before {
+                    // Shortened to the servos' rated speeds (`controller/servo_speed.rs`).
+                    let mut stepped = stream.tracker;
+                    self.step_within_servo_speed(&before, &mut stepped, &mut solution);
+                    next = stepped.pose();
+                    if let Some(stream) = self.stream.as_mut() {
+                        stream.tracker = stepped;
+                    }
                 }
-                self.motion = Motion::new(next.pose());
+                self.motion = Motion::new(next);
                 self.solution = solution;
-                stream.tracker = next;
             }
             Err(_) => {
                 // The goal can be driven (it was clamped), but the axes' own paths to it
@@ -176,7 +214,6 @@ impl<M: Math> Controller<M> {
                 self.stream_counts.clamped = self.stream_counts.clamped.wrapping_add(1);
             }
         }
-        self.stream = Some(stream);
     }
 
     /// Starts clamping a stream target as the controller's own job: `to` cannot be reached
@@ -194,10 +231,13 @@ impl<M: Math> Controller<M> {
     /// (`solution`: its IK; `None` to stay where the platform is), else the tracker's goal.
     /// Nothing if the stream has ended meanwhile (a clamp's job outlived it).
     pub(super) fn reach_stream_goal(&mut self, pose: Pose, solution: Option<Solution>) {
+        let Some(timing) = self.track_timing() else {
+            return;
+        };
         let Some(mut stream) = self.stream else {
             return;
         };
-        if self.passes_through() {
+        if timing.pass_through {
             if let Some(solution) = solution {
                 self.motion = Motion::new(pose);
                 self.solution = solution;
@@ -217,6 +257,13 @@ impl<M: Math> Controller<M> {
             self.motion = Motion::new(*self.motion.pose());
         }
     }
+}
+
+/// `a` and `b` are the same pose, bit for bit (integer comparisons, where `==` on `f32` is a
+/// library call on the RP2040; a zero of the other sign only costs an IK).
+fn same_bits(a: &Pose, b: &Pose) -> bool {
+    let (a, b) = (a.to_array(), b.to_array());
+    (0..6).fold(0, |d, i| d | (a[i].to_bits() ^ b[i].to_bits())) == 0
 }
 
 #[cfg(test)]

@@ -177,6 +177,7 @@ pub const HELP: &[&str] = &[
     "  servo <1-6> <us>                       drive one servo to a pulse (the others hold), e.g. to calibrate",
     "  reset                                  clear the emergency stop once its input is closed",
     "  status (or ?)                          pose, target, motion, arm angles, pulse widths",
+    "  pulses                                 the six pulse widths on the pins now (one line)",
     "  geometry                               the active geometry",
     "  config                                 list the settings",
     "  set <name> <value>                     change a setting (names as in config)",
@@ -509,6 +510,8 @@ pub struct StatusReport {
 pub enum Listing {
     /// `status`, from its snapshot.
     Status(StatusReport),
+    /// `pulses`: the pulse widths the pins carry, us.
+    Pulses([f32; LEGS]),
     /// `geometry`: the layout, the geometry and the IK's home arm angles.
     Geometry,
     /// `config`: the platform's settings, the asking link's, and how they stand against those
@@ -549,6 +552,13 @@ impl Listing {
     ) -> bool {
         match self {
             Listing::Status(report) => status_line(out, report, index),
+            Listing::Pulses(pulse_us) => {
+                if index > 0 {
+                    return false;
+                }
+                line(out, format_args!("pulse_us: {}", Six(pulse_us, 2)));
+                true
+            }
             Listing::Geometry => geometry_line(out, settings, solver, index),
             Listing::Config(link, saved) => config_line(out, settings, link, *saved, index),
             Listing::Help => HELP.get(index).is_some_and(|text| {

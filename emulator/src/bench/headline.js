@@ -15,6 +15,7 @@ import {
   measureLongestPass,
 } from './firmware-bench.js';
 import { benchPoses, runIkBench, runStreamBench, runWarmIk } from './ik-bench.js';
+import { measureStreamCpu } from './stream-bench.js';
 
 const EMULATOR = join(dirname(fileURLToPath(import.meta.url)), '..', '..');
 /** The committed table `./dev test` checks (`./dev bench --update-guard` rewrites it). */
@@ -37,6 +38,25 @@ export const HEADLINES = {
   poseLatencyUs: '`pose` line to PWM at 115,200 baud (PL011 receive rules), us, mean',
   poseLatencyMaxUs: '`pose` line to PWM at 115,200 baud (PL011 receive rules), us, max',
   longestPassCycles: 'longest main-loop pass (41 long commands at 333 Hz, then 20 moves), cycles',
+};
+
+/** Headline figures `./dev bench` reports beside those and the guard leaves out (longer runs). */
+export const BENCH_HEADLINES = {
+  streamEdgeCpuPercent:
+    'stream pipeline at 333 Hz, targets just past the servo limits, payload and ratings, % of the CPU',
+};
+
+/**
+ * `./dev bench`'s sizes: more of each than the guard's, and the stream pipeline's worst case
+ * (`edgeSeconds` of it; the guard leaves it out, to keep `./dev test` as long as before).
+ */
+export const HEADLINE_SIZES = {
+  poses: 40,
+  streamPoses: 10,
+  lines: 200,
+  frames: 20,
+  latencyLines: 20,
+  edgeSeconds: 0.5,
 };
 
 /** A smooth path of `count` pose arguments (mm, degrees), as the bench's streaming lines. */
@@ -101,6 +121,15 @@ export function measureHeadlines(poses, sizes = GUARD_SIZES) {
     poseLatencyMaxUs: round(Math.max(...latency), 3),
     longestPassCycles: passes.longestPassCycles,
   };
+  if (sizes.edgeSeconds) {
+    const edge = measureStreamCpu({
+      framesPerSecond: 333,
+      seconds: sizes.edgeSeconds,
+      allAxes: true,
+      edge: true,
+    });
+    figures.streamEdgeCpuPercent = round(edge.cpuShare * 100, 2);
+  }
   return { figures, xip: ik.xip };
 }
 

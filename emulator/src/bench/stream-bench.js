@@ -96,12 +96,20 @@ export function highestFrameRate(rates, options) {
  * far above reach, alternating with far below), so every frame's target is clamped and the
  * tracker runs every servo frame. Returns the share of the CPU's cycles executed (the core
  * does not count cycles while asleep in WFI) over `seconds` of streaming, and the counters.
+ *
+ * `edge`: the honest worst case instead (issue 23): z just past the servo limits (14.3 to 14.9
+ * mm, where the default build's reach from home is 13.99 mm, a servo at its limit: found only
+ * after a full IK, where targets far out of reach fail at the first leg), every axis moving,
+ * and a payload with torque ratings (2 kg 30 mm above the centre, 20 kgf cm: the servo limit
+ * stays the boundary, but every target and every step of its clamp has its holding torques
+ * checked).
  */
 export function measureStreamCpu({
   framesPerSecond = 100,
   seconds = 1,
   baud = 921600,
   allAxes = false,
+  edge = false,
 } = {}) {
   const { board } = streamingBoard({ baud });
   for (const line of [
@@ -110,7 +118,9 @@ export function measureStreamCpu({
     'set accel_mm_s2 2000',
     'set speed_deg_s 200',
     'set accel_deg_s2 2000',
-    'set stream.z_mm 200',
+    ...(edge
+      ? ['set payload_g 2000', 'set payload_com_z_mm 30', 'set servos.torque_kgcm 20']
+      : ['set stream.z_mm 200']),
   ]) {
     expectOk(board, line);
   }
@@ -120,11 +130,15 @@ export function measureStreamCpu({
   // Prime: the first target, then settle to the steady state before measuring.
   // x and z move (z far out of reach, so every target is clamped); with `allAxes` the other
   // four move too, so no axis of the tracker ever rests.
-  const moving = (k, n, step) => (allAxes ? 32768 + (k % n) * step : 32768);
+  const moving = (k, n, step) => (allAxes || edge ? 32768 + (k % n) * step : 32768);
+  // z: far above reach and far below in turn, or (edge) just past the top of reach (the
+  // default stream.z_mm, 15 mm full scale).
+  const z = (k) =>
+    edge ? 32768 + Math.round(((14.3 + (k % 4) * 0.2) / 15) * 32768) : k % 2 === 0 ? 65535 : 0;
   const far = (k) => [
     32768 + (k % 7) * 200,
     moving(k, 5, 200),
-    k % 2 === 0 ? 65535 : 0,
+    z(k),
     moving(k, 3, 300),
     moving(k, 4, 300),
     moving(k, 6, 300),

@@ -1,7 +1,9 @@
 #!/usr/bin/env node
-// Takes the README's picture of the live 3D view: starts `./dev run`, opens the page in headless
-// Chromium (1280 x 800 px), types a pose from the golden table into the page's
-// terminal line, waits for the readout to show it and saves a PNG of the whole page.
+// Takes the README's picture of the live 3D view (`./dev screenshot [out.png]` runs it): starts
+// `./dev run`, opens the page in headless Chromium (1280 x 800 px), types a pose from the golden
+// table into the page's terminal line, waits for the readout to show it and saves a PNG of the
+// whole page. (Chromium's own `--screenshot` cannot wait for the live event stream: with
+// `--virtual-time-budget` it never returns, without it it shoots the page still connecting.)
 // Usage: node emulator/src/view-server/view-screenshot.js [out.png]  (default emulator/view/screenshot.png)
 
 import { dirname, join } from 'node:path';

@@ -2,10 +2,13 @@
 // (emulator/view/), three.js and xterm.js from node_modules and the view's WebAssembly
 // kinematics (view-kinematics, built into target/), and streams to the page what a logic
 // analyser and a second serial host would see: the six pulse widths measured on the servo pins
-// (ns, exact to the PWM count), the board's serial output (bytes), and the board's own
-// `geometry` and `config` listings, read from that output. The page's typed lines come back as
-// whole lines through SharedInput. Nothing here computes kinematics: the page does, from the
-// pins, with the project's own code.
+// (ns, exact to the PWM count), the serial output of your terminal's link (bytes), and the
+// board's own `geometry` and `config` listings. The page's typed lines come back as whole lines
+// on your terminal's link through SharedInput. The listings, and the page's jog commands
+// (POST /command, answered with the board's reply), go on the view's own link instead
+// (view-link.js: UART0 while your terminal is on USB, USB with --uart), so they never show on
+// your terminal. Nothing here computes kinematics: the page does, from the pins, with the
+// project's own code.
 //
 // Server-Sent Events carry the stream (node's http is enough; no WebSocket library): at most
 // one pin update per FRAME_MS (60 a second) and only when a width changed or a second passed,
@@ -17,8 +20,8 @@ import { createServer } from 'node:http';
 import { dirname, extname, join, resolve, sep } from 'node:path';
 import { fileURLToPath } from 'node:url';
 
-import { BANNER } from '../chip/board.js';
-import { ListingReader, listingsChangedBy } from './board-listings.js';
+import { ListingReader, listingsChangedBy } from '../../view/board-listings.js';
+import { ViewLink } from './view-link.js';
 
 const EMULATOR = join(dirname(fileURLToPath(import.meta.url)), '..', '..');
 const REPO = join(EMULATOR, '..');
@@ -76,6 +79,8 @@ const CONTENT_TYPES = {
  * @param {import('../chip/board.js').EmulatedBoard} options.board
  * @param {object} [options.serial] the serial link the page and the terminal share (one with
  *   `onOutput(listener)`: `board.usb`, `board.uart`; default the board, UART0)
+ * @param {object} options.queries the view's own link, for the listings and the page's
+ *   commands (`sendBytes`, `onOutput`: the other one of `board.uart`, `board.usb`)
  * @param {import('./shared-input.js').SharedInput} options.input
  * @param {string} [options.link] what the terminal side is, for the page ('terminal', 'pty')
  * @param {number} [options.port] the port to listen on (default `DEFAULT_VIEW_PORT`)
@@ -85,19 +90,20 @@ const CONTENT_TYPES = {
 export async function startViewServer({
   board,
   serial = board,
+  queries,
   input,
   port = DEFAULT_VIEW_PORT,
   fallback = true,
   link = 'terminal',
   wasm = VIEW_WASM,
 }) {
-  const view = new ViewServer({ board, serial, input, link, wasm });
+  const view = new ViewServer({ board, serial, queries, input, link, wasm });
   await view.listen(port, fallback);
   return view;
 }
 
 export class ViewServer {
-  constructor({ board, serial = board, input, link, wasm }) {
+  constructor({ board, serial = board, queries, input, link, wasm }) {
     this.board = board;
     this.input = input;
     this.link = link;
@@ -106,7 +112,6 @@ export class ViewServer {
     this.clients = new Set();
     this.listings = { geometry: null, config: null };
     this.reader = new ListingReader();
-    this.partialLine = '';
     this.scrollback = [];
     this.pendingOutput = [];
     this.lastPins = null;
@@ -115,7 +120,14 @@ export class ViewServer {
     this.stopped = null;
 
     serial.onOutput((byte) => this.output(byte));
-    input.onLine((text, source) => this.lineSent(text, source));
+    input.onLine((text) => this.ask(listingsChangedBy(text)));
+    this.queries = new ViewLink(queries);
+    this.queries.onLine((line) => this.listingLine(line));
+    this.queries.onBanner(() => {
+      // A (re)booted board, or the port opened: its settings may be its defaults again.
+      this.queries.request('set echo off');
+      this.ask(['geometry', 'config']);
+    });
   }
 
   /** @returns {Promise<void>} */
@@ -154,16 +166,10 @@ export class ViewServer {
     if (this.clients.size > 0) {
       this.pendingOutput.push(byte);
     }
-    if (byte !== 0x0a) {
-      this.partialLine += String.fromCharCode(byte);
-      return;
-    }
-    const line = this.partialLine.replace(/\r$/, '');
-    this.partialLine = '';
-    if (BANNER.test(line)) {
-      // A (re)booted board: its settings are its defaults again. Ask for both listings.
-      this.ask(['geometry', 'config']);
-    }
+  }
+
+  /** A line on the view's own link: part of a listing, perhaps. */
+  listingLine(line) {
     const listing = this.reader.line(line);
     if (listing) {
       this.listings[listing.kind] = listing[listing.kind];
@@ -171,21 +177,14 @@ export class ViewServer {
     }
   }
 
-  /** A line went to the board: if it can change a listing, ask for that listing after it. */
-  lineSent(text, source) {
-    if (source !== 'view') {
-      this.ask(listingsChangedBy(text));
-    }
-  }
-
-  /** Sends `geometry` / `config` on the serial link, like a user typing them. */
+  /** Asks the board for `geometry` / `config` on the view's own link. */
   ask(listings) {
     if (listings.length === 0) {
       return;
     }
     this.broadcast('asking', { listings });
     for (const name of listings) {
-      this.input.sendLine(name, 'view');
+      this.queries.request(name);
     }
   }
 
@@ -258,7 +257,7 @@ export class ViewServer {
       res.end();
       return;
     }
-    const hello = { link: this.link, frameMs: FRAME_MS };
+    const hello = { link: this.link, frameMs: FRAME_MS, source: 'emulator' };
     this.send(client, `event: hello\ndata: ${JSON.stringify(hello)}\n\n`);
     for (const kind of ['geometry', 'config']) {
       if (this.listings[kind]) {
@@ -283,7 +282,19 @@ export class ViewServer {
     }
     const url = new URL(req.url, `http://${req.headers.host}`);
     if (req.method === 'POST' && url.pathname === '/uart') {
-      return this.typedLine(req, res);
+      return this.typedLine(req, res, (line) => {
+        const held = this.input.sendLine(line, 'page');
+        res.writeHead(200, { 'Content-Type': 'application/json' });
+        res.end(JSON.stringify({ held }));
+      });
+    }
+    if (req.method === 'POST' && url.pathname === '/command') {
+      return this.typedLine(req, res, async (line) => {
+        const answer = await this.queries.request(line);
+        this.ask(listingsChangedBy(line));
+        res.writeHead(200, { 'Content-Type': 'application/json' });
+        res.end(JSON.stringify(answer));
+      });
     }
     if (req.method !== 'GET' && req.method !== 'HEAD') {
       return this.fail(res, 405, 'method not allowed');
@@ -330,8 +341,13 @@ export class ViewServer {
     createReadStream(path).pipe(res);
   }
 
-  /** POST /uart `{ "line": "pose 0 0 10 0 0 0" }`: one line typed on the page. */
-  typedLine(req, res) {
+  /**
+   * POST /uart `{ "line": "pose 0 0 10 0 0 0" }`: one line typed on the page, for the shared
+   * link (answer `{ held }`); POST /command `{ "line": "move x=5" }`: one of the page's own
+   * commands, on the view's link (answer `{ reply, data }`: the board's final reply and data
+   * lines). `then(line)` answers once the request is checked.
+   */
+  typedLine(req, res, then) {
     const origin = req.headers.origin;
     if (origin !== undefined && origin !== `http://${req.headers.host}`) {
       return this.fail(res, 403, 'forbidden origin');
@@ -361,9 +377,7 @@ export class ViewServer {
       if (this.stopped !== null) {
         return this.fail(res, 503, this.stopped);
       }
-      const held = this.input.sendLine(line, 'page');
-      res.writeHead(200, { 'Content-Type': 'application/json' });
-      res.end(JSON.stringify({ held }));
+      return then(line);
     });
   }
 

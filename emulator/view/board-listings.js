@@ -5,7 +5,9 @@
 // limits in us, torque rating in kgf cm and speed rating in s per 60 degrees). The 3D view draws from these, so it shows the
 // build the firmware uses, not the documented defaults. Whoever asked for the listing (a user,
 // the view), it is read the same way; a listing counts only once its final `ok` has arrived,
-// so a refused or cut one changes nothing.
+// so a refused or cut one changes nothing. Plain JavaScript with no imports: the Node view server
+// (emulator/src/view-server/) and the page itself (for `hexapod view`, whose server passes the
+// board's lines on as they are) read listings with this one reader.
 
 const NUMBER = String.raw`[-+]?\d+(?:\.\d+)?`;
 const VECTOR = String.raw`\((${NUMBER}), (${NUMBER}), (${NUMBER})\)`;
