@@ -25,7 +25,8 @@
 //!   [`store`]: the two flash sectors used in turn (A/B) over a small [`store::NorFlash`]
 //!   trait the board implements, so a power cut during a save never loses the last good one.
 //! - [`motion`]: straight-line moves at bounded speed and acceleration (trapezoid), path
-//!   checks; [`tracker`]: the stream tracker (per-axis speed and acceleration limits,
+//!   checks; `motion::blend`: a new target while moving, from the pose and velocity there
+//!   into the straight line, within the acceleration limits; [`tracker`]: the stream tracker (per-axis speed and acceleration limits,
 //!   time-optimal, no overshoot; in integers: fixed-point positions, an exact discrete braking
 //!   rule with an integer square root).
 //! - [`payload`]: the payload carried and the servos' torque ratings: holding torques in

@@ -32,8 +32,18 @@
 //!   when its frame comes (it holds the last good pose and stops).
 //!
 //! The cost of a check is therefore bounded by [`MAX_PATH_CHECKS`] IK solutions per command.
+//!
+//! A move that starts while the platform moves, with an acceleration limit set, is a
+//! [`blend::Blend`] instead: from the pose and velocity the motion in progress has at a chosen
+//! frame, into the straight line to the target, within the acceleration limits at every frame
+//! (see that module). [`Plan`] is either; [`Motion`] runs one and can hold the next, queued to
+//! start at a given frame (the hand-over).
 
-use kinematics_core::Pose;
+use kinematics_core::{Math, Pose};
+
+pub mod blend;
+
+use self::blend::{Blend, BlendCheckpoints, CheckRule};
 
 /// Largest spacing between path checks along the linear coordinates, mm.
 pub const PATH_STEP_MM: f32 = 0.5;
@@ -202,6 +212,32 @@ impl Segment {
         }
     }
 
+    /// The velocity at frame `k` (mm and rad per frame, the profile's own, not a difference of
+    /// frames; zero from `frames` on), where a blend that takes over at that frame starts.
+    pub fn rate_at(&self, k: u32) -> [f32; 6] {
+        if k >= self.frames {
+            return [0.0; 6];
+        }
+        let n = self.frames as f32;
+        let time = k as f32 / n;
+        // d fraction / d time fraction, then per frame.
+        let slope = if self.ramp == 0.0 {
+            1.0
+        } else {
+            let peak = 1.0 / (1.0 - self.ramp);
+            let accel = peak / self.ramp;
+            if time < self.ramp {
+                accel * time
+            } else if time <= 1.0 - self.ramp {
+                peak
+            } else {
+                accel * (1.0 - time)
+            }
+        } / n;
+        let (a, b) = (self.start.to_array(), self.target.to_array());
+        core::array::from_fn(|i| (b[i] - a[i]) * slope)
+    }
+
     /// How many evenly spaced samples keep checks within [`PATH_STEP_MM`] and [`PATH_STEP_DEG`].
     fn spacing_samples(&self) -> u32 {
         let by_mm = linear_distance_mm(&self.start, &self.target) / PATH_STEP_MM;
@@ -301,6 +337,16 @@ enum Walk {
     Evenly { m: u32, j: u32 },
 }
 
+impl Checkpoints {
+    /// How many poses the whole walk visits (from its start), without walking it.
+    pub fn total(&self) -> u32 {
+        match self.walk {
+            Walk::EveryFrame { sub, .. } => self.segment.frames.saturating_mul(sub),
+            Walk::Evenly { m, .. } => m,
+        }
+    }
+}
+
 impl Iterator for Checkpoints {
     type Item = (Pose, f32);
 
@@ -351,17 +397,155 @@ impl Iterator for Checkpoints {
     }
 }
 
-/// The pose being commanded and the move in progress, if any.
+/// The rule a blend's path check follows: the straight moves' spacing and budget.
+pub const CHECK_RULE: CheckRule = CheckRule {
+    step_mm: PATH_STEP_MM,
+    step_deg: PATH_STEP_DEG,
+    max_checks: MAX_PATH_CHECKS,
+    max_frames: MAX_FRAMES,
+};
+
+impl From<SpeedLimits> for blend::Limits {
+    fn from(l: SpeedLimits) -> blend::Limits {
+        blend::Limits {
+            mm_per_s: l.mm_per_s,
+            deg_per_s: l.deg_per_s,
+            mm_per_s2: l.mm_per_s2,
+            deg_per_s2: l.deg_per_s2,
+        }
+    }
+}
+
+/// A planned move: a straight line from rest, or a blend from a moving state.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Plan {
+    /// From rest ([`Segment`]).
+    Straight(Segment),
+    /// From the motion in progress ([`Blend`]).
+    Blend(Blend),
+}
+
+impl Plan {
+    /// The move to `target` from `start` moving at `rate` (mm and rad per frame): a blend
+    /// ([`Blend::plan`], square roots by `M`), or the straight move when none is needed.
+    pub fn after<M: Math>(
+        start: Pose,
+        rate: [f32; 6],
+        target: Pose,
+        limits: SpeedLimits,
+        frame_hz: f32,
+    ) -> Plan {
+        match Blend::plan::<M>(start, rate, target, limits.into(), frame_hz, CHECK_RULE) {
+            Some(blend) => Plan::Blend(blend),
+            None => Plan::Straight(Segment::plan(start, target, limits, frame_hz)),
+        }
+    }
+
+    /// Where the move starts.
+    pub fn start(&self) -> Pose {
+        match self {
+            Plan::Straight(s) => *s.start(),
+            Plan::Blend(b) => b.start(),
+        }
+    }
+
+    /// Where the move ends.
+    pub fn target(&self) -> &Pose {
+        match self {
+            Plan::Straight(s) => s.target(),
+            Plan::Blend(b) => b.target(),
+        }
+    }
+
+    /// Frames the move takes (at least 1).
+    pub fn frames(&self) -> u32 {
+        match self {
+            Plan::Straight(s) => s.frames(),
+            Plan::Blend(b) => b.frames(),
+        }
+    }
+
+    /// The pose commanded at frame `k` (`0` = start, `frames` and beyond = target exactly).
+    pub fn pose_at(&self, k: u32) -> Pose {
+        match self {
+            Plan::Straight(s) => s.pose_at(k),
+            Plan::Blend(b) => b.pose_at(k),
+        }
+    }
+
+    /// The velocity at frame `k` (mm and rad per frame; zero from `frames` on).
+    pub fn rate_at(&self, k: u32) -> [f32; 6] {
+        match self {
+            Plan::Straight(s) => s.rate_at(k),
+            Plan::Blend(b) => b.rate_at(k),
+        }
+    }
+
+    /// How many poses its path check visits (without walking them).
+    pub fn check_count(&self) -> u32 {
+        match self {
+            Plan::Straight(s) => s.checkpoints().total(),
+            Plan::Blend(b) => b.check_count(),
+        }
+    }
+
+    /// The poses its path check visits, in order.
+    pub fn checkpoints(&self) -> PlanCheckpoints {
+        match self {
+            Plan::Straight(s) => PlanCheckpoints::Straight(s.checkpoints()),
+            Plan::Blend(b) => PlanCheckpoints::Blend(b.checkpoints()),
+        }
+    }
+}
+
+/// The poses a [`Plan`]'s path check visits, `(pose, fraction)` in order.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PlanCheckpoints {
+    /// A straight move's ([`Segment::checkpoints`]).
+    Straight(Checkpoints),
+    /// A blend's ([`Blend::checkpoints`]).
+    Blend(BlendCheckpoints),
+}
+
+impl PlanCheckpoints {
+    /// How many poses the whole check visits (from its start), without walking it.
+    pub fn total(&self) -> u32 {
+        match self {
+            PlanCheckpoints::Straight(c) => c.total(),
+            PlanCheckpoints::Blend(c) => c.total(),
+        }
+    }
+}
+
+impl Iterator for PlanCheckpoints {
+    type Item = (Pose, f32);
+
+    fn next(&mut self) -> Option<(Pose, f32)> {
+        match self {
+            PlanCheckpoints::Straight(c) => c.next(),
+            PlanCheckpoints::Blend(c) => c.next(),
+        }
+    }
+}
+
+/// The pose being commanded and the move in progress, if any (and the next, queued).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Motion {
     pose: Pose,
-    active: Option<(Segment, u32)>,
+    active: Option<(Plan, u32)>,
+    /// A move to start after this many more frames of the one in progress (see
+    /// [`Motion::start_after`]).
+    queued: Option<(Plan, u32)>,
 }
 
 impl Motion {
     /// Standing still at `pose`.
     pub const fn new(pose: Pose) -> Motion {
-        Motion { pose, active: None }
+        Motion {
+            pose,
+            active: None,
+            queued: None,
+        }
     }
 
     /// The pose commanded on the last frame.
@@ -371,48 +555,92 @@ impl Motion {
 
     /// Where the platform is going (the current pose when standing still).
     pub fn target(&self) -> &Pose {
-        match &self.active {
-            Some((segment, _)) => segment.target(),
-            None => &self.pose,
+        match (&self.queued, &self.active) {
+            (Some((plan, _)), _) | (None, Some((plan, _))) => plan.target(),
+            (None, None) => &self.pose,
         }
     }
 
-    /// True while a move is in progress.
+    /// True while a move is in progress (or queued).
     pub fn is_moving(&self) -> bool {
-        self.active.is_some()
+        self.active.is_some() || self.queued.is_some()
     }
 
     /// `(frames done, frames total)` of the move in progress.
     pub fn progress(&self) -> Option<(u32, u32)> {
-        self.active.map(|(segment, done)| (done, segment.frames()))
+        self.active.map(|(plan, done)| (done, plan.frames()))
     }
 
     /// Starts a move (planned from the current pose), replacing any move in progress.
     pub fn start(&mut self, segment: Segment) {
-        self.active = Some((segment, 0));
+        self.active = Some((Plan::Straight(segment), 0));
+        self.queued = None;
+    }
+
+    /// Queues `plan` to take over after `frames` more frames of the motion in progress (0: from
+    /// the next frame on); it must start where and how fast [`Motion::state_after`]`(frames)`
+    /// says the motion will be then. Replaces any move queued before, so `frames` must be at
+    /// most [`Motion::queued_after`] (else the frames between would not be the ones planned
+    /// from).
+    pub fn start_after(&mut self, plan: Plan, frames: u32) {
+        self.queued = Some((plan, frames));
+    }
+
+    /// The frames until a queued move takes over, if one is queued.
+    pub fn queued_after(&self) -> Option<u32> {
+        self.queued.map(|(_, wait)| wait)
+    }
+
+    /// The pose and velocity (mm and rad per frame) `frames` frames from now, if nothing else
+    /// changes: what a move taking over then starts from.
+    pub fn state_after(&self, frames: u32) -> (Pose, [f32; 6]) {
+        if let Some((plan, wait)) = &self.queued {
+            if frames >= *wait {
+                let k = frames - wait;
+                return (plan.pose_at(k), plan.rate_at(k));
+            }
+        }
+        match &self.active {
+            Some((plan, done)) => {
+                let k = done.saturating_add(frames);
+                (plan.pose_at(k), plan.rate_at(k))
+            }
+            None => (self.pose, [0.0; 6]),
+        }
     }
 
     /// Freezes at the current pose.
     pub fn stop(&mut self) {
         self.active = None;
+        self.queued = None;
     }
 
     /// The pose for the next frame (the current pose when standing still). Nothing changes
     /// until [`Motion::commit`].
     pub fn next_pose(&self) -> Pose {
-        match &self.active {
-            Some((segment, done)) => segment.pose_at(done + 1),
-            None => self.pose,
+        match (&self.queued, &self.active) {
+            (Some((plan, 0)), _) => plan.pose_at(1),
+            (_, Some((plan, done))) => plan.pose_at(done + 1),
+            (_, None) => self.pose,
         }
     }
 
-    /// Makes the pose from [`Motion::next_pose`] current; the move ends on its last frame.
+    /// Makes the pose from [`Motion::next_pose`] current; the move ends on its last frame (a
+    /// queued move takes over when its wait is over).
     pub fn commit(&mut self) {
         let next = self.next_pose();
         self.pose = next;
-        if let Some((segment, done)) = &mut self.active {
+        match &mut self.queued {
+            Some((plan, 0)) => {
+                self.active = Some((*plan, 0));
+                self.queued = None;
+            }
+            Some((_, wait)) => *wait -= 1,
+            None => {}
+        }
+        if let Some((plan, done)) = &mut self.active {
             *done += 1;
-            if *done >= segment.frames() {
+            if *done >= plan.frames() {
                 self.active = None;
             }
         }

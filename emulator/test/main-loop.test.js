@@ -17,7 +17,13 @@ import assert from 'node:assert/strict';
 import { before, test } from 'node:test';
 
 import { EmulatedBoard, FINAL_REPLY } from '../src/chip/board.js';
-import { bootQuiet, firmwareBootrom, FRAME_MS, ok } from '../src/test-support/e2e-support.js';
+import {
+  bootQuiet,
+  firmwareBootrom,
+  FRAME_MS,
+  ok,
+  status,
+} from '../src/test-support/e2e-support.js';
 import { binaryFrame } from '../src/bench/firmware-bench.js';
 
 /** The documented bound on a main-loop pass: 1 ms at 125 MHz. */
@@ -89,6 +95,28 @@ test('four moves in flight at 1 mm/s (each checked at 1,000 poses): no stall, ev
   assert.deepEqual(replies, ['ok', 'ok', 'ok', 'ok']);
   board.runMs(200);
   assertNoStall(board, 'four moves');
+});
+
+test('new targets blended into while moving (acceleration limits) at 333 Hz, pipelined: no stall', () => {
+  const board = quietBoard();
+  ok(board, 'set frame_hz 333');
+  ok(board, 'set speed_mm_s 100');
+  ok(board, 'set accel_mm_s2 50');
+  ok(board, 'set accel_deg_s2 40');
+  ok(board, 'pose 12 0 0 0 0 0');
+  board.runMs(300);
+  measure(board);
+  // Each a blend from the motion in progress over hundreds of frames, checked at every one of
+  // them while the platform moves on, its hand-over learnt from the checks before.
+  const lines = ['pose -10 5 2 0 0 4', 'nudge yaw=-6', 'move x=9', 'nudge z=-3', 'home'];
+  const replies = pipeline(board, lines);
+  assert.deepEqual(
+    replies,
+    lines.map(() => 'ok'),
+  );
+  board.runMs(3000);
+  assertNoStall(board, 'blends');
+  assert.equal(status(board).state, 'idle');
 });
 
 test('three moves in flight at 0.5 mm/s at 115,200 baud', () => {

@@ -24,10 +24,13 @@
 //!   between slices.
 //!
 //! One job at a time: while [`Controller::is_busy`], the board feeds no bytes (they wait in the
-//! link's receive queue, or the USB host waits). A move checked while the platform moves holds
-//! the platform where it was when the command arrived until the check ends (a few
-//! milliseconds; at most about 150 ms on the RP2040 for the longest check), then starts from
-//! there; a refused move lets the move in progress go on. `check` does not hold anything.
+//! link's receive queue, or the USB host waits). A move checked while the platform moves, with
+//! an acceleration limit set and no servo speed rated, is a blend ([`crate::motion::blend`]): the motion goes on while
+//! it is checked, and it takes over at a hand-over frame planned ahead (`moves.rs`). Without an
+//! acceleration limit (or while streaming, or with servo speed ratings), the platform holds where it was when the command
+//! arrived until the check ends (a few milliseconds; at most about 150 ms on the RP2040 for the
+//! longest check), then starts from there. A refused move lets the move in progress go on.
+//! `check` does not hold anything.
 //!
 //! This file holds the state, the public API and the dispatch: a line to its command
 //! ([`Controller::on_byte`]), a slice to the job in progress ([`Controller::work`]), a frame to
@@ -106,6 +109,9 @@ mod test_support;
 pub const LINK_LOSS_SPEED_MM_S: f32 = 10.0;
 /// Angular speed for returning home after link loss when `speed_deg_s` is off, deg/s.
 pub const LINK_LOSS_SPEED_DEG_S: f32 = 15.0;
+
+/// Path checks per frame assumed before any was measured (see `moves.rs`, blends).
+const INITIAL_CHECK_RATE: u32 = 16;
 
 /// Notices kept for links that have not shown them yet (the latest ones).
 const NOTICE_QUEUE: usize = 4;
@@ -192,8 +198,13 @@ pub struct Controller<M: Math = Libm> {
     returning_home: bool,
     /// The work in progress, if any.
     job: Option<Job>,
-    /// The motion holds still until the job's check ends (a move checked while moving).
+    /// The motion holds still until the job's check ends (a move checked while moving, no
+    /// blend).
     holding: bool,
+    /// Path checks a frame has been seen to fit (a blend's hand-over is put that far ahead),
+    /// and how many the last blend needed.
+    check_rate: u32,
+    blend_checks: u32,
     /// Time without a line, us, counted in whole frames from the first frame that started
     /// after the last line; `None` until that frame.
     silence_us: Option<u32>,
@@ -267,6 +278,8 @@ impl<M: Math> Controller<M> {
             returning_home: false,
             job: None,
             holding: false,
+            check_rate: INITIAL_CHECK_RATE,
+            blend_checks: 0,
             silence_us: None,
             link_loss_handled: false,
             fault: None,
@@ -575,11 +588,28 @@ impl<M: Math> Controller<M> {
             solver: &self.solver,
         };
         match self.job.as_mut()? {
+            Job::Path(path) if path.replan => {
+                // A missed hand-over: planned again from here, in a slice of its own.
+                let target = *path.plan.target();
+                let (plan, hand_over) = self.blend_plan(target, self.speed_limits());
+                if let Some(Job::Path(path)) = &mut self.job {
+                    *path = path.replanned(plan, hand_over);
+                }
+                None
+            }
             Job::Path(path) => {
                 let result = path.step::<M>(check)?;
                 // Copied out (not the whole job, which `take` would move), then ended.
                 let path = *path;
                 self.job = None;
+                let missed =
+                    result.is_ok() && !self.estop.stops_motion() && self.missed_hand_over(&path);
+                self.learn_check_rate(&path, missed);
+                if missed {
+                    // Too late to take over as planned: planned (next slice) and checked again.
+                    self.job = Some(Job::Path(path.to_replan()));
+                    return None;
+                }
                 Some(self.finish_path(path, result))
             }
             Job::Clamp(clamp) => {

@@ -10,14 +10,32 @@
 //! short). Streaming hosts use this mode. With a speed limit set the first step comes with the
 //! next frame (up to one frame later), because writing it early could put two steps into one
 //! frame and exceed the limit.
+//!
+//! A new target while moving, with an acceleration limit set: a blend
+//! ([`crate::motion::blend`]), checked while the motion in progress goes on. It takes over at
+//! the hand-over, a frame chosen when the line arrives, as far ahead as the check is expected
+//! to take (its number of poses over the poses a frame has been seen to fit, `check_rate`,
+//! with a quarter to spare), and it is planned from the pose and velocity the motion will have
+//! then ([`crate::motion::Motion::state_after`]), so the path checked is the path taken. A
+//! check that ends after its hand-over (or after the motion changed: a fault) is planned and
+//! checked again from the motion as it is then, with half the rate; the motion goes on
+//! meanwhile. A blend waiting for its hand-over is replaced by the next target's, which
+//! therefore takes over no later than it would. Without an acceleration limit, while
+//! streaming, or with servo speed ratings set (a known limit: a blend is not yet planned or
+//! measured within the ratings), the platform holds during the check and starts from rest
+//! (the speed may jump).
 
 use kinematics_core::{Math, Pose};
 
-use super::path::{PathCheck, Purpose};
+use super::path::{HandOver, PathCheck, Purpose};
 use super::{Begun, Controller, Done, Job};
 use crate::error::Error;
-use crate::motion::{Motion, Segment, SpeedLimits};
+use crate::motion::{Motion, Plan, Segment, SpeedLimits};
 use crate::report::{Listing, Notice};
+
+/// The most frames a blend's hand-over is put ahead (10 s at 50 Hz, 1.5 s at 333 Hz; a check
+/// takes about 0.2 s at most, 0.7 s with torque ratings).
+const MAX_LEAD_FRAMES: u32 = 500;
 
 impl<M: Math> Controller<M> {
     /// The speed and acceleration limits of commanded moves.
@@ -39,7 +57,9 @@ impl<M: Math> Controller<M> {
     }
 
     /// Checks the target now (its error is the most useful one), then starts the check of the
-    /// straight path to it from the current pose as a job.
+    /// path to it as a job: the straight line from the current pose, or, for a move while the
+    /// platform moves with an acceleration limit set, a blend from the motion in progress
+    /// ([`Controller::blend_plan`]).
     pub(super) fn start_path(
         &mut self,
         target: Pose,
@@ -51,20 +71,114 @@ impl<M: Math> Controller<M> {
             return Err(Error::NoPose(e));
         }
         let solution = self.solver.solve::<M>(&self.settings.servos, &target)?;
-        // Within the servos' rated speeds, if they have any (`controller/servo_speed.rs`).
-        let (segment, servo_time) = self.plan_within_servo_speed(target, &solution, limits);
-        // A move checked while moving (or streaming): the platform holds here until the check
-        // ends.
-        self.holding =
-            purpose != Purpose::Check && (self.motion.is_moving() || self.is_streaming());
+        // With servo speed ratings a new target while moving does not blend (a known limit,
+        // docs/commands.md): the straight move from rest within the ratings, as below.
+        let blends = purpose == Purpose::Move { jump: false }
+            && (limits.mm_per_s2 > 0.0 || limits.deg_per_s2 > 0.0)
+            && !self.is_streaming()
+            && !self.settings.servo_speed.rated();
+        let (plan, hand_over, servo_time) = if blends {
+            let (plan, hand_over) = self.blend_plan(target, limits);
+            (plan, hand_over, None)
+        } else {
+            // Within the servos' rated speeds, if they have any (`controller/servo_speed.rs`).
+            let (segment, servo_time) = self.plan_within_servo_speed(target, &solution, limits);
+            (Plan::Straight(segment), None, servo_time)
+        };
+        // A move checked while moving (or streaming) without a blend: the platform holds here
+        // until the check ends.
+        self.holding = purpose != Purpose::Check
+            && hand_over.is_none()
+            && (self.motion.is_moving() || self.is_streaming());
         self.job = Some(Job::Path(PathCheck::new(
             purpose,
             solution,
-            segment,
+            plan,
+            hand_over,
             &self.settings,
             servo_time,
         )));
         Ok(Begun::Pending)
+    }
+
+    /// The straight move from the current pose.
+    fn straight_plan(&self, target: Pose, limits: SpeedLimits) -> Plan {
+        let hz = f32::from(self.settings.frame_hz);
+        Plan::Straight(Segment::plan(*self.motion.pose(), target, limits, hz))
+    }
+
+    /// The move to `target` taking over from the motion in progress a few frames from now,
+    /// when its check will have ended (the hand-over): planned from the pose and velocity the
+    /// motion will have then, so the motion goes on while the check runs and the path checked
+    /// is the path taken. The lead is the check's size over the checks a frame has been
+    /// seen to fit (`check_rate`), with a quarter to spare: planned first with the lead the
+    /// last blend's size needed, and again if this one needs more, or much less. A check that ends too
+    /// late is planned and checked again ([`Controller::missed_hand_over`]). Standing still:
+    /// the straight move.
+    pub(super) fn blend_plan(&self, target: Pose, limits: SpeedLimits) -> (Plan, Option<HandOver>) {
+        if !self.motion.is_moving() {
+            return (self.straight_plan(target, limits), None);
+        }
+        let hz = f32::from(self.settings.frame_hz);
+        let plan_after = |lead: u32| {
+            let (pose, rate) = self.motion.state_after(lead);
+            let plan = Plan::after::<M>(pose, rate, target, limits, hz);
+            let hand_over = HandOver {
+                begun: self.frame_ticks,
+                at: self.frame_ticks.wrapping_add(lead),
+                pose,
+                rate,
+            };
+            (plan, Some(hand_over))
+        };
+        // A move queued and not started yet is replaced, so the new one takes over no later
+        // than it would (if the check takes longer, it is planned again once that one runs).
+        let latest = self.motion.queued_after().unwrap_or(MAX_LEAD_FRAMES);
+        let lead_for = |checks: u32| {
+            let lead = (checks.saturating_mul(5) / 4).div_ceil(self.check_rate.max(1));
+            lead.clamp(1, MAX_LEAD_FRAMES).min(latest)
+        };
+        let guess = lead_for(self.blend_checks);
+        let first = plan_after(guess);
+        let needed = lead_for(first.0.check_count());
+        if needed <= guess && guess <= needed + needed.div_ceil(4) {
+            first
+        } else {
+            // Later, or sooner (the platform should not wait much longer than the check needs:
+            // the motion in progress may end before the hand-over).
+            plan_after(needed)
+        }
+    }
+
+    /// Whether a blend whose check has just ended can no longer take over as planned (its
+    /// hand-over frame has passed, or the motion changed meanwhile): then it is planned and
+    /// checked again from the motion as it is now.
+    pub(super) fn missed_hand_over(&self, path: &PathCheck) -> bool {
+        match path.hand_over {
+            Some(h) => {
+                let wait = h.at.wrapping_sub(self.frame_ticks) as i32;
+                self.motion.state_after(wait.max(0) as u32) != (h.pose, h.rate)
+            }
+            None => false,
+        }
+    }
+
+    /// Learns how many path checks fit in a frame, from the check that has just ended; after a
+    /// missed hand-over, half as many.
+    pub(super) fn learn_check_rate(&mut self, path: &PathCheck, missed: bool) {
+        let Some(h) = path.hand_over else {
+            return;
+        };
+        self.blend_checks = path.plan.check_count();
+        let frames = self.frame_ticks.wrapping_sub(h.begun);
+        self.check_rate = match path.solved.checked_div(frames) {
+            Some(rate) => rate.max(1),
+            // Done within the frame it began in: at least that many fit.
+            None => self.check_rate.max(path.solved),
+        };
+        if missed {
+            self.check_rate = (self.check_rate / 2).max(1);
+        }
     }
 
     /// What a checked path leads to.
@@ -73,7 +187,8 @@ impl<M: Math> Controller<M> {
         let PathCheck {
             purpose,
             solution,
-            segment,
+            plan,
+            hand_over,
             ..
         } = path;
         if self.estop.stops_motion()
@@ -92,7 +207,7 @@ impl<M: Math> Controller<M> {
                 // An accepted move ends the stream (and driving the servos one by one).
                 self.end_stream();
                 self.direct = None;
-                self.start(segment);
+                self.start_plan(plan, hand_over);
                 self.servo_power = true;
                 Done::Ok
             }
@@ -100,7 +215,7 @@ impl<M: Math> Controller<M> {
                 // No speed limit: a jump, made now (see the module docs on latency).
                 self.end_stream();
                 self.direct = None;
-                self.motion = Motion::new(*segment.target());
+                self.motion = Motion::new(*plan.target());
                 self.solution = solution;
                 self.new_pulses = true;
                 self.returning_home = false;
@@ -111,7 +226,7 @@ impl<M: Math> Controller<M> {
             (Purpose::EstopHome, Ok(())) => {
                 self.end_stream();
                 self.direct = None;
-                self.start(segment);
+                self.start_plan(plan, None);
                 Done::Quiet
             }
             (Purpose::EstopHome, Err(e)) => {
@@ -120,10 +235,10 @@ impl<M: Math> Controller<M> {
                 Done::Quiet
             }
             (Purpose::Check, Ok(())) => {
-                let duration_s = if segment.start() == segment.target() {
+                let duration_s = if plan.start() == *plan.target() {
                     0.0
                 } else {
-                    segment.frames() as f32 / f32::from(self.settings.frame_hz)
+                    plan.frames() as f32 / f32::from(self.settings.frame_hz)
                 };
                 Done::List(Listing::Check {
                     arm_rad: solution.arm_rad,
@@ -135,7 +250,7 @@ impl<M: Math> Controller<M> {
             (Purpose::ReturnHome, Ok(())) => {
                 self.end_stream();
                 self.direct = None;
-                self.start(segment);
+                self.start_plan(plan, None);
                 self.returning_home = true;
                 self.notify(Notice::LinkLost {
                     timeout_s: self.settings.link_timeout_s,
@@ -155,6 +270,20 @@ impl<M: Math> Controller<M> {
         self.motion.start(segment);
         self.returning_home = false;
         self.fault = None;
+    }
+
+    /// Starts a checked plan: a straight move now, or a blend at its hand-over (which
+    /// [`Controller::missed_hand_over`] has found still ahead, or now).
+    fn start_plan(&mut self, plan: Plan, hand_over: Option<HandOver>) {
+        match (plan, hand_over) {
+            (Plan::Straight(segment), None) => self.start(segment),
+            (plan, hand_over) => {
+                let wait = hand_over.map_or(0, |h| h.at.wrapping_sub(self.frame_ticks) as i32);
+                self.motion.start_after(plan, wait.max(0) as u32);
+                self.returning_home = false;
+                self.fault = None;
+            }
+        }
     }
 }
 
@@ -233,6 +362,225 @@ mod tests {
         let held = *c.pose();
         c.on_frame();
         assert!(c.pose().x_mm < held.x_mm);
+    }
+
+    /// Feeds `line` to `c` as the board does, then runs frames with `slices` slices of work
+    /// between them until the reply; the poses of those frames, and the reply.
+    fn line_while_moving(
+        c: &mut crate::Controller,
+        link: &mut crate::Session,
+        line: &str,
+        slices: u32,
+        poses: &mut std::vec::Vec<Pose>,
+    ) -> std::string::String {
+        let mut out = std::string::String::new();
+        for &b in line.as_bytes().iter().chain(b"\n") {
+            c.on_byte(link, b, &mut out);
+        }
+        while link.awaits_reply() {
+            c.on_frame();
+            poses.push(*c.pose());
+            for _ in 0..slices {
+                c.work(link, &mut out);
+            }
+        }
+        out
+    }
+
+    /// Per-frame speed and change of velocity of z (mm per frame, per frame^2).
+    fn steps(poses: &[Pose]) -> std::vec::Vec<f32> {
+        poses.windows(2).map(|w| w[1].z_mm - w[0].z_mm).collect()
+    }
+
+    #[test]
+    fn with_an_acceleration_limit_a_new_target_blends_in_while_the_check_runs() {
+        let (mut c, mut link) = (quiet(), program());
+        let mut out = std::string::String::new();
+        c.execute_line(&mut link, "set speed_mm_s 40", &mut out);
+        c.execute_line(&mut link, "set accel_mm_s2 200", &mut out);
+        c.execute_line(&mut link, "pose 0 0 6 0 0 0", &mut out);
+        let mut poses = std::vec![*c.pose()];
+        for _ in 0..8 {
+            c.on_frame();
+            poses.push(*c.pose());
+        }
+        // Every 5 frames a new target (ahead, ahead, back down, up again), each checked over
+        // one frame or more (six slices, 18 IK solutions, per frame: the board fits more),
+        // the platform moving on meanwhile.
+        for line in [
+            "nudge z=4",
+            "nudge z=4",
+            "pose 0 0 -2 0 0 0",
+            "pose 0 0 9 0 0 0",
+        ] {
+            let before = poses.len();
+            let reply = line_while_moving(&mut c, &mut link, line, 6, &mut poses);
+            assert_eq!(reply, "ok\r\n", "{line}");
+            let during = &poses[before - 1..];
+            assert!(
+                during.windows(2).all(|w| w[0] != w[1]),
+                "{line}: held during its check"
+            );
+            while poses.len() - before < 5 {
+                c.on_frame();
+                poses.push(*c.pose());
+            }
+        }
+        while c.is_moving() {
+            c.on_frame();
+            poses.push(*c.pose());
+        }
+        assert_eq!(*c.pose(), Pose::from_degrees(0.0, 0.0, 9.0, 0.0, 0.0, 0.0));
+        // 200 mm/s2 is 0.08 mm of change per frame at 50 Hz, 40 mm/s is 0.8 mm a frame (f32
+        // rounding of poses of a few mm: 1e-5 mm).
+        let v = steps(&poses);
+        for (k, w) in v.windows(2).enumerate() {
+            assert!((w[1] - w[0]).abs() <= 0.08 + 1e-4, "frame {}: {v:?}", k + 1);
+        }
+        assert!(v.iter().all(|s| s.abs() <= 0.8 + 1e-4), "{v:?}");
+        // Never held still before it arrived: no two frames in a row without a step (a turn
+        // back passes through rest, which may round to one step of 0).
+        let end = v.iter().rposition(|s| *s != 0.0).unwrap();
+        assert!(
+            v[..end].windows(2).all(|w| w[0] != 0.0 || w[1] != 0.0),
+            "{v:?}"
+        );
+        // The turn back came from the velocity it had, not from a stop at the command.
+        assert!(
+            v.iter().any(|s| *s > 0.5) && v.iter().any(|s| *s < -0.5),
+            "{v:?}"
+        );
+        assert!(c.fault().is_none());
+    }
+
+    #[test]
+    fn a_check_slower_than_its_lead_is_planned_again_and_still_within_the_limits() {
+        // One slice (3 IK solutions) a frame: far fewer than first assumed, so the first
+        // hand-overs are missed and planned again from the motion as it is by then.
+        let (mut c, mut link) = (quiet(), program());
+        let mut out = std::string::String::new();
+        c.execute_line(&mut link, "set speed_mm_s 30", &mut out);
+        c.execute_line(&mut link, "set accel_mm_s2 100", &mut out);
+        c.execute_line(&mut link, "pose 0 0 20 0 0 0", &mut out);
+        let mut poses = std::vec![*c.pose()];
+        for _ in 0..20 {
+            c.on_frame();
+            poses.push(*c.pose());
+        }
+        for line in ["pose 0 0 3 0 0 0", "nudge z=6"] {
+            let reply = line_while_moving(&mut c, &mut link, line, 1, &mut poses);
+            assert_eq!(reply, "ok\r\n", "{line}");
+        }
+        while c.is_moving() {
+            c.on_frame();
+            poses.push(*c.pose());
+        }
+        assert_eq!(*c.pose(), Pose::from_degrees(0.0, 0.0, 9.0, 0.0, 0.0, 0.0));
+        let v = steps(&poses);
+        for w in v.windows(2) {
+            assert!((w[1] - w[0]).abs() <= 0.04 + 1e-4, "{v:?}");
+        }
+    }
+
+    #[test]
+    fn a_refused_target_while_blending_changes_nothing() {
+        let (mut c, mut link) = (quiet(), program());
+        let mut out = std::string::String::new();
+        c.execute_line(&mut link, "set speed_mm_s 20", &mut out);
+        c.execute_line(&mut link, "set accel_mm_s2 100", &mut out);
+        c.execute_line(&mut link, "pose 0 0 10 0 0 0", &mut out);
+        for _ in 0..10 {
+            c.on_frame();
+        }
+        let mut untouched = c.clone();
+        let mut poses = std::vec::Vec::new();
+        // Reachable, but not along any way there from here (far out sideways and tilted).
+        let reply = line_while_moving(&mut c, &mut link, "pose 60 0 -20 0 25 0", 1, &mut poses);
+        assert!(reply.starts_with("error:"), "{reply}");
+        let mut expected = std::vec::Vec::new();
+        for _ in 0..poses.len() {
+            untouched.on_frame();
+            expected.push(*untouched.pose());
+        }
+        assert_eq!(
+            poses, expected,
+            "the motion went on as if the line had not come"
+        );
+        while c.is_moving() || untouched.is_moving() {
+            assert_eq!(c.on_frame(), untouched.on_frame());
+        }
+        assert_eq!(*c.pose(), *untouched.pose());
+    }
+
+    #[test]
+    fn with_servo_speed_ratings_a_new_target_holds_for_its_check_then_starts_from_rest() {
+        // The known limit (docs/commands.md): with ratings set nothing is blended; the same
+        // lines without ratings blend in (the contrast, so the rule is what is pinned).
+        for rated in [true, false] {
+            let (mut c, mut link) = (quiet(), program());
+            let mut out = std::string::String::new();
+            if rated {
+                c.execute_line(&mut link, "set servos.speed_s_60deg 0.1", &mut out);
+            }
+            c.execute_line(&mut link, "set speed_mm_s 40", &mut out);
+            c.execute_line(&mut link, "set accel_mm_s2 200", &mut out);
+            c.execute_line(&mut link, "pose 0 0 10 0 0 0", &mut out);
+            assert!(!out.contains("error"), "{out}");
+            let mut poses = std::vec![*c.pose()];
+            for _ in 0..10 {
+                c.on_frame();
+                poses.push(*c.pose());
+            }
+            let here = *c.pose();
+            assert!(here.z_mm > 1.0 && c.is_moving(), "{here:?}");
+            let before = poses.len();
+            let reply = line_while_moving(&mut c, &mut link, "pose 0 0 -5 0 0 0", 6, &mut poses);
+            assert_eq!(reply, "ok\r\n");
+            let during = &poses[before..];
+            assert!(during.len() > 1, "the check took frames: {}", during.len());
+            if rated {
+                assert!(
+                    during.iter().all(|p| *p == here),
+                    "held where it was during the check: {during:?}"
+                );
+            } else {
+                assert!(
+                    during[0] != here && during[1] != during[0],
+                    "moving on during the check: {during:?}"
+                );
+            }
+            let last = poses.len() - 1;
+            c.on_frame();
+            poses.push(*c.pose());
+            let first = poses[last + 1].z_mm - poses[last].z_mm;
+            if rated {
+                // From rest, downwards: at most the acceleration of one frame
+                // (200 mm/s2 at 50 Hz: 0.08 mm per frame per frame).
+                assert!(first < 0.0 && first > -0.08 - 1e-4, "first step {first}");
+            }
+            while c.is_moving() {
+                c.on_frame();
+                poses.push(*c.pose());
+            }
+            assert_eq!(*c.pose(), Pose::from_degrees(0.0, 0.0, -5.0, 0.0, 0.0, 0.0));
+            assert!(c.fault().is_none());
+        }
+    }
+
+    #[test]
+    fn without_acceleration_limits_a_new_target_holds_then_jumps_or_starts_from_rest() {
+        // Speed limits off, acceleration set: a move is a jump, made when its check ends.
+        let (mut c, mut link) = (quiet(), program());
+        let mut out = std::string::String::new();
+        c.execute_line(&mut link, "set speed_mm_s 0", &mut out);
+        c.execute_line(&mut link, "set speed_deg_s 0", &mut out);
+        c.execute_line(&mut link, "set accel_mm_s2 100", &mut out);
+        c.execute_line(&mut link, "pose 0 0 10 0 0 0", &mut out);
+        c.on_frame();
+        assert_eq!(*c.pose(), Pose::from_degrees(0.0, 0.0, 10.0, 0.0, 0.0, 0.0));
+        assert!(!c.is_moving());
+        // The hold of `a_move_checked_while_moving_holds_the_platform_then_starts_from_there`
+        // is the rule with speed limits and no acceleration limit.
     }
 
     #[test]

@@ -1,18 +1,20 @@
-//! A path check: the job of a reachable target whose straight path from the current pose is
-//! checked by the IK at up to [`crate::motion::MAX_PATH_CHECKS`] checkpoints, a few per slice
+//! A path check: the job of a reachable target whose path (a straight line from the current
+//! pose, or a blend from the motion in progress, [`crate::motion::blend`]) is checked by the
+//! IK at up to [`crate::motion::MAX_PATH_CHECKS`] checkpoints, a few per slice
 //! ([`PoseCheck::per_slice`]). With a payload to check against ratings or to report (`check`),
 //! the target's holding torques come first, in a slice of their own. What a checked path leads
 //! to (a move, a jump, `check`'s listing, the way home) is the controller's
 //! (`controller/moves.rs`). With servo speed ratings ([`crate::servo_speed`]) the check also
 //! measures the path time from its IK solutions ([`ServoTime`]), and if the move was planned
-//! too fast for it, plans it again and checks the new plan's poses.
+//! too fast for it, plans it again and checks the new plan's poses (straight moves only: with
+//! ratings a new target while moving does not blend).
 
 use kinematics_core::ik::Solution;
 use kinematics_core::{Math, Pose, LEGS};
 
 use super::pose_check::{PoseCheck, Torques};
 use crate::error::Error;
-use crate::motion::{Checkpoints, Segment, SpeedLimits};
+use crate::motion::{Plan, PlanCheckpoints, Segment, SpeedLimits};
 use crate::payload::TorqueError;
 use crate::servo_speed::{PathTime, ServoSpeeds};
 use crate::settings::Settings;
@@ -44,14 +46,35 @@ impl Purpose {
     }
 }
 
-/// A reachable target whose straight path is being checked.
+/// When a blend checked while the motion in progress goes on takes over (frame counts, as
+/// the controller counts frames, wrapping).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct HandOver {
+    /// The frame count when the check began.
+    pub begun: u32,
+    /// The frame count after which the blend's first frame comes.
+    pub at: u32,
+    /// The pose and velocity (per frame) the motion was to have then, where the blend starts.
+    pub pose: Pose,
+    pub rate: [f32; 6],
+}
+
+/// A reachable target whose path is being checked.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct PathCheck {
     pub purpose: Purpose,
     /// The target's solution (solved when the command came).
     pub solution: Solution,
-    pub segment: Segment,
-    checkpoints: Checkpoints,
+    /// The move checked: from rest, or a blend from the motion in progress.
+    pub plan: Plan,
+    /// For a blend: the frame (the controller's frame count) at which it takes over, and the
+    /// frame count when the check began.
+    pub hand_over: Option<HandOver>,
+    /// IK solutions of the path done so far (the controller learns how many fit in a frame).
+    pub solved: u32,
+    /// The plan is stale (a missed hand-over): the next slice plans it again.
+    pub replan: bool,
+    checkpoints: PlanCheckpoints,
     /// The target's holding torques: `None` until computed (the first slice, when there is a
     /// payload to check or report), then what `check` reports.
     torque: Option<Option<Torques>>,
@@ -74,19 +97,23 @@ pub(super) struct ServoTime {
 }
 
 impl PathCheck {
-    /// The check of `segment`, whose target has `solution`, for `purpose` with `settings`.
+    /// The check of `plan`, whose target has `solution`, for `purpose` with `settings`.
     pub fn new(
         purpose: Purpose,
         solution: Solution,
-        segment: Segment,
+        plan: Plan,
+        hand_over: Option<HandOver>,
         settings: &Settings,
         servo_time: Option<ServoTime>,
     ) -> PathCheck {
         PathCheck {
             purpose,
             solution,
-            segment,
-            checkpoints: segment.checkpoints(),
+            plan,
+            hand_over,
+            solved: 0,
+            replan: false,
+            checkpoints: plan.checkpoints(),
             // The target's torques take a slice of their own, if they are needed at all.
             torque: if purpose.needs_target_torque(settings) {
                 None
@@ -94,6 +121,27 @@ impl PathCheck {
                 Some(None)
             },
             servo_time,
+        }
+    }
+
+    /// The same check of another plan (the target's torques kept, if computed): a blend whose
+    /// hand-over was missed, planned again.
+    pub fn replanned(&self, plan: Plan, hand_over: Option<HandOver>) -> PathCheck {
+        PathCheck {
+            plan,
+            hand_over,
+            solved: 0,
+            replan: false,
+            checkpoints: plan.checkpoints(),
+            ..*self
+        }
+    }
+
+    /// The same check, its plan marked stale (a missed hand-over): the next slice plans again.
+    pub fn to_replan(self) -> PathCheck {
+        PathCheck {
+            replan: true,
+            ..self
         }
     }
 
@@ -131,7 +179,7 @@ impl PathCheck {
         }
         let torques = payload.holding_torques_kgcm::<M>(
             check.solver,
-            self.segment.target(),
+            self.plan.target(),
             &self.solution.arm_rad,
         );
         if payload.checked() {
@@ -156,13 +204,14 @@ impl PathCheck {
                     Some(Ok(()))
                 };
             };
-            if pose == *self.segment.target() {
+            if pose == *self.plan.target() {
                 // Checked when the command came and in the first slice.
                 let arm_rad = self.solution.arm_rad;
                 self.measure(&check.settings.servo_speed, &pose, &arm_rad);
                 continue;
             }
             solved += 1;
+            self.solved += 1;
             match check.pose::<M>(&pose, torque) {
                 Ok(solution) => {
                     self.measure(&check.settings.servo_speed, &pose, &solution.arm_rad);
@@ -197,14 +246,19 @@ impl PathCheck {
         if measured_s <= time.planned_s {
             return false;
         }
-        let (start, target) = (*self.segment.start(), *self.segment.target());
+        // Only straight moves are measured (with ratings a move never blends,
+        // `controller/moves.rs`).
+        let Plan::Straight(planned) = self.plan else {
+            return false;
+        };
+        let (start, target) = (*planned.start(), *planned.target());
         let limits = ServoSpeeds::capped_limits(time.limits, &start, &target, measured_s);
         let segment = Segment::plan(start, target, limits, time.frame_hz);
-        if segment == self.segment {
+        if segment == planned {
             return false;
         }
-        self.segment = segment;
-        self.checkpoints = segment.checkpoints();
+        self.plan = Plan::Straight(segment);
+        self.checkpoints = self.plan.checkpoints();
         true
     }
 }
