@@ -14,7 +14,7 @@ import { join } from 'node:path';
 import { after, before, test } from 'node:test';
 
 import { COUNT_US, firmwareBootrom, numbersIn } from '../src/test-support/e2e-support.js';
-import { buildTool, runTool, startRunner } from '../src/test-support/tool-runner.js';
+import { buildTool, runProgram, startPtyRunner } from '../src/test-support/pty-runner.js';
 
 let tool;
 let dir;
@@ -24,7 +24,7 @@ before(async () => {
   firmwareBootrom(); // the ELF is built and the boot ROM cached before the runner needs them
   tool = buildTool();
   dir = mkdtempSync(join(tmpdir(), 'hexapod-calibrate-e2e-'));
-  board = await startRunner(['--no-view']);
+  board = await startPtyRunner();
 });
 
 after(() => {
@@ -38,7 +38,7 @@ const onPort = () => ['--port', board.port, '--timeout-s', '30'];
 
 /** `hexapod send` lines; their replies' lines. */
 async function send(...lines) {
-  const outcome = await runTool(tool, ['send', ...onPort(), ...lines], { cwd: dir });
+  const outcome = await runProgram(tool, ['send', ...onPort(), ...lines], { cwd: dir, input: '' });
   assert.equal(outcome.status, 0, outcome.stderr);
   return outcome.stdout.split('\n').filter((line) => line !== '');
 }
@@ -98,7 +98,7 @@ test('the end of input midway puts the pulses back and leaves the settings as th
   const before = await config();
   const start = await servos();
   // Servo 1 trimmed, servo 2 moved 20 us, then the input ends.
-  const run = await runTool(tool, ['calibrate', ...onPort(), '-o', 'quit.toml'], {
+  const run = await runProgram(tool, ['calibrate', ...onPort(), '-o', 'quit.toml'], {
     cwd: dir,
     input: ']]+\n\n]]\n',
   });
@@ -116,7 +116,7 @@ test('the end of input midway puts the pulses back and leaves the settings as th
 
 test('q at a check pose puts the six trims back', async () => {
   const before = await config();
-  const run = await runTool(tool, ['calibrate', ...onPort(), '-o', 'quit.toml'], {
+  const run = await runProgram(tool, ['calibrate', ...onPort(), '-o', 'quit.toml'], {
     cwd: dir,
     input: ']\n\n[\n\n]\n\n[\n\n+\n\n-\n\nq\n',
   });
@@ -137,7 +137,7 @@ test('the whole flow: trims in the build file (the rest kept), saved, listed, ke
   // Per servo: the keys, then Enter alone (level); then Enter at each of the five check poses.
   const keys = [']]+', '-', '1490', '', '[ +', ']'];
   const steps = [21, -1, null, 0, -9, 10];
-  const run = await runTool(tool, ['calibrate', ...onPort()], {
+  const run = await runProgram(tool, ['calibrate', ...onPort()], {
     cwd: dir,
     input: keys.flatMap((k) => (k === '' ? [''] : [k, ''])).join('\n') + '\n' + '\n'.repeat(5),
   });

@@ -19,7 +19,7 @@ import assert from 'node:assert/strict';
 import { test } from 'node:test';
 
 import { COUNT_US, firmwareBootrom, numbersIn } from '../src/test-support/e2e-support.js';
-import { buildTool, startPtyRunner, startToolView } from '../src/test-support/hexapod-tool.js';
+import { buildTool, startPtyRunner, startToolView } from '../src/test-support/pty-runner.js';
 import {
   CHROMIUM,
   haveChromium,
@@ -60,7 +60,7 @@ for (const { name, args } of [
     }
     firmwareBootrom(); // the ELF built and the boot ROM cached before the runner needs them
     const tool = buildTool();
-    const board = await startPtyRunner(args);
+    const board = await startPtyRunner({ args: ['--no-view', ...args] });
     let view;
     let browser;
     t.after(async () => {

@@ -1,7 +1,8 @@
 // The host tool `hexapod` against the emulated board as a user runs them: `./dev run --pty
 // --no-view` (src/run.js) boots the firmware ELF with UART0 on a pseudo-terminal, and the tool,
 // built by cargo, talks to that terminal as to a board's serial port. Written once for the
-// tests that do that (cli.test.js, cue.test.js) and the cue latency benchmark.
+// tests that do that (cli.test.js, cue.test.js, calibrate.test.js, view-board.test.js) and the
+// cue latency benchmark.
 
 import { execFileSync, spawn } from 'node:child_process';
 import { dirname, join } from 'node:path';
@@ -38,13 +39,15 @@ export function buildTool() {
 
 /**
  * Starts the runner with UART0 on a pseudo-terminal (the ELF and the boot ROM must be ready:
- * `firmwareBootrom()` first). Resolves, once the runner has said where the terminal is, to
- * `{ runner, port, log }`: the child process, the terminal's path and a function returning
- * everything the runner wrote to stderr so far. `onText` sees that text as it comes.
- * @param {{ onText?: (text: string) => void }} [options]
+ * `firmwareBootrom()` first), with `args` (no view unless told; e.g. `['--no-view', '--uart']`).
+ * Resolves, once the runner has said where the terminal is, to `{ runner, port, log }`: the
+ * child process, the terminal's path and a function returning everything the runner wrote to
+ * stderr so far (with the `servos us: ...` lines of the pins it measures). `onText` sees that
+ * text as it comes.
+ * @param {{ args?: string[], onText?: (text: string) => void }} [options]
  */
-export async function startPtyRunner({ onText = () => {} } = {}) {
-  const runner = spawn(process.execPath, [RUNNER, '--pty', '--no-view', '--elf', DEFAULT_ELF], {
+export async function startPtyRunner({ args = ['--no-view'], onText = () => {} } = {}) {
+  const runner = spawn(process.execPath, [RUNNER, '--pty', ...args, '--elf', DEFAULT_ELF], {
     stdio: ['ignore', 'ignore', 'pipe'],
   });
   let log = '';
@@ -71,13 +74,13 @@ export async function startPtyRunner({ onText = () => {} } = {}) {
 
 /**
  * Runs a program (asynchronously, so the runner keeps emulating); resolves to
- * `{ status, stdout, stderr }`. `onLine` sees each stdout or stderr line as it comes, with the
- * wall-clock time it came.
+ * `{ status, stdout, stderr }`. `input`, if given, is its whole standard input (then closed).
+ * `onLine` sees each stdout or stderr line as it comes, with the wall-clock time it came.
  * @param {string} program
  * @param {string[]} args
- * @param {{ cwd?: string, onLine?: (line: string, at: number) => void }} [options]
+ * @param {{ cwd?: string, input?: string, onLine?: (line: string, at: number) => void }} [options]
  */
-export function runProgram(program, args, { cwd, onLine = () => {} } = {}) {
+export function runProgram(program, args, { cwd, input, onLine = () => {} } = {}) {
   return new Promise((resolve) => {
     const child = spawn(program, args, { cwd });
     let stdout = '';
@@ -97,6 +100,44 @@ export function runProgram(program, args, { cwd, onLine = () => {} } = {}) {
       stderr += d;
       take(d);
     });
+    if (input !== undefined) {
+      child.stdin.on('error', () => {}); // a program that exits before reading it all
+      child.stdin.end(input);
+    }
     child.on('close', (status) => resolve({ status, stdout, stderr }));
   });
+}
+
+/**
+ * Starts `hexapod view --port PORT --view-port 0`; resolves to `{ child, url, stderr() }` once
+ * it prints the page's address.
+ * @param {string} tool
+ * @param {string} port
+ * @param {string[]} [args]
+ */
+export async function startToolView(tool, port, args = []) {
+  const child = spawn(
+    tool,
+    ['view', '--port', port, '--view-port', '0', '--timeout-s', '30', ...args],
+    {
+      stdio: ['ignore', 'pipe', 'pipe'],
+    },
+  );
+  let text = '';
+  child.stderr.setEncoding('utf8');
+  child.stderr.on('data', (chunk) => {
+    text += chunk;
+  });
+  const url = await new Promise((resolve, reject) => {
+    const timer = setTimeout(() => reject(new Error(`no address after 60 s: ${text}`)), 60_000);
+    child.stderr.on('data', () => {
+      const found = /3D view: (http:\/\/\S+)/.exec(text);
+      if (found) {
+        clearTimeout(timer);
+        resolve(found[1]);
+      }
+    });
+    child.on('exit', (code) => reject(new Error(`hexapod view exited (${code}): ${text}`)));
+  });
+  return { child, url, stderr: () => text };
 }
