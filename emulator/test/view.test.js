@@ -154,6 +154,10 @@ test('the 3D view shows the pose the pins carry, tilts with a roll, and says whe
   });
 
   await t.test('the jog panel moves the board smoothly, and goes home', async () => {
+    // Slow moves (5 mm take 0.5 s), so the readout, sampled every 40 ms of wall-clock time
+    // whatever the machine's load, is seen on the way; the default speed is set back below.
+    await typeLine(page, 'set speed_mm_s 10');
+    await page.waitForTimeout(300);
     // h: home (from the roll above), through the board's own move.
     await page.locator('#stage').click(); // the focus off the typing line: keys jog
     await page.keyboard.press('h');
@@ -190,6 +194,8 @@ test('the 3D view shows the pose the pins carry, tilts with a roll, and says whe
     // The home button.
     await page.click('#jog-home');
     await waitForPose(page, [0, 0, 0, 0, 0, 0], JOG_TOLERANCE, SETTLE_TIMEOUT_MS);
+    await typeLine(page, 'set speed_mm_s 50');
+    await page.waitForTimeout(300);
     // None of it showed on the user's terminal.
     assert.doesNotMatch(runner.stdoutText, /move |home|unreachable/);
   });
