@@ -154,11 +154,6 @@ impl LineModel {
         let at_line_start = self.text.is_empty() && !self.refused() && self.esc == Esc::Off;
         let in_garbage = self.bad_character && !self.too_long && !self.lost;
         if self.frame.is_some() || (b == 0xA5 && (at_line_start || in_garbage)) {
-            if self.frame.is_none() {
-                // An A5 is not printable: it ends an escape sequence in progress (ESC, then
-                // garbage, then a frame: the frame's bytes are not the sequence's).
-                self.esc = Esc::Off;
-            }
             return self.frame_byte(b);
         }
         self.line_byte(b)
@@ -187,7 +182,11 @@ impl LineModel {
             self.frame = Some(bytes);
             return LineEnd::None;
         }
-        if bytes[14..] != [0x0D, 0x0A] {
+        if bytes[14..] == [0x0D, 0x0A] {
+            // A whole frame is a sync point: an escape sequence begun before it is over (ESC,
+            // garbage, a frame, then another frame at a line start). A damaged one is not.
+            self.esc = Esc::Off;
+        } else {
             // Damaged: go on from the next A5 5A, or a last lone A5, among its bytes.
             let next = (1..16).find(|&i| bytes[i] == 0xA5 && (i == 15 || bytes[i + 1] == 0x5A));
             if let Some(i) = next {
