@@ -413,10 +413,14 @@ a line's CPU cycles, ${HEADLINE_SIZES.frames} stream frames, ${HEADLINE_SIZES.la
 session of "The longest main-loop pass" (\`src/bench/headline.js\`). The IK "in the benchmark
 sequence" follows the previous pose's other IK variants (which evict much of it); "cold"
 empties the cache as it starts; "warm" is the same IK run again at once (the benchmark
-firmware's \`i\`). The firmware's IK touches ${fmt(xipIk.accessesPerIk)} flash words per IK in the sequence, ${fmt(
-  (100 * xipIk.hitsPerIk) / xipIk.accessesPerIk,
-  1,
-)} % of them hits.
+firmware's \`i\`). ${
+  xipIk.accessesPerIk > 0
+    ? `The firmware's IK touches ${fmt(xipIk.accessesPerIk)} flash words per IK in the sequence, ${fmt(
+        (100 * xipIk.hitsPerIk) / xipIk.accessesPerIk,
+        1,
+      )} % of them hits.`
+    : "The firmware's IK reads no flash at all (its code and tables run from RAM: `memory.x`), so the cache cannot slow it."
+}
 
 Targets with the cache modelled (issue 23): a \`pose\` line to PWM under 500 us at 115,200 baud,
 a stream frame to PWM under 200 us at 921,600 baud, a main-loop pass under 1 ms (125,000
