@@ -23,6 +23,7 @@ use kinematics_core::{Math, Pose};
 use super::stream_goal::{Clamp, Streaming, TrackTiming};
 use super::{Controller, Job};
 use crate::motion::Motion;
+use crate::settings::Settings;
 use crate::stream::Frame;
 use crate::tracker::{TrackLimits, Tracker};
 
@@ -77,7 +78,13 @@ impl<M: Math> Controller<M> {
     /// acceleration limit off, and no servo speed rating (a rated stream is tracked, one
     /// step per frame, so that each step can be kept to the ratings).
     pub(super) fn passes_through(&self) -> bool {
-        self.track_limits() == TrackLimits::OFF && !self.settings.servo_speed.rated()
+        Self::passes_through_with(self.track_limits(), &self.settings)
+    }
+
+    /// [`Controller::passes_through`] with the tracker's limits already worked out (the one
+    /// rule, for the per-frame timing cached in [`TrackTiming`] too).
+    fn passes_through_with(limits: TrackLimits, settings: &Settings) -> bool {
+        limits == TrackLimits::OFF && !settings.servo_speed.rated()
     }
 
     /// A whole stream frame arrived: its pose becomes the stream's target (applied by
@@ -152,7 +159,7 @@ impl<M: Math> Controller<M> {
         let timing = TrackTiming {
             generation,
             limits,
-            pass_through: limits == TrackLimits::OFF && !self.settings.servo_speed.rated(),
+            pass_through: Self::passes_through_with(limits, &self.settings),
             frame_s: 1.0 / f32::from(self.settings.frame_hz.max(1)),
         };
         self.stream.as_mut()?.timing = Some(timing);
