@@ -590,18 +590,8 @@ impl<M: Math> Controller<M> {
         };
         match self.job.as_mut()? {
             Job::Path(path) if path.replan => {
-                // A missed hand-over, or arms found too fast for their ratings: planned again
-                // from here (with the limits the ratings need), in a slice of its own.
-                let target = *path.plan.target();
-                let (limits, corner) = path
-                    .frame_turns
-                    .map_or((self.speed_limits(), 1.0), |t| (t.limits, t.corner_scale));
-                // (`check` while a stream is tracked plans from the stream as a motion.)
-                let motion = self.stream_as_motion().unwrap_or(self.motion);
-                let (plan, hand_over) = self.blend_plan(&motion, target, limits, corner);
-                if let Some(Job::Path(path)) = &mut self.job {
-                    *path = path.replanned(plan, hand_over);
-                }
+                // Planned (again) from the motion as it is now, in a slice of its own.
+                self.replan();
                 None
             }
             Job::Path(path) => {

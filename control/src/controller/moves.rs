@@ -13,7 +13,8 @@
 //!
 //! A new target while moving, with an acceleration limit set: a blend
 //! ([`crate::motion::blend`]), checked while the motion in progress goes on. It takes over at
-//! the hand-over, a frame chosen when the line arrives, as far ahead as the check is expected
+//! the hand-over, a frame chosen in the job's first slice (the line's own pass has parsed it and
+//! solved the target: [`Controller::replan`]), as far ahead as the check is expected
 //! to take (its number of poses over the poses a frame has been seen to fit, `check_rate`,
 //! with a quarter to spare), and it is planned from the pose and velocity the motion will have
 //! then ([`crate::motion::Motion::state_after`]), so the path checked is the path taken. A
@@ -29,8 +30,8 @@
 //! too fast, it is planned again from the motion as it is then, slower
 //! (`path.rs`, `FrameTurns`; at most four passes, the last braking to rest at its corner).
 //!
-//! A move while a stream is tracked (its limits on, the tracker moving): the stream ends when
-//! the line arrives and its motion goes on as a planned one, a blend from the tracker's pose
+//! A move while a stream is tracked (its limits on, the tracker moving): the stream ends as
+//! the move's check begins (its first slice) and its motion goes on as a planned one, a blend from the tracker's pose
 //! and velocity to the stream's goal ([`Controller::stream_as_motion`]), which the move takes
 //! over from like any motion in progress. `check` plans the same as a `pose` at that moment
 //! would (from the stream as a motion, without ending it), and takes nothing over.
@@ -94,20 +95,11 @@ impl<M: Math> Controller<M> {
                 Purpose::Check => !self.jumps(&limits),
                 _ => false,
             };
-        // A stream being tracked goes on as a planned motion (a move ends the stream: from
-        // the line on; `check` only plans from it).
-        let streamed = if blends {
-            self.stream_as_motion()
-        } else {
-            None
-        };
-        if let (Some(motion), Purpose::Move { .. }) = (streamed, purpose) {
-            self.stream = None;
-            self.motion = motion;
-        }
-        let motion = streamed.unwrap_or(self.motion);
+        // Blended into: the motion in progress, or a stream being tracked (which goes on as a
+        // planned motion: [`Controller::stream_as_motion`]).
+        let takes_over = blends && (self.motion.is_moving() || self.tracks_stream());
         let rated = self.settings.servo_speed.rated();
-        let (plan, hand_over, servo_time, frame_turns) = if blends && motion.is_moving() {
+        let (plan, hand_over, servo_time, frame_turns) = if takes_over {
             let hz = f32::from(self.settings.frame_hz);
             let turns = rated.then(|| {
                 // First planned at most as fast as the arm angles at its two ends allow (the
@@ -116,12 +108,14 @@ impl<M: Math> Controller<M> {
                     .settings
                     .servo_speed
                     .least_time_s(&self.solution.arm_rad, &solution.arm_rad);
-                let capped = ServoSpeeds::capped_limits(limits, motion.pose(), &target, least);
+                let here = self.motion.pose();
+                let capped = ServoSpeeds::capped_limits(limits, here, &target, least);
                 FrameTurns::new(capped, 1.0, hz)
             });
-            let (plan_limits, corner) = turns.map_or((limits, 1.0), |t| (t.limits, t.corner_scale));
-            let (plan, hand_over) = self.blend_plan(&motion, target, plan_limits, corner);
-            (plan, hand_over, None, turns)
+            // The blend is planned in the job's first slice (`Controller::replan`), from the
+            // motion as it is then: this pass has parsed the line and solved the target.
+            let placeholder = Segment::plan(*self.motion.pose(), target, limits, hz);
+            (Plan::Straight(placeholder), None, None, turns)
         } else {
             // Within the servos' rated speeds, if they have any (`controller/servo_speed.rs`).
             let (segment, servo_time) = self.plan_within_servo_speed(target, &solution, limits);
@@ -130,9 +124,9 @@ impl<M: Math> Controller<M> {
         // A move checked while moving (or streaming) without a blend: the platform holds here
         // until the check ends.
         self.holding = purpose != Purpose::Check
-            && hand_over.is_none()
+            && !takes_over
             && (self.motion.is_moving() || self.is_streaming());
-        self.job = Some(Job::Path(PathCheck::new(
+        let path = PathCheck::new(
             purpose,
             solution,
             plan,
@@ -140,8 +134,45 @@ impl<M: Math> Controller<M> {
             &self.settings,
             servo_time,
             frame_turns,
-        )));
+        );
+        self.job = Some(Job::Path(if takes_over { path.to_replan() } else { path }));
         Ok(Begun::Pending)
+    }
+
+    /// The slice that plans (again) the move of a path check that takes over from the motion
+    /// in progress: its first slice, after a missed hand-over, or after its arms were found too
+    /// fast for their ratings; with the limits the ratings need, from the motion as it is now
+    /// (a stream being tracked becomes that motion here, for a move; `check` only plans from
+    /// it).
+    pub(super) fn replan(&mut self) {
+        let Some(Job::Path(path)) = &self.job else {
+            return;
+        };
+        let (target, purpose) = (*path.plan.target(), path.purpose);
+        let (limits, corner) = path
+            .frame_turns
+            .map_or((self.speed_limits(), 1.0), |t| (t.limits, t.corner_scale));
+        let motion = match self.stream_as_motion() {
+            Some(motion) if purpose != Purpose::Check => {
+                // A move ends the stream; its motion goes on, planned.
+                self.stream = None;
+                self.motion = motion;
+                motion
+            }
+            Some(motion) => motion,
+            None => self.motion,
+        };
+        let (plan, hand_over) = self.blend_plan(&motion, target, limits, corner);
+        if let Some(Job::Path(path)) = &mut self.job {
+            *path = path.replanned(plan, hand_over);
+        }
+    }
+
+    /// A stream is being tracked (not passed through) and its tracker moves.
+    fn tracks_stream(&self) -> bool {
+        self.stream
+            .as_ref()
+            .is_some_and(|s| !s.tracker.at_rest() && !self.passes_through())
     }
 
     /// The stream's tracker, moving, as a planned motion: from its pose and velocity, a blend
@@ -149,13 +180,13 @@ impl<M: Math> Controller<M> {
     /// first and on from rest no faster than the arm angles at the goal allow), so that a move
     /// can take over from it. `None` when no stream is being tracked (pass-through, or none),
     /// or its tracker is at rest.
-    pub(super) fn stream_as_motion(&self) -> Option<Motion> {
+    fn stream_as_motion(&self) -> Option<Motion> {
+        if !self.tracks_stream() {
+            return None;
+        }
         let stream = self.stream.as_ref()?;
         let hz = f32::from(self.settings.frame_hz.max(1));
         let rate = stream.tracker.rate_per_frame(1.0 / hz);
-        if self.passes_through() || stream.tracker.at_rest() {
-            return None;
-        }
         let pose = stream.tracker.pose();
         let mut limits = self.speed_limits();
         let mut corner = 1.0;

@@ -11,7 +11,7 @@
 //! (`controller/servo_speed.rs`); a step that would leave the workspace (the axes' own paths to a
 //! reachable goal can) stops the tracker where it is, counted as a clamp too. An accepted
 //! move (`pose`, `move`, `nudge`, `home`) or `stop` ends the stream; with acceleration limits
-//! a move ends it when its line arrives, the tracker's motion going on as a planned one that
+//! a move ends it as its check begins, the tracker's motion going on as a planned one that
 //! the move takes over from (`controller/moves.rs`), while in pass-through the stream holds
 //! during the move's check (a refused one lets it go on). The next frame starts the stream
 //! again from wherever the platform is, at the velocity it has there.
