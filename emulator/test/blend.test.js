@@ -235,6 +235,7 @@ test('with ratings, a pose line while a stream is tracked takes over from its mo
   // A heave stream at 60 Hz (binary frames, z full scale 15 mm) climbing at 15 mm/s for
   // 0.6 s, then, with the tracker moving, `pose 0 0 -5 0 0 0`, and the stream stops.
   const count = (z) => Math.round(32768 + (z / 15) * 32768);
+  /** @type {{ atMs: number, line?: string, bytes?: Buffer }[]} */
   const timed = Array.from({ length: 36 }, (_, i) => {
     const z = 15 * (i / 60);
     return {
