@@ -9,9 +9,8 @@ import assert from 'node:assert/strict';
 import { test } from 'node:test';
 
 import {
-  CHROMIUM,
-  haveChromium,
-  launchChromium,
+  openPage,
+  skipWithoutChromium,
   startRunner,
   typeLine,
 } from '../src/test-support/view-browser.js';
@@ -67,23 +66,13 @@ async function press(page, stage, key) {
 }
 
 test('the page calibration: quit leaves the settings; the whole flow saves the trims', async (t) => {
-  if (!haveChromium()) {
-    const why = `SKIPPED: no Chromium at ${CHROMIUM}, so the page calibration did not run`;
-    console.error(why);
-    t.skip(why);
+  if (skipWithoutChromium(t, 'the page calibration')) {
     return;
   }
   const runner = startRunner();
-  let browser;
-  t.after(async () => {
-    await browser?.close();
-    runner.kill('SIGKILL');
-  });
+  t.after(() => runner.kill('SIGKILL'));
   const url = await runner.url;
-  browser = await launchChromium();
-  const page = await browser.newPage({ viewport: { width: 1200, height: 1000 } });
-  const pageErrors = [];
-  page.on('pageerror', (error) => pageErrors.push(error.message));
+  const { page, pageErrors } = await openPage(t, { width: 1200, height: 1000 });
   await page.goto(url);
   await page.waitForSelector('#fk-status[data-status="solved"]', { timeout: TIMEOUT_MS });
 

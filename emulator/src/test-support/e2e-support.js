@@ -161,6 +161,24 @@ export function bootQuietUsb(bootrom) {
   return viaUsb;
 }
 
+let sharedBootrom;
+
+/**
+ * Boots the firmware quiet (`bootQuiet`; over USB, `bootQuietUsb`, with `usb`) and sets
+ * `settings` in order, each `set name value` answered `ok`: `bootWith({ speed_mm_s: 'off',
+ * speed_deg_s: 'off' })`. The boot ROM is loaded once (`firmwareBootrom`) for every caller.
+ * @param {Record<string, string | number>} [settings]
+ * @param {{ usb?: boolean }} [options]
+ */
+export function bootWith(settings = {}, { usb = false } = {}) {
+  sharedBootrom ??= firmwareBootrom();
+  const board = usb ? bootQuietUsb(sharedBootrom) : bootQuiet(sharedBootrom);
+  for (const [name, value] of Object.entries(settings)) {
+    ok(board, `set ${name} ${value}`);
+  }
+  return board;
+}
+
 /**
  * Boots the firmware as a terminal meets it, echo on: on UART0, after the power-up banner; or,
  * with `usb`, on the USB port once the host has opened it and its banner came. Returns the
@@ -220,6 +238,32 @@ export function refused(board, line, code, { timeoutMs = 2000 } = {}) {
 /** Numbers in a data line's value (`key: 1.0 2.0 ...`). */
 export function numbersIn(text) {
   return (text.match(/-?\d+(?:\.\d+)?/g) ?? []).map(Number);
+}
+
+/**
+ * The pins' widths, us, that `./dev run` printed last in `log` (its `servos us: ...` lines, as
+ * `startPtyRunner`'s `log()` returns them).
+ * @param {string} log
+ */
+export function pinsUs(log) {
+  const lines = log.split(/[\r\n]/).filter((line) => line.startsWith('servos us:'));
+  assert.ok(lines.length > 0, 'the runner printed no pins yet');
+  return numbersIn(lines.at(-1).replace(/\|.*$/, ''));
+}
+
+/**
+ * Waits (generously: 30 s) until the pins the runner prints (`log()`) show `expected` within
+ * one PWM count; returns the pins then, us (the caller asserts they arrived).
+ * @param {() => string} log
+ * @param {number[]} expected
+ */
+export async function pinsReach(log, expected) {
+  const until = Date.now() + 30_000;
+  const near = () => pinsUs(log()).every((w, i) => Math.abs(w - expected[i]) <= COUNT_US + 1e-9);
+  while (!near() && Date.now() < until) {
+    await new Promise((resolve) => setTimeout(resolve, 100));
+  }
+  return pinsUs(log());
 }
 
 /** `key=value` pairs of a pose line as six numbers in pose order. */
