@@ -13,7 +13,13 @@ import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 import { after, before, test } from 'node:test';
 
-import { COUNT_US, firmwareBootrom, pinsReach } from '../src/test-support/e2e-support.js';
+import {
+  COUNT_US,
+  expectedTrim,
+  firmwareBootrom,
+  pinsReach,
+  servosFromListings,
+} from '../src/test-support/e2e-support.js';
 import { buildTool, runProgram, startPtyRunner } from '../src/test-support/pty-runner.js';
 
 let tool;
@@ -43,31 +49,11 @@ async function send(...lines) {
   return outcome.stdout.split('\n').filter((line) => line !== '');
 }
 
-/** Each servo's trim, rate (us/rad) and direction sign from `config`, alpha0 (rad) from `geometry`. */
-async function servos() {
-  const lines = await send('geometry', 'config');
-  return [1, 2, 3, 4, 5, 6].map((n) => {
-    const leg = lines.find((l) => l.startsWith(`# leg ${n}:`));
-    const servo = lines.find((l) => l.startsWith(`# servo${n}:`));
-    return {
-      alpha0: (Number(leg.match(/alpha0_deg=(\S+)/)[1]) * Math.PI) / 180,
-      trim: Number(servo.match(/trim_us=(\S+)/)[1]),
-      rate: Number(servo.match(/rate_us_rad=(\S+)/)[1]),
-      sign: servo.includes('dir=reversed') ? -1 : 1,
-    };
-  });
-}
-
 const round2 = (us) => Math.round(us * 100) / 100;
 
-/**
- * The trim the flow must take for a servo whose arm is made level `steps` us from where a
- * trimmed arm would be level: eq. 13 / 14 at alpha = 0 gives the level pulse
- * W0 - d r alpha0 (where the flow starts), and W0 = level + d r alpha0.
- */
-function expectedTrim(servo, steps) {
-  const start = round2(servo.trim - servo.sign * servo.rate * servo.alpha0);
-  return start + steps + servo.sign * servo.rate * servo.alpha0;
+/** Each servo's trim, rate (us/rad) and direction sign from `config`, alpha0 (rad) from `geometry`. */
+async function servos() {
+  return servosFromListings(await send('geometry', 'config'));
 }
 
 /** `config`'s lines that are the settings and whether they are saved. */

@@ -8,6 +8,7 @@
 import assert from 'node:assert/strict';
 import { test } from 'node:test';
 
+import { expectedTrim, servosFromListings } from '../src/test-support/e2e-support.js';
 import {
   openPage,
   skipWithoutChromium,
@@ -79,16 +80,7 @@ test('the page calibration: quit leaves the settings; the whole flow saves the t
   // The board's listings, for the expected trims.
   const listed = await (await replyTo(runner, 'geometry'))(page);
   const settingsBefore = await config(runner, page);
-  const servos = [1, 2, 3, 4, 5, 6].map((n) => {
-    const leg = listed.find((l) => l.startsWith(`# leg ${n}:`));
-    const servo = settingsBefore.find((l) => l.startsWith(`# servo${n}:`));
-    return {
-      alpha0: (Number(leg.match(/alpha0_deg=(\S+)/)[1]) * Math.PI) / 180,
-      trim: Number(servo.match(/trim_us=(\S+)/)[1]),
-      rate: Number(servo.match(/rate_us_rad=(\S+)/)[1]),
-      sign: servo.includes('dir=reversed') ? -1 : 1,
-    };
-  });
+  const servos = servosFromListings([...listed, ...settingsBefore]);
 
   await t.test('quit after one servo: config as it was', async () => {
     await page.click('#calibrate-start');
@@ -122,10 +114,7 @@ test('the page calibration: quit leaves the settings; the whole flow saves the t
       await page.waitForSelector('#calibrate[data-stage="saved"]', { timeout: TIMEOUT_MS });
       // eq. 13 / 14 at alpha = 0: the flow starts at W0 - d r alpha0 (to 0.01 us); the trim of an
       // arm level at W is W + d r alpha0.
-      const expected = servos.map((s, i) => {
-        const start = Math.round((s.trim - s.sign * s.rate * s.alpha0) * 100) / 100;
-        return start + steps[i] + s.sign * s.rate * s.alpha0;
-      });
+      const expected = servos.map((s, i) => expectedTrim(s, steps[i]));
       const trimsIn = (lines) =>
         [1, 2, 3, 4, 5, 6].map((n) =>
           Number(lines.find((l) => l.startsWith(`# servo${n}:`)).match(/trim_us=(\S+)/)[1]),

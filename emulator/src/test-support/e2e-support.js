@@ -266,6 +266,35 @@ export async function pinsReach(log, expected) {
   return pinsUs(log());
 }
 
+/**
+ * Each servo's home arm angle `alpha0` (rad, from `geometry`'s `# leg N:` lines), `trim` (us),
+ * `rate` (us/rad) and direction `sign` (from `config`'s `# servoN:` lines), out of the lines of
+ * both listings (docs/commands.md).
+ * @param {string[]} lines
+ */
+export function servosFromListings(lines) {
+  return SERVOS.map((n) => {
+    const leg = lines.find((l) => l.startsWith(`# leg ${n}:`));
+    const servo = lines.find((l) => l.startsWith(`# servo${n}:`));
+    return {
+      alpha0: (Number(leg.match(/alpha0_deg=(\S+)/)[1]) * Math.PI) / 180,
+      trim: Number(servo.match(/trim_us=(\S+)/)[1]),
+      rate: Number(servo.match(/rate_us_rad=(\S+)/)[1]),
+      sign: servo.includes('dir=reversed') ? -1 : 1,
+    };
+  });
+}
+
+/**
+ * The trim a calibration must take for a servo (`servosFromListings`) whose arm is made level
+ * `steps` us from where it starts: eq. 13 / 14 at alpha = 0 give the level pulse W0 - d r alpha0
+ * (where the flow starts, to 0.01 us), and the trim of an arm level at W is W + d r alpha0.
+ */
+export function expectedTrim(servo, steps) {
+  const start = Math.round((servo.trim - servo.sign * servo.rate * servo.alpha0) * 100) / 100;
+  return start + steps + servo.sign * servo.rate * servo.alpha0;
+}
+
 /** `key=value` pairs of a pose line as six numbers in pose order. */
 export function poseIn(text) {
   const values = {};
