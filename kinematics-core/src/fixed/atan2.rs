@@ -32,7 +32,7 @@
 
 use core::f64::consts::PI;
 
-use super::{normalise, table, umul64, wide_mul};
+use super::{normalise, table, wide_mul};
 
 /// `2^16 / (1 + (i + 1/2) / 256)` for `i` = 0..=255, rounded: for a normalised `a` in
 /// `[2^31, 2^32)` whose bits 30..23 are `i`, an estimate of `2^47 / a` within 2^-9 (relative).
@@ -147,16 +147,27 @@ fn mul_small(a: u32, j: u32) -> u64 {
 
 /// `2^61 / a` for `a` in `[2^31, 2^32)`, within 2^-26 (relative): the table's 9-bit estimate,
 /// one Newton-Raphson step `r <- r (2 - a r)` on `a`'s top 16 bits (to about 2^-13), and one on
-/// all of them with the exact residual `2^61 - a r`.
+/// all of them with the residual `2^61 - a r`, in 32-bit words: the residual is below 2^48, so
+/// `(2^61 - a r) / 2^18` is the wrapping difference of `2^43` and `a r / 2^18` taken modulo
+/// 2^32 (from the four 16-bit partial products, each cut on its own: within 3 of the exact
+/// quotient), and the correction `r residual / 2^61` comes from `r`'s top 14 bits and the
+/// residual's top 16 (below 2^30, within 2^-13 of the correction, itself below 2^18).
 #[inline(always)]
 fn reciprocal(a: u32) -> u32 {
     // r0 ~ 2^47 / a; a's top 16 bits times r0 ~ 2^31 (1 + e), so 2^32 minus it is 2^31 (1 - e).
     let r0 = u32::from(RECIPROCALS[((a >> 23) & 0xff) as usize]);
     let r1 = r0 * (0u32.wrapping_sub((a >> 16) * r0) >> 17); // ~ 2^61 / a, below 2^30.01
-                                                             // The residual 2^61 - a r1, exactly (|residual| < 2^48), then r2 = r1 + r1 residual / 2^61.
-    let residual = (1i64 << 61) - umul64(a, r1) as i64;
-    let correction = wide_mul(r1 as i32, (residual >> 18) as i32) >> 43;
-    (i64::from(r1) + correction) as u32
+    let (a_hi, a_lo) = (a >> 16, a & 0xffff);
+    let (r_hi, r_lo) = (r1 >> 16, r1 & 0xffff);
+    // a r1 / 2^18 modulo 2^32 (a_hi r_hi < 2^30: its 2^14 multiple wraps as it must).
+    let a_r = (a_hi * r_hi << 14)
+        .wrapping_add((a_hi * r_lo) >> 2)
+        .wrapping_add((a_lo * r_hi) >> 2)
+        .wrapping_add((a_lo * r_lo) >> 18);
+    // 2^43 is 0 modulo 2^32.
+    let residual = 0u32.wrapping_sub(a_r) as i32;
+    let correction = ((r1 >> 16) as i32 * (residual >> 14)) >> 13;
+    r1.wrapping_add(correction as u32)
 }
 
 #[cfg(test)]
