@@ -160,7 +160,7 @@ fn reciprocal(a: u32) -> u32 {
     let (a_hi, a_lo) = (a >> 16, a & 0xffff);
     let (r_hi, r_lo) = (r1 >> 16, r1 & 0xffff);
     // a r1 / 2^18 modulo 2^32 (a_hi r_hi < 2^30: its 2^14 multiple wraps as it must).
-    let a_r = (a_hi * r_hi << 14)
+    let a_r = ((a_hi * r_hi) << 14)
         .wrapping_add((a_hi * r_lo) >> 2)
         .wrapping_add((a_lo * r_hi) >> 2)
         .wrapping_add((a_lo * r_lo) >> 18);
