@@ -32,7 +32,7 @@
 
 use core::f64::consts::PI;
 
-use super::{normalise, table, wide_mul};
+use super::{normalise, table};
 
 /// `2^16 / (1 + (i + 1/2) / 256)` for `i` = 0..=255, rounded: for a normalised `a` in
 /// `[2^31, 2^32)` whose bits 30..23 are `i`, an estimate of `2^47 / a` within 2^-9 (relative).
@@ -128,8 +128,15 @@ fn atan_of_ratio(a: u32, b: u32) -> u32 {
     } else {
         ((big_a >> 6) as u32, ((big_b + (1 << 5)) >> 6) as i32)
     };
-    // t = B / A in steps of 2^-36 (|t| < 0.0099: below 2^30 steps).
-    let t = ((wide_mul(b32, reciprocal(a32) as i32) + (1 << 24)) >> 25) as i32;
+    // t = B / A in steps of 2^-36 (|t| < 0.0099: below 2^30 steps): B r / 2^25 with the
+    // reciprocal r ~ 2^61 / A (below 2^30.01), in 32-bit products of B split at bit 13
+    // (|B| < 2^25.4) and r at bit 15: `B r / 2^25 = 8 B_hi r_hi + (B_hi r_lo + 4 B_lo r_hi +
+    // B_lo r_lo / 2^13) / 2^12`, every product and the sum below 2^30.2; the low product cut
+    // (within a step of 2^-36 of B r / 2^25 rounded).
+    let r = reciprocal(a32) as i32;
+    let (b_hi, b_lo, r_hi, r_lo) = (b32 >> 13, b32 & 0x1fff, r >> 15, r & 0x7fff);
+    let t = ((b_hi * r_hi) << 3)
+        + ((b_hi * r_lo + ((b_lo * r_hi) << 2) + ((b_lo * r_lo) >> 13) + (1 << 11)) >> 12);
     // t^3/3 from t's top bits (steps of 2^-22, then 2^-28, 2^-50, 2^-36; 21845 / 2^16 is 1/3
     // within 1.6e-5 of a term below 3.3e-7).
     let t22 = t >> 14;
