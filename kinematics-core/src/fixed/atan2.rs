@@ -114,19 +114,26 @@ pub fn atan2(y: i32, x: i32) -> i32 {
 #[inline(always)]
 fn atan_of_ratio(a: u32, b: u32) -> u32 {
     let (a, shift) = normalise(a);
-    let b = b << shift; // b <= a: no bit lost
-                        // j = round(64 b / a), with a's reciprocal from the table: q ~ (b/a) 2^31 within 2^-9.
+    // b <= a: no bit lost.
+    let b = b << shift;
+    // j = round(64 b / a), with a's reciprocal from the table: q ~ (b/a) 2^31 within 2^-9.
     let q = (b >> 16) * u32::from(RECIPROCALS[((a >> 23) & 0xff) as usize]);
     let j = ((q + (1 << 24)) >> 25).min(64);
-    // (a + i b)(64 - i j): the vector turned back by atan(j/64), exactly (A < 2^39).
-    let big_a = (u64::from(a) << 6) + mul_small(b, j);
-    let big_b = (u64::from(b) << 6) as i64 - mul_small(a, j) as i64;
-    // A in [2^37, 2^39) scaled into [2^31, 2^32); B with it, rounded (|B| < 0.0099 A). (Two
-    // constant shifts: a variable 64-bit shift is a library call on the M0+.)
-    let (a32, b32) = if big_a >> 38 != 0 {
-        ((big_a >> 7) as u32, ((big_b + (1 << 6)) >> 7) as i32)
+    // (a + i b)(64 - i j): the vector turned back by atan(j/64), exactly, A = 64 a + j b in
+    // [2^37, 2^39) and B = 64 b - j a (|B| < 0.0099 A), then both scaled by 2^-6 (2^-7 when A
+    // passes 2^38) into [2^31, 2^32), B rounded. In 32-bit words: `floor(A / 64) = a + floor(j
+    // b / 64)` (a carry out of 32 bits is A passing 2^38), and with `w = b - j floor(a / 64)`
+    // (|w| < 2^26, so its wrapping difference is exact) and `c = j (a mod 64)` (below 2^12),
+    // `B = 64 w - c`: `(B + 32) >> 6 = w + ((32 - c) >> 6)` and `(B + 64) >> 7 =
+    // (w + ((64 - c) >> 6)) >> 1`.
+    let jb = (b >> 6) * j + (((b & 63) * j) >> 6);
+    let (a_scaled, carry) = a.overflowing_add(jb);
+    let w = b.wrapping_sub((a >> 6) * j) as i32;
+    let c = ((a & 63) * j) as i32;
+    let (a32, b32) = if carry {
+        ((a_scaled >> 1) | (1 << 31), (w + ((64 - c) >> 6)) >> 1)
     } else {
-        ((big_a >> 6) as u32, ((big_b + (1 << 5)) >> 6) as i32)
+        (a_scaled, w + ((32 - c) >> 6))
     };
     // t = B / A in steps of 2^-36 (|t| < 0.0099: below 2^30 steps): B r / 2^25 with the
     // reciprocal r ~ 2^61 / A (below 2^30.01), in 32-bit products of B split at bit 13
@@ -142,14 +149,9 @@ fn atan_of_ratio(a: u32, b: u32) -> u32 {
     let t22 = t >> 14;
     let t_squared = (t22 * t22) >> 16;
     let t_cubed_over_3 = (((t_squared * t22) >> 14) * 21845) >> 16;
-    let atan_t = i64::from(t - t_cubed_over_3);
-    (i64::from(ARC_TANGENTS[j as usize]) + ((atan_t + 8) >> 4)) as u32
-}
-
-/// `a * j` for `j <= 64`, exactly, from two 16 x 7-bit products (no 64-bit multiply).
-#[inline(always)]
-fn mul_small(a: u32, j: u32) -> u64 {
-    (u64::from((a >> 16) * j) << 16) + u64::from((a & 0xffff) * j)
+    // atan(j/64) + atan t, in steps of 2^-32 (within [0, pi/4]: the wrapping sum is exact).
+    let atan_t = ((t - t_cubed_over_3) + 8) >> 4;
+    ARC_TANGENTS[j as usize].wrapping_add(atan_t as u32)
 }
 
 /// `2^61 / a` for `a` in `[2^31, 2^32)`, within 2^-26 (relative): the table's 9-bit estimate,
