@@ -9,14 +9,14 @@
 //! Implementation", chapter "Newton-Raphson and Goldschmidt iterations"; P. Markstein, "IA-64
 //! and Elementary Functions", for the coupled form). `D` is shifted left by an even count `2k`
 //! into `[2^62, 2^64)`; its top 32 bits, `h`, index an 8-bit table of `1/sqrt` (within 2^-8),
-//! which one step `y <- y (3 - h y^2) / 2` in 16-bit products takes to about 2^-14. Then the
+//! which one step `y <- y (3 - h y^2) / 2` in 16-bit products takes to about 2^-13. Then the
 //! root itself, `s = h y` (16-bit factors), and twice the coupled step
 //! `s <- s + (h - s^2) y / 2`, all in 32-bit words: the residual `h - s^2` in steps of 2^32 of
 //! the shifted `D` (within one step), the product with `y` cut so it fits 31 bits (13 bits of
 //! `y` in the first step, 16 in the second). Each step multiplies the error by about
-//! `|1 - y sqrt(h)|` and adds its own cuts: from about 2^18 steps of the 32-bit root to a few
-//! hundred, then within 2 (before the shift back). Shifted back by `k` (rounded: `k >= 1`
-//! below 2^60), the result is within 1 of `sqrt(D)`.
+//! `|1 - y sqrt(h)|` and adds its own cuts; after the second the 32-bit root is within 2 of
+//! `sqrt(D << 2k)`. Shifted back by `k` (rounded: `k >= 1` below 2^60), the result is within
+//! 1 of `sqrt(D)`.
 //!
 //! Error bound: 2, and 1 below 2^60 (`(s - 1)^2 <= D <= (s + 1)^2`), tested exhaustively for
 //! every `D < 2^20`, at and around every 4093rd square up to 2^64 and by proptest. The
