@@ -657,7 +657,10 @@ impl Solver {
         let mut arm_rad = [0.0f32; LEGS];
         let mut pulse_us = [0.0f32; LEGS];
         if let Some((table, fixed)) = self.fixed_pose::<M>(pose) {
-            let alpha = table.arm_angles::<M>(&fixed).map_err(unreachable)?;
+            let mut alpha = [0i32; LEGS];
+            table
+                .arm_angles_into::<M>(&fixed, &mut alpha)
+                .map_err(unreachable)?;
             // Every pulse and angle first, then the limits (the first servo beyond them is
             // named, as before): the conversions run without an exit path's values held.
             for (i, (servo, c)) in servos.0.iter().zip(&table.legs).enumerate() {
@@ -767,6 +770,18 @@ impl FixedTable {
     #[inline(always)]
     fn arm_angles<M: Math>(&self, fixed: &FixedPose) -> Result<[i32; LEGS], u8> {
         let mut alpha = [0i32; LEGS];
+        self.arm_angles_into::<M>(fixed, &mut alpha)?;
+        Ok(alpha)
+    }
+
+    /// [`FixedTable::arm_angles`] written into `alpha` (the hot path's form: returning the
+    /// array inside a `Result` costs a copy of it on the chip).
+    #[inline(always)]
+    fn arm_angles_into<M: Math>(
+        &self,
+        fixed: &FixedPose,
+        alpha: &mut [i32; LEGS],
+    ) -> Result<(), u8> {
         for (i, c) in self.legs.iter().enumerate() {
             let l = leg_vector(c, fixed);
             let terms = match self.narrow_terms(c, l) {
@@ -775,7 +790,7 @@ impl FixedTable {
             };
             alpha[i] = half_angle::<M>(terms).ok_or(i as u8 + 1)?;
         }
-        Ok(alpha)
+        Ok(())
     }
 
     /// The usual way to `M`, `L - N` and `L + N` of eq. 9 for one leg `l` (steps of 2^-20 mm),
