@@ -382,8 +382,8 @@ fn scale_terms(terms: [i64; 3]) -> [i32; 3] {
     [scale(terms[0]), scale(terms[1]), scale(terms[2])]
 }
 
-/// `l` (eq. 2, 3) of one leg in steps of 2^-20 mm: `R p` rounded to nearest (halves up), then
-/// the translation, exactly.
+/// `l` (eq. 2, 3) of one leg in steps of 2^-20 mm: `R p` within 2 steps of its exact value,
+/// unbiased (`fixed::rotate_mm_split`), then the translation, exactly.
 #[inline(always)]
 fn leg_vector(c: &FixedLeg, fixed: &FixedPose) -> [i32; 3] {
     let (rows, position, p) = (&fixed.rows, &fixed.position, c.platform_split);
@@ -757,7 +757,7 @@ impl FixedTable {
     /// reach.
     ///
     /// Per leg: `l = R p + (x, y, z) + ((0, 0, h0) - b)` (eq. 2, 3) in steps of 2^-20 mm (`R p`
-    /// exact, rounded once); `|l|^2`, `L`, `N`, `M` of eq. 9 in 32-bit words, in steps of
+    /// within 2 steps, unbiased); `|l|^2`, `L`, `N`, `M` of eq. 9 in 32-bit words, in steps of
     /// 2^-15 mm^2 (products rounded once: [`FixedTable::narrow_terms`], every usual leg), or
     /// beyond that path's bounds in 64-bit words, in steps of 2^-36 mm^2 (exact products cut
     /// once: [`FixedTable::wide_terms`]); then `M`, `L - N`, `L + N` scaled by one power of two

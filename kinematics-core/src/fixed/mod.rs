@@ -50,8 +50,9 @@ pub(crate) const MAX_FIXED_ROD_TERM_MM2: f32 = 4.0e7;
 /// Fraction bits of the squared lengths (mm^2) of the IK's 32-bit path (the usual one, see
 /// [`crate::ik`]): steps of 2^-15 mm^2 (3.1e-5 mm^2), so that `|l|^2` below 2^16 mm^2 (a leg
 /// shorter than 256 mm) fits 31 bits. Each product there is within 0.51 of a step, while the
-/// rounding of `l` itself to 2^-21 mm already moves `|l|^2` by up to `|l|` 2^-20 mm^2 (3.7
-/// steps for a 120 mm leg): the coarser step costs the arm angle nothing measurable.
+/// error of `l` itself (each coordinate within 2^-19 mm, [`rotate_mm_split`]) already moves
+/// `|l|^2` by up to about `|l|` 2^-17 mm^2 (30 steps for a 120 mm leg; the pose's own `f32`
+/// steps are coarser still): the coarser step costs the arm angle nothing measurable.
 pub(crate) const NARROW_SQ_FRAC: u32 = 15;
 /// Bound (exclusive) on each coordinate of `l` for the 32-bit path, in steps of 2^-[`MM_FRAC`]
 /// mm: 256 mm. A larger one takes the 64-bit path.
