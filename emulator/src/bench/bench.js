@@ -477,8 +477,7 @@ meant.
 - **Not modelled**: the M0+'s discarded prefetch after a taken branch, the second core and DMA
   (not used), the streaming FIFO; boot2 itself runs from SRAM on the chip and is not charged.
 
-The emulator runs with the model by default: every end-to-end test (with their timing bounds:
-those that code still in flash makes miss are named by \`knownSlowWithCache\`), every table
+The emulator runs with the model by default: every end-to-end test (with their timing bounds), every table
 below and \`./dev run\`. \`HEXAPOD_XIP_CACHE=off\`, a board's \`xipCache: false\` or
 \`./dev run --no-xip-cache\` takes it out (the "no cache model" column).
 
