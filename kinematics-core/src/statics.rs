@@ -21,10 +21,10 @@
 use crate::configuration::Placement;
 use crate::error::{Input, KinematicsError};
 use crate::ik::Solver;
-use crate::jacobian::{Actuators, Jacobian};
+use crate::jacobian::{Actuators, Jacobian, DEAD_CENTRE_TOLERANCE};
 use crate::legs::ArmState;
-use crate::linalg::{Lu6, Mat6, Vec6};
-use crate::math::{cross, mul_mat_vec, Math};
+use crate::linalg::{solve_once, Lu6, Mat6, Vec6};
+use crate::math::{cross, dot, lt, mul_mat_vec, Math, Real};
 use crate::pose::Pose;
 use crate::types::{Mat3, Vec3, LEGS};
 
@@ -176,23 +176,67 @@ pub fn holding_loads<M: Math, A: Actuators>(
 
 /// [`holding_loads`] for a servo platform whose arm angles at `pose` are at hand (the IK's
 /// `Solution::arm_rad`, solved anyway to drive the servos): the same torques (N mm) without
-/// solving the IK again.
+/// solving the IK again. What a firmware checks for every pose it may drive with a payload
+/// and torque ratings, so it takes the servo Jacobian's structure rather than the matrix:
+///
+/// row `i` of `J` is `g_i^T / (d_i . t_i)` with `g_i = [d_i, r_i x d_i]` (see
+/// [`crate::jacobian`]), so `J^T tau = w` is `G^T u = w` with `u_i = tau_i / (d_i . t_i)`:
+/// the six rods' "forces" `u_i d_i`, whose sum holds the payload's force and whose moments
+/// about `C` hold its moment. `G^T` (columns `g_i`) is solved once ([`solve_once`]), then
+/// `tau_i = (d_i . t_i) u_i`: no row is divided, and neither `J` nor its factors are kept.
+/// The hold, `-w` of the weight `W = m g` at the centre of mass' lever `l = R (com - c)`, is
+/// `(0, 0, W, W l_y, -W l_x, 0)` (the cross product with a vertical force written out).
+/// Refused where [`Jacobian::of_arms`] and [`joint_forces_for`] refuse: an arm at dead centre
+/// ([`crate::jacobian::DEAD_CENTRE_TOLERANCE`]), a singular pose (each pivot is measured
+/// against its leg's `g_i` instead of the scaled row).
 pub fn servo_holding_torques<M: Math>(
     solver: &Solver,
     pose: &Pose,
     arm_rad: &[f32; LEGS],
     payload: &Payload,
 ) -> Result<[f32; LEGS], KinematicsError> {
+    let r = Real::<M>::new;
     payload.check()?;
     crate::ik::check_pose(pose)?;
+    let geometry = solver.geometry();
     let state = ArmState::at_angles::<M>(solver, pose, *arm_rad);
-    let jacobian = Jacobian::of_arms::<M>(&state, solver.geometry())?;
-    let weight = payload.gravity_wrench::<M>(&state.placement, solver.rotation_centre_mm());
-    let hold = Wrench {
-        force_n: -weight.force_n,
-        moment_n_mm: -weight.moment_n_mm,
-    };
-    joint_forces_for::<M>(&jacobian, &hold)
+    let threshold = (r(DEAD_CENTRE_TOLERANCE) * r(geometry.rod_mm()) * r(geometry.arm_mm())).0;
+    // `G^T`: column `i` is `g_i`.
+    let mut g_t = [[0.0f32; LEGS]; 6];
+    let mut along = [0.0f32; LEGS];
+    for i in 0..LEGS {
+        let d = state.rods_mm[i];
+        along[i] = dot::<M>(d, state.tip_rates_mm[i]);
+        if !lt(threshold, along[i].abs()) {
+            return Err(KinematicsError::DeadCentre { leg: i as u8 + 1 });
+        }
+        let moment = cross::<M>(state.placement.levers_mm[i], d);
+        for k in 0..3 {
+            g_t[k][i] = d[k];
+            g_t[k + 3][i] = moment[k];
+        }
+    }
+    let c = solver.rotation_centre_mm();
+    let com = payload.centre_of_mass_mm;
+    let lever = mul_mat_vec::<M>(
+        &state.placement.rotation,
+        Vec3::new(
+            (r(com.x) - r(c.x)).0,
+            (r(com.y) - r(c.y)).0,
+            (r(com.z) - r(c.z)).0,
+        ),
+    );
+    let weight_n = r(payload.mass_kg) * r(GRAVITY_MM_S2 * 1e-3);
+    let hold = [
+        0.0,
+        0.0,
+        weight_n.0,
+        (weight_n * r(lever.y)).0,
+        (-(weight_n * r(lever.x))).0,
+        0.0,
+    ];
+    let u = solve_once::<M>(g_t, hold)?;
+    Ok(core::array::from_fn(|i| (r(along[i]) * r(u[i])).0))
 }
 
 /// The platform's stiffness `K = J^T diag(k) J` for joint stiffnesses `k` (N/mm for struts,
