@@ -130,51 +130,6 @@ impl Lu6 {
     }
 }
 
-/// `x` with `A x = b` for one right-hand side (`a[i][k]`: row `i`, column `k`): Gaussian
-/// elimination with partial pivoting on `A` and `b` together, then back substitution. The
-/// operations of [`Lu6::factor`] and [`Lu6::solve`] (about 200 multiplications and additions
-/// and six divisions), without keeping the factors or a permutation, for a system solved once
-/// (the holding torques of [`crate::statics::servo_holding_torques`]). Refused like
-/// [`Lu6::factor`]: a pivot not larger than [`PIVOT_TOLERANCE`] times the largest entry of its
-/// column in `a`, or not finite.
-pub fn solve_once<M: Math>(
-    mut a: [[f32; 6]; 6],
-    mut b: [f32; 6],
-) -> Result<[f32; 6], KinematicsError> {
-    let r = Real::<M>::new;
-    let mut scale = [0u32; 6];
-    for row in &a {
-        for (k, v) in row.iter().enumerate() {
-            scale[k] = scale[k].max(abs_bits(*v));
-        }
-    }
-    let mut inv_pivot = [0.0f32; 6];
-    for k in 0..6 {
-        let best = (k..6).max_by_key(|&i| abs_bits(a[i][k])).unwrap_or(k);
-        if best != k {
-            a.swap(k, best);
-            b.swap(k, best);
-        }
-        check_pivot::<M>(a[k][k], scale[k])?;
-        inv_pivot[k] = 1.0 / a[k][k];
-        for i in k + 1..6 {
-            let factor = r(a[i][k]) * r(inv_pivot[k]);
-            for j in k + 1..6 {
-                a[i][j] = (r(a[i][j]) - factor * r(a[k][j])).0;
-            }
-            b[i] = (r(b[i]) - factor * r(b[k])).0;
-        }
-    }
-    for i in (0..6).rev() {
-        let mut sum = r(b[i]);
-        for j in i + 1..6 {
-            sum = sum - r(a[i][j]) * r(b[j]);
-        }
-        b[i] = (sum * r(inv_pivot[i])).0;
-    }
-    Ok(b)
-}
-
 /// Whether a pivot may be divided by: finite, and larger than [`PIVOT_TOLERANCE`] times the
 /// largest magnitude of its column (`column_bits`, an `f32`'s bits), tested as
 /// `|pivot| > PIVOT_TOLERANCE * column` with one multiplication and integer comparisons
@@ -256,29 +211,6 @@ mod tests {
     }
 
     #[test]
-    fn solve_once_solves_what_the_factors_solve() {
-        let mut seed = 0x1357_9bdf;
-        let mut solved = 0;
-        for _ in 0..200 {
-            let a = random(&mut seed);
-            let b = random(&mut seed).column(0).into_owned();
-            let rows: [[f32; 6]; 6] = core::array::from_fn(|i| core::array::from_fn(|k| a[(i, k)]));
-            let once = solve_once::<Libm>(rows, b.into());
-            let Ok(lu) = Lu6::factor::<Libm>(&a) else {
-                assert!(once.is_err());
-                continue;
-            };
-            let x = Vec6::from(once.unwrap());
-            let k = condition_number::<Libm>(&a);
-            assert!((a * x - b).amax() < 1e-5 * k.max(1.0), "{k}");
-            // The same operations in the same order as the factors and their solve.
-            assert_eq!(x, lu.solve::<Libm>(&b));
-            solved += 1;
-        }
-        assert!(solved > 150, "{solved}");
-    }
-
-    #[test]
     fn singular_matrices_are_refused_not_divided_by() {
         let mut a = Mat6::identity();
         a[(4, 4)] = 0.0;
@@ -298,15 +230,6 @@ mod tests {
         c[(2, 2)] = f32::NAN;
         assert!(Lu6::factor::<Libm>(&c).is_err());
         assert!(Lu6::factor::<Libm>(&Mat6::zeros()).is_err());
-        let rows = |m: &Mat6| -> [[f32; 6]; 6] {
-            core::array::from_fn(|i| core::array::from_fn(|k| m[(i, k)]))
-        };
-        for m in [&a, &b, &c, &Mat6::zeros()] {
-            assert!(matches!(
-                solve_once::<Libm>(rows(m), [1.0; 6]),
-                Err(KinematicsError::Singular { .. })
-            ));
-        }
         // A pivot just above the tolerance (of its column's largest entry, 1) is taken, one
         // just below it is not.
         let mut d = Mat6::identity();
