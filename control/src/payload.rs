@@ -10,8 +10,9 @@
 //! positive lifts the arm (towards a larger arm angle `alpha`). A servo is overloaded where
 //! `|tau_i|` exceeds its rating.
 //!
-//! Costs (RP2040): one torque computation is about three IK solutions (a Jacobian, a 6x6
-//! factorisation and a solve), so the controller gives it a slice of work of its own.
+//! Costs (RP2040): one torque computation is about 47,000 cycles, 0.38 ms, some five IK
+//! solutions (the arms' rows, a 6x6 factorisation and a solve), so the controller gives it a
+//! slice of work of its own.
 
 use kinematics_core::error::KinematicsError;
 use kinematics_core::ik::Solver;

@@ -159,12 +159,18 @@ impl Clamp {
             }
             self.steps += 1;
             let pose = self.midpoint::<M>();
-            match check.pose::<M>(&pose, each) {
-                Ok(solution) => {
+            // By the reach alone, the IK's own result (no error to convert, a smaller copy).
+            let drivable = if each {
+                check.pose::<M>(&pose, true).ok()
+            } else {
+                check.solver.solve::<M>(&check.settings.servos, &pose).ok()
+            };
+            match drivable {
+                Some(solution) => {
                     self.near = pose;
                     self.best = Some((pose, solution));
                 }
-                Err(_) => self.far = pose,
+                None => self.far = pose,
             }
         }
         // (With ratings, the reach alone is done in the next slice, by its torques.)
