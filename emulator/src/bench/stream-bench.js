@@ -101,8 +101,8 @@ export function highestFrameRate(rates, options) {
  * mm, where the default build's reach from home is 13.99 mm, a servo at its limit: found only
  * after a full IK, where targets far out of reach fail at the first leg), every axis moving,
  * and a payload with torque ratings (2 kg 30 mm above the centre, 20 kgf cm: the servo limit
- * stays the boundary, but every target and every step of its clamp has its holding torques
- * checked).
+ * stays the boundary, but every target within reach and the furthest drivable pose of every
+ * clamp have their holding torques checked).
  *
  * `instrument`: `{ start(board), stop(board) }`, called around the measured stretch (a
  * profile of it: `quick-bench.js edge-profile`).
