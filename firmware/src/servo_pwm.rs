@@ -13,9 +13,6 @@ use core::sync::atomic::{compiler_fence, AtomicU32, Ordering};
 
 use control::settings::{FRAME_HZ_MAX, FRAME_HZ_MIN};
 use embedded_hal::pwm::SetDutyCycle;
-use firmware::rom_math::RomMath;
-use kinematics_core::math::lt;
-use kinematics_core::Math;
 use rp2040_hal::{
     gpio::{bank0, DefaultTypeState, Pin},
     pac::{self, interrupt},
@@ -225,23 +222,14 @@ fn top_for(frame_hz: u16) -> Result<u16, FrameRateOutOfRange> {
 }
 
 /// Microseconds -> compare counts, or `None` for a non-finite width. Clamps to `window`, then
-/// to `0..=top` (a pulse never outlasts its frame), and rounds half up. Comparisons in integer
-/// instructions and the arithmetic through the boot ROM directly ([`RomMath`]): six servos'
-/// worth of the compiler's float library calls cost a servo frame about 3,600 cycles.
+/// to `0..=top` (a pulse never outlasts its frame), and rounds half up.
 fn pulse_counts(width_us: f32, window: PulseWindowUs, top: u16) -> Option<u16> {
     if !width_us.is_finite() {
         return None;
     }
-    // Like `f32::max`/`min`, a NaN bound is ignored (every comparison with it is false), so a
-    // broken window cannot produce NaN either.
-    let mut clamped_us = width_us;
-    if lt(clamped_us, window.min_us) {
-        clamped_us = window.min_us;
-    }
-    if lt(window.max_us, clamped_us) {
-        clamped_us = window.max_us;
-    }
-    let counts = RomMath::add(RomMath::mul(clamped_us, COUNTS_PER_US), 0.5);
+    // `f32::max`/`min` ignore a NaN bound, so a broken window cannot produce NaN either.
+    let clamped_us = width_us.max(window.min_us).min(window.max_us);
+    let counts = clamped_us * COUNTS_PER_US + 0.5;
     // `as` saturates (negative -> 0); the value is finite here.
     Some((counts as u32).min(u32::from(top)) as u16)
 }
