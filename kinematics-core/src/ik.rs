@@ -715,7 +715,7 @@ impl FixedTable {
             FixedCentre::Beyond => return None,
         };
         // The platform is planar: `R`'s third column only turns the centre's `z`.
-        let r = pose.rotation_fixed::<M>(centre.is_some_and(|c| c[2] != 0));
+        let r = pose.rotation_fixed::<M>(centre.is_some_and(|c| c[2] != 0))?;
         // (A check against the `Math` in use, whatever its sines: the bounds of `fixed` hold.)
         let bounded = |row: &[i32; 3]| {
             row.iter()

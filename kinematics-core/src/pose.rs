@@ -4,7 +4,7 @@
 //! `R = Rz(yaw) * Ry(pitch) * Rx(roll)` (eq. 1 of "The Mathematics of the Stewart Platform"): yaw
 //! about z, then pitch about the new y, then roll about the new x.
 
-use crate::fixed::wide_mul;
+use crate::fixed::{mul_rot, MAX_ROTATION_ENTRY};
 use crate::math::{Math, Real};
 use crate::types::Mat3;
 
@@ -187,41 +187,48 @@ impl Pose {
     }
 
     /// [`Pose::rotation`] in fixed point, entries in steps of 2^-30 (eq. 1, the same symbols),
-    /// from `M`'s fixed-point sines and cosines ([`Math::sin_cos_fixed`]). Each entry is the
-    /// exact sum of exact products rounded once (to nearest); `c_psi s_theta` and
-    /// `s_psi s_theta`, each shared by two entries, are rounded first. With `third_column` false
-    /// that column is left zero, as in [`Pose::rotation_columns`]. The angles must be finite.
+    /// from `M`'s fixed-point sines and cosines ([`Math::sin_cos_fixed`]), or `None` if one of
+    /// them is beyond `fixed::MAX_ROTATION_ENTRY` (no sine of any usable library is). Each
+    /// product is rounded to nearest (`fixed::mul_rot`, 32-bit products), so an entry is within
+    /// about one step of its sines' exact one; `c_psi s_theta` and `s_psi s_theta`, each shared
+    /// by two entries, are rounded first. (The sums wrap rather than panic: only sines whose
+    /// `sin^2 + cos^2` is far from 1 could pass 2^31, and the IK bounds every entry after.)
+    /// With `third_column` false that column is left zero, as in [`Pose::rotation_columns`].
+    /// The angles must be finite.
     #[inline(always)]
-    pub(crate) fn rotation_fixed<M: Math>(&self, third_column: bool) -> [[i32; 3]; 3] {
+    pub(crate) fn rotation_fixed<M: Math>(&self, third_column: bool) -> Option<[[i32; 3]; 3]> {
         let (s_phi, c_phi) = M::sin_cos_fixed(self.roll_rad);
         let (s_theta, c_theta) = M::sin_cos_fixed(self.pitch_rad);
         let (s_psi, c_psi) = M::sin_cos_fixed(self.yaw_rad);
-        // A sum of products in steps of 2^-60, rounded to 2^-30.
-        let round = |v: i64| ((v + (1 << 29)) >> 30) as i32;
-        let cs = round(wide_mul(c_psi, s_theta));
-        let ss = round(wide_mul(s_psi, s_theta));
+        let bound = MAX_ROTATION_ENTRY as u32;
+        let sines = [s_phi, c_phi, s_theta, c_theta, s_psi, c_psi];
+        if sines.iter().any(|v| v.unsigned_abs() >= bound) {
+            return None;
+        }
+        let cs = mul_rot(c_psi, s_theta);
+        let ss = mul_rot(s_psi, s_theta);
         let (r02, r12, r22) = if third_column {
             (
-                round(wide_mul(s_psi, s_phi) + wide_mul(cs, c_phi)),
-                round(wide_mul(ss, c_phi) - wide_mul(c_psi, s_phi)),
-                round(wide_mul(c_theta, c_phi)),
+                mul_rot(s_psi, s_phi).wrapping_add(mul_rot(cs, c_phi)),
+                mul_rot(ss, c_phi).wrapping_sub(mul_rot(c_psi, s_phi)),
+                mul_rot(c_theta, c_phi),
             )
         } else {
             (0, 0, 0)
         };
-        [
+        Some([
             [
-                round(wide_mul(c_psi, c_theta)),
-                round(wide_mul(cs, s_phi) - wide_mul(s_psi, c_phi)),
+                mul_rot(c_psi, c_theta),
+                mul_rot(cs, s_phi).wrapping_sub(mul_rot(s_psi, c_phi)),
                 r02,
             ],
             [
-                round(wide_mul(s_psi, c_theta)),
-                round(wide_mul(c_psi, c_phi) + wide_mul(ss, s_phi)),
+                mul_rot(s_psi, c_theta),
+                mul_rot(c_psi, c_phi).wrapping_add(mul_rot(ss, s_phi)),
                 r12,
             ],
-            [-s_theta, round(wide_mul(c_theta, s_phi)), r22],
-        ]
+            [-s_theta, mul_rot(c_theta, s_phi), r22],
+        ])
     }
 }
 
@@ -254,7 +261,9 @@ mod tests {
         for (roll, pitch, yaw) in [(10.0, -20.0, 35.0), (-179.0, 90.0, 180.0), (0.0, 0.0, 0.0)] {
             let pose = Pose::from_degrees(0.0, 0.0, 0.0, roll, pitch, yaw);
             let expected = pose.rotation::<Libm>();
-            let r = pose.rotation_fixed::<Libm>(true);
+            let r = pose
+                .rotation_fixed::<Libm>(true)
+                .expect("within the bounds");
             for (k, row) in r.iter().enumerate() {
                 for (j, &entry) in row.iter().enumerate() {
                     let entry = f64::from(entry) / f64::from(1u32 << 30);
@@ -264,7 +273,7 @@ mod tests {
                     );
                 }
             }
-            assert_eq!(pose.rotation_fixed::<Libm>(false)[1][2], 0);
+            assert_eq!(pose.rotation_fixed::<Libm>(false).map(|r| r[1][2]), Some(0));
         }
     }
 

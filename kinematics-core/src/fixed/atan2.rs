@@ -32,7 +32,7 @@
 
 use core::f64::consts::PI;
 
-use super::{normalise, table, umul64, wide_mul};
+use super::{normalise, table};
 
 /// `2^16 / (1 + (i + 1/2) / 256)` for `i` = 0..=255, rounded: for a normalised `a` in
 /// `[2^31, 2^32)` whose bits 30..23 are `i`, an estimate of `2^47 / a` within 2^-9 (relative).
@@ -114,49 +114,69 @@ pub fn atan2(y: i32, x: i32) -> i32 {
 #[inline(always)]
 fn atan_of_ratio(a: u32, b: u32) -> u32 {
     let (a, shift) = normalise(a);
-    let b = b << shift; // b <= a: no bit lost
-                        // j = round(64 b / a), with a's reciprocal from the table: q ~ (b/a) 2^31 within 2^-9.
+    // b <= a: no bit lost.
+    let b = b << shift;
+    // j = round(64 b / a), with a's reciprocal from the table: q ~ (b/a) 2^31 within 2^-9.
     let q = (b >> 16) * u32::from(RECIPROCALS[((a >> 23) & 0xff) as usize]);
     let j = ((q + (1 << 24)) >> 25).min(64);
-    // (a + i b)(64 - i j): the vector turned back by atan(j/64), exactly (A < 2^39).
-    let big_a = (u64::from(a) << 6) + mul_small(b, j);
-    let big_b = (u64::from(b) << 6) as i64 - mul_small(a, j) as i64;
-    // A in [2^37, 2^39) scaled into [2^31, 2^32); B with it, rounded (|B| < 0.0099 A). (Two
-    // constant shifts: a variable 64-bit shift is a library call on the M0+.)
-    let (a32, b32) = if big_a >> 38 != 0 {
-        ((big_a >> 7) as u32, ((big_b + (1 << 6)) >> 7) as i32)
+    // (a + i b)(64 - i j): the vector turned back by atan(j/64), exactly, A = 64 a + j b in
+    // [2^37, 2^39) and B = 64 b - j a (|B| < 0.0099 A), then both scaled by 2^-6 (2^-7 when A
+    // passes 2^38) into [2^31, 2^32), B rounded. In 32-bit words: `floor(A / 64) = a + floor(j
+    // b / 64)` (a carry out of 32 bits is A passing 2^38), and with `w = b - j floor(a / 64)`
+    // (|w| < 2^26, so its wrapping difference is exact) and `c = j (a mod 64)` (below 2^12),
+    // `B = 64 w - c`: `(B + 32) >> 6 = w + ((32 - c) >> 6)` and `(B + 64) >> 7 =
+    // (w + ((64 - c) >> 6)) >> 1`.
+    let jb = (b >> 6) * j + (((b & 63) * j) >> 6);
+    let (a_scaled, carry) = a.overflowing_add(jb);
+    let w = b.wrapping_sub((a >> 6) * j) as i32;
+    let c = ((a & 63) * j) as i32;
+    let (a32, b32) = if carry {
+        ((a_scaled >> 1) | (1 << 31), (w + ((64 - c) >> 6)) >> 1)
     } else {
-        ((big_a >> 6) as u32, ((big_b + (1 << 5)) >> 6) as i32)
+        (a_scaled, w + ((32 - c) >> 6))
     };
-    // t = B / A in steps of 2^-36 (|t| < 0.0099: below 2^30 steps).
-    let t = ((wide_mul(b32, reciprocal(a32) as i32) + (1 << 24)) >> 25) as i32;
+    // t = B / A in steps of 2^-36 (|t| < 0.0099: below 2^30 steps): B r / 2^25 with the
+    // reciprocal r ~ 2^61 / A (below 2^30.01), in 32-bit products of B split at bit 13
+    // (|B| < 2^25.4) and r at bit 15: `B r / 2^25 = 8 B_hi r_hi + (B_hi r_lo + 4 B_lo r_hi +
+    // B_lo r_lo / 2^13) / 2^12`, every product and the sum below 2^30.2; the low product cut
+    // (within a step of 2^-36 of B r / 2^25 rounded).
+    let r = reciprocal(a32) as i32;
+    let (b_hi, b_lo, r_hi, r_lo) = (b32 >> 13, b32 & 0x1fff, r >> 15, r & 0x7fff);
+    let t = ((b_hi * r_hi) << 3)
+        + ((b_hi * r_lo + ((b_lo * r_hi) << 2) + ((b_lo * r_lo) >> 13) + (1 << 11)) >> 12);
     // t^3/3 from t's top bits (steps of 2^-22, then 2^-28, 2^-50, 2^-36; 21845 / 2^16 is 1/3
     // within 1.6e-5 of a term below 3.3e-7).
     let t22 = t >> 14;
     let t_squared = (t22 * t22) >> 16;
     let t_cubed_over_3 = (((t_squared * t22) >> 14) * 21845) >> 16;
-    let atan_t = i64::from(t - t_cubed_over_3);
-    (i64::from(ARC_TANGENTS[j as usize]) + ((atan_t + 8) >> 4)) as u32
-}
-
-/// `a * j` for `j <= 64`, exactly, from two 16 x 7-bit products (no 64-bit multiply).
-#[inline(always)]
-fn mul_small(a: u32, j: u32) -> u64 {
-    (u64::from((a >> 16) * j) << 16) + u64::from((a & 0xffff) * j)
+    // atan(j/64) + atan t, in steps of 2^-32 (within [0, pi/4]: the wrapping sum is exact).
+    let atan_t = ((t - t_cubed_over_3) + 8) >> 4;
+    ARC_TANGENTS[j as usize].wrapping_add(atan_t as u32)
 }
 
 /// `2^61 / a` for `a` in `[2^31, 2^32)`, within 2^-26 (relative): the table's 9-bit estimate,
 /// one Newton-Raphson step `r <- r (2 - a r)` on `a`'s top 16 bits (to about 2^-13), and one on
-/// all of them with the exact residual `2^61 - a r`.
+/// all of them with the residual `2^61 - a r`, in 32-bit words: the residual is below 2^48, so
+/// `(2^61 - a r) / 2^18` is the wrapping difference of `2^43` and `a r / 2^18` taken modulo
+/// 2^32 (from the four 16-bit partial products, each cut on its own: within 3 of the exact
+/// quotient), and the correction `r residual / 2^61` comes from `r`'s top 14 bits and the
+/// residual's top 16 (below 2^30, within 2^-13 of the correction, itself below 2^18).
 #[inline(always)]
 fn reciprocal(a: u32) -> u32 {
     // r0 ~ 2^47 / a; a's top 16 bits times r0 ~ 2^31 (1 + e), so 2^32 minus it is 2^31 (1 - e).
     let r0 = u32::from(RECIPROCALS[((a >> 23) & 0xff) as usize]);
     let r1 = r0 * (0u32.wrapping_sub((a >> 16) * r0) >> 17); // ~ 2^61 / a, below 2^30.01
-                                                             // The residual 2^61 - a r1, exactly (|residual| < 2^48), then r2 = r1 + r1 residual / 2^61.
-    let residual = (1i64 << 61) - umul64(a, r1) as i64;
-    let correction = wide_mul(r1 as i32, (residual >> 18) as i32) >> 43;
-    (i64::from(r1) + correction) as u32
+    let (a_hi, a_lo) = (a >> 16, a & 0xffff);
+    let (r_hi, r_lo) = (r1 >> 16, r1 & 0xffff);
+    // a r1 / 2^18 modulo 2^32 (a_hi r_hi < 2^30: its 2^14 multiple wraps as it must).
+    let a_r = ((a_hi * r_hi) << 14)
+        .wrapping_add((a_hi * r_lo) >> 2)
+        .wrapping_add((a_lo * r_hi) >> 2)
+        .wrapping_add((a_lo * r_lo) >> 18);
+    // 2^43 is 0 modulo 2^32.
+    let residual = 0u32.wrapping_sub(a_r) as i32;
+    let correction = ((r1 >> 16) as i32 * (residual >> 14)) >> 13;
+    r1.wrapping_add(correction as u32)
 }
 
 #[cfg(test)]
