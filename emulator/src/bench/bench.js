@@ -655,8 +655,10 @@ its target costs the tracker nothing), and all six moving every frame; then the 
 case (issue 23): all six moving with z just past the servo limits (14.3 to 14.9 mm, the reach
 from home 13.99 mm: each target fails only after a full IK, where targets far out of reach fail
 at the first leg), with a payload of 2 kg 30 mm above the centre and torque ratings of 20 kgf cm
-(the servo limit stays the boundary, but every target and every step of its clamp has its
-holding torques checked: \`measureStreamCpu\`'s \`edge\`, \`src/bench/stream-bench.js\`):
+(the servo limit stays the boundary, but every target within reach and the furthest drivable
+pose of every clamp have their holding torques checked: \`measureStreamCpu\`'s \`edge\`,
+\`src/bench/stream-bench.js\`; alone: \`node emulator/src/bench/quick-bench.js edge\`, and
+where its cycles go, per function: \`edge-profile\`):
 
 | axes moving | frames in | CPU busy | cycles per servo frame | frames applied / clamped | longest pass |
 |---|---|---:|---:|---:|---:|
