@@ -279,26 +279,39 @@ pub enum Command {
     Set(SettingId, SettingValue),
 }
 
-/// The words of a line.
+/// The words of a line: what lies between separators (spaces, tabs, commas), empty ones
+/// skipped. Separators are ASCII, so every cut is a character boundary; found byte by byte
+/// (no character decoding: this runs over every byte of every command line).
 struct Words<'a> {
-    inner: core::str::Split<'a, fn(char) -> bool>,
+    rest: &'a str,
 }
 
 impl<'a> Words<'a> {
     fn new(line: &'a str) -> Self {
-        fn separator(c: char) -> bool {
-            c == ' ' || c == '\t' || c == ','
-        }
-        Words {
-            inner: line.split(separator as fn(char) -> bool),
-        }
+        Words { rest: line }
     }
+}
+
+/// A byte that separates words.
+fn separator(b: u8) -> bool {
+    b == b' ' || b == b'\t' || b == b','
 }
 
 impl<'a> Iterator for Words<'a> {
     type Item = &'a str;
     fn next(&mut self) -> Option<&'a str> {
-        self.inner.by_ref().find(|w| !w.is_empty())
+        let bytes = self.rest.as_bytes();
+        let Some(start) = bytes.iter().position(|&b| !separator(b)) else {
+            self.rest = "";
+            return None;
+        };
+        let end = bytes[start..]
+            .iter()
+            .position(|&b| separator(b))
+            .map_or(bytes.len(), |len| start + len);
+        let (word, rest) = (self.rest.get(start..end)?, self.rest.get(end..)?);
+        self.rest = rest;
+        Some(word)
     }
 }
 

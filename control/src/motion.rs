@@ -132,8 +132,20 @@ const MIN_RAMP: f32 = 1e-6;
 impl Segment {
     /// Plans a move at the given limits for a frame rate (Hz, > 0).
     pub fn plan(start: Pose, target: Pose, limits: SpeedLimits, frame_hz: f32) -> Segment {
-        let linear_mm = linear_distance_mm(&start, &target);
-        let angular_deg = angular_distance_deg(&start, &target);
+        // The distances only where a limit applies (a jump, every limit off, needs neither:
+        // two square roots in software on the chip).
+        let linear = limits.mm_per_s > 0.0 || limits.mm_per_s2 > 0.0;
+        let angular = limits.deg_per_s > 0.0 || limits.deg_per_s2 > 0.0;
+        let linear_mm = if linear {
+            linear_distance_mm(&start, &target)
+        } else {
+            0.0
+        };
+        let angular_deg = if angular {
+            angular_distance_deg(&start, &target)
+        } else {
+            0.0
+        };
         // In path fraction u (0..=1) per second: the tighter group's speed and acceleration
         // (infinite where no limit applies).
         let fraction_per = |limit: f32, distance: f32| {
