@@ -408,17 +408,16 @@ pub fn parse(line: &str) -> Result<Command, ParseError> {
     if line.len() > MAX_LINE {
         return Err(ParseError::Spoiled(Spoiled::TooLong));
     }
-    if let Some(&byte) = line
-        .as_bytes()
-        .iter()
-        .find(|b| !(0x20..=0x7E).contains(*b) && **b != b'\t')
-    {
-        return Err(ParseError::Spoiled(Spoiled::BadByte(byte)));
-    }
+    // Checked and lowered in one pass (the first byte that is not printable ASCII or a tab
+    // refuses the line).
     let mut lower = [0u8; MAX_LINE];
     let lower = &mut lower[..line.len()];
-    lower.copy_from_slice(line.as_bytes());
-    lower.make_ascii_lowercase();
+    for (slot, &byte) in lower.iter_mut().zip(line.as_bytes()) {
+        if !(0x20..=0x7E).contains(&byte) && byte != b'\t' {
+            return Err(ParseError::Spoiled(Spoiled::BadByte(byte)));
+        }
+        *slot = byte.to_ascii_lowercase();
+    }
     // Printable ASCII throughout, checked above.
     let line = core::str::from_utf8(lower).map_err(|_| ParseError::Spoiled(Spoiled::BadByte(0)))?;
 
