@@ -237,8 +237,27 @@ fn pulse_counts(width_us: f32, window: PulseWindowUs, top: u16) -> Option<u16> {
         clamped_us = window.max_us;
     }
     let counts = clamped_us * COUNTS_PER_US + 0.5;
-    // `as` saturates (negative -> 0); the value is finite here.
-    Some((counts as u32).min(u32::from(top)) as u16)
+    Some(saturating_u32(counts).min(u32::from(top)) as u16)
+}
+
+/// `x as u32` for an `x` that is not NaN (towards zero, negative -> 0, too large -> `u32::MAX`),
+/// on the bits: the cast's range checks would be two soft-float comparisons.
+fn saturating_u32(x: f32) -> u32 {
+    let bits = x.to_bits();
+    let exponent = (bits >> 23) & 0xFF;
+    if bits & 0x8000_0000 != 0 || exponent < 127 {
+        0 // negative, or below 1
+    } else if exponent >= 127 + 32 {
+        u32::MAX
+    } else {
+        let mantissa = (bits & 0x007F_FFFF) | 0x0080_0000;
+        let shift = exponent as i32 - 127 - 23;
+        if shift >= 0 {
+            mantissa << shift
+        } else {
+            mantissa >> -shift
+        }
+    }
 }
 
 /// `f32::is_finite` on the bits (no soft-float comparison).
