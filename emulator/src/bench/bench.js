@@ -20,6 +20,7 @@ import {
   measureSave,
   measureLongestPass,
   measureLongestPassBothLinks,
+  measureMotionLimitsPass,
   measureStream,
   measureUsbStream,
   measureWorstCommand,
@@ -287,6 +288,13 @@ for (const c of kinCommands) {
   );
 }
 const clampedStream = measureClampedStream();
+log('blends and servo speed ratings ...');
+const motionLimits = measureMotionLimitsPass();
+for (const p of motionLimits.phases) {
+  log(
+    `  ${p.what}: longest pass ${fmt(p.longestPassCycles)} cycles, ${p.missed} of ${p.frames} frames missed`,
+  );
+}
 const kinLongest = Math.max(
   ...kinCommands.map((c) => c.longestPassCycles),
   clampedStream.longestPassCycles,
@@ -761,6 +769,25 @@ ${kinCommands
 | ${clampedStream.sent} pass-through stream frames at 921,600 baud beyond the ratings (rated 1 kgf cm): ${clampedStream.applied} applied, ${clampedStream.clamped} clamped, a pose with its torques per pass | - | - | ${fmt(clampedStream.longestPassCycles)} cycles = ${fmt(clampedStream.longestPassCycles / 125, 0)} us | ${clampedStream.missed} of ${clampedStream.frames} |
 
 Longest pass of these: **${fmt(kinLongest)} cycles = ${fmt(kinLongest / 125, 0)} us** (bound: 125,000 cycles).
+
+### Blends and the servos' rated speed
+
+The real firmware at 333 Hz, echo off, 115,200 baud, speed limits 100 mm/s and 60 deg/s,
+acceleration limits 200 mm/s^2 and 120 deg/s^2: new targets while moving (each a blend from the
+motion in progress, checked while it goes on), then the same with the servos' rated speed set
+(0.1 s per 60 degrees, servo 4 0.3 s: every path measured against the ratings), then a stream
+stepped by the tracker within the ratings (\`measureMotionLimitsPass\`, \`src/bench/firmware-bench.js\`).
+
+| session | lines answered \`ok\` | longest pass | frames missed |
+|---|---:|---:|---:|
+${motionLimits.phases
+  .map(
+    (p) =>
+      `| ${p.what} | ${p.lines ? `${p.ok} of ${p.lines}` : '-'} | ${fmt(p.longestPassCycles)} cycles = ${fmt(p.longestPassCycles / 125, 0)} us | ${p.missed} of ${p.frames} |`,
+  )
+  .join('\n')}
+
+Longest pass of these: **${fmt(Math.max(...motionLimits.phases.map((p) => p.longestPassCycles)))} cycles** (bound: 125,000 cycles).
 
 ## Saving the settings: the one long pass
 

@@ -532,6 +532,98 @@ export function measureLongestPass() {
 }
 
 /**
+ * The longest main-loop pass while motion limits are busiest (issue 22's bound): at 333 Hz
+ * with acceleration limits, a `nudge` every 50 ms (a person jogging) and then `pose` lines at
+ * 60 Hz (a program), each a new target while moving; then the same with the servos' rated
+ * speeds set (every move slowed to the ratings, its path measured); then a stream followed
+ * by the tracker within the ratings. Returns { phases: [{ what, lines, ok, longestPassCycles,
+ * frames, missed }] }.
+ */
+export function measureMotionLimitsPass() {
+  const board = new EmulatedBoard();
+  board.boot();
+  for (const l of [
+    'set echo off',
+    'set frame_hz 333',
+    'set speed_mm_s 100',
+    'set speed_deg_s 60',
+    'set accel_mm_s2 200',
+    'set accel_deg_s2 120',
+  ]) {
+    expectOk(board, l);
+  }
+  const phases = [];
+  /** Sends `lines` one every `everyMs` without waiting, then counts the replies. */
+  const session = (what, lines, everyMs) => {
+    board.runMs(100);
+    board.loop.reset();
+    board.frames.reset();
+    const from = board.lines.length;
+    for (const l of lines) {
+      board.sendBytes(`${l}\n`);
+      board.runMs(everyMs);
+    }
+    const replies = () => board.lines.slice(from).filter((l) => /^(ok|error:)/.test(l));
+    board.runUntil(() => replies().length >= lines.length, { timeoutMs: 10_000 });
+    board.runMs(20);
+    phases.push({
+      what,
+      lines: lines.length,
+      ok: replies().filter((l) => l === 'ok').length,
+      longestPassCycles: board.loop.longestPassCycles,
+      frames: board.frames.frames,
+      missed: board.frames.missed,
+    });
+  };
+  const nudges = Array.from({ length: 20 }, (_, i) => (i % 10 < 7 ? 'nudge x=2' : 'nudge yaw=-2'));
+  const poseLines = Array.from({ length: 60 }, (_, i) => {
+    const t = i / 60;
+    const f = (v) => v.toFixed(2);
+    return `pose ${f(8 * Math.sin(2 * Math.PI * t))} ${f(6 * Math.cos(2 * Math.PI * t))} ${f(3 * Math.sin(4 * Math.PI * t))} 0 ${f(4 * Math.sin(2 * Math.PI * t))} ${f(5 * Math.cos(2 * Math.PI * t))}`;
+  });
+  session('a `nudge` every 50 ms (20), acceleration limits', nudges, 50);
+  session('`pose` lines at 60 Hz (60), acceleration limits', poseLines, 1000 / 60);
+  expectOk(board, 'home');
+  board.runMs(1000);
+  expectOk(board, 'set servos.speed_s_60deg 0.1');
+  expectOk(board, 'set servo4.speed_s_60deg 0.3');
+  session('a `nudge` every 50 ms (20), acceleration limits and servo speed ratings', nudges, 50);
+  session(
+    '`pose` lines at 60 Hz (60), acceleration limits and servo speed ratings',
+    poseLines,
+    1000 / 60,
+  );
+  // A stream followed by the tracker within the ratings, its target jumping every 6 ms.
+  board.runMs(2000);
+  board.loop.reset();
+  board.frames.reset();
+  for (let i = 0; i < 60; i++) {
+    const s = i % 2 === 0 ? 1 : -1;
+    board.sendBytes(
+      binaryFrame([
+        32768 + s * 0.4 * 32768,
+        32768 - s * 0.2 * 32768,
+        32768,
+        32768,
+        32768,
+        32768 + s * 0.3 * 32768,
+      ]),
+    );
+    board.runMs(6);
+  }
+  board.runMs(100);
+  phases.push({
+    what: 'a stream (60 frames, every 6 ms) stepped by the tracker within the ratings',
+    lines: 0,
+    ok: 0,
+    longestPassCycles: board.loop.longestPassCycles,
+    frames: board.frames.frames,
+    missed: board.frames.missed,
+  });
+  return { phases };
+}
+
+/**
  * A `save` with the flash model's `timing` ('typical' or 'max', gaps/flash.js, gap 7): its
  * one long main-loop pass (the sector erase and the page program in the boot ROM with
  * interrupts masked, and the firmware's own work in that pass), the time from its line end to
