@@ -7,6 +7,7 @@
 mod support;
 
 use std::net::UdpSocket;
+use std::path::{Path, PathBuf};
 use std::thread;
 use std::time::{Duration, Instant};
 
@@ -20,6 +21,72 @@ fn free_port() -> u16 {
         .unwrap()
         .port()
 }
+
+/// A flight's set-up: a scratch folder holding `build.toml` (easing home over `ease_s`, the
+/// tilt at 8 deg/s), a board passing frames through, and a free port for the tool to listen on.
+struct Flight {
+    dir: PathBuf,
+    board: SimBoard,
+    port: u16,
+    /// `127.0.0.1:port`.
+    listen: String,
+}
+
+fn flight(name: &str, ease_s: &str) -> Flight {
+    let dir = scratch(name);
+    let board = pass_through_board(&dir);
+    std::fs::write(
+        dir.join("build.toml"),
+        format!("[cue]\nease_s = {ease_s}\n[cue.tilt]\nrate_deg_s = 8\n"),
+    )
+    .unwrap();
+    let port = free_port();
+    let listen = format!("127.0.0.1:{port}");
+    Flight {
+        dir,
+        board,
+        port,
+        listen,
+    }
+}
+
+impl Flight {
+    /// `cue` on this flight's board, port and build file, recording to `flight.csv`; then `more`.
+    fn cue_args<'a>(&'a self, more: &[&'a str]) -> Vec<&'a str> {
+        let mut args = vec![
+            "cue",
+            "--port",
+            &self.board.path,
+            "--listen",
+            &self.listen,
+            "--settings",
+            "build.toml",
+            "--record",
+            "flight.csv",
+        ];
+        args.extend_from_slice(more);
+        args
+    }
+}
+
+/// The rows of a `cue --record` file (after its two header lines), every field a number (NaN
+/// where one is not).
+fn record_rows(dir: &Path) -> Vec<Vec<f64>> {
+    let record = std::fs::read_to_string(dir.join("flight.csv")).unwrap();
+    record
+        .lines()
+        .skip(2)
+        .map(|l| {
+            l.split(',')
+                .map(|f| f.parse().unwrap_or(f64::NAN))
+                .collect()
+        })
+        .collect()
+}
+
+/// Gravity, and the forward push the flights make (3 m/s^2), in the telemetry's ft/s^2.
+const G_FT_S2: f64 = 9.80665 / 0.3048;
+const PUSH_FT_S2: f64 = 3.0 / 0.3048;
 
 /// A telemetry line: time, specific force (ft/s^2, body axes), rates (rad/s), attitude.
 fn line(time_s: f64, force_ft_s2: [f64; 3]) -> String {
@@ -35,17 +102,15 @@ fn fly(port: u16) {
     let socket = UdpSocket::bind("127.0.0.1:0").unwrap();
     let to = ("127.0.0.1", port);
     let start = Instant::now();
-    let g_ft = 9.80665 / 0.3048;
-    let push_ft = 3.0 / 0.3048;
     for k in 0..250 {
         let t = f64::from(k) * 0.01;
         let ax = if (0.5..2.0).contains(&t) {
-            push_ft
+            PUSH_FT_S2
         } else {
             0.0
         };
         socket
-            .send_to(line(t, [ax, 0.0, -g_ft]).as_bytes(), to)
+            .send_to(line(t, [ax, 0.0, -G_FT_S2]).as_bytes(), to)
             .unwrap();
         match k {
             20 => {
@@ -63,7 +128,7 @@ fn fly(port: u16) {
                     .unwrap();
                 // The same time again: not a new sample.
                 socket
-                    .send_to(line(t, [0.0, 0.0, -g_ft]).as_bytes(), to)
+                    .send_to(line(t, [0.0, 0.0, -G_FT_S2]).as_bytes(), to)
                     .unwrap();
             }
             _ => {}
@@ -75,38 +140,20 @@ fn fly(port: u16) {
 
 #[test]
 fn telemetry_becomes_frames_bad_lines_are_counted_and_the_end_eases_home() {
-    let dir = scratch("cue");
-    let board = pass_through_board(&dir);
-    std::fs::write(
-        dir.join("build.toml"),
-        "[cue]\nease_s = 0.5\n[cue.tilt]\nrate_deg_s = 8\n",
-    )
-    .unwrap();
-    let port = free_port();
-    let listen = format!("127.0.0.1:{port}");
+    let flight = flight("cue", "0.5");
+    let port = flight.port;
     let sender = thread::spawn(move || {
         // Time for the tool to start and read the board's settings.
         thread::sleep(Duration::from_millis(700));
         fly(port);
     });
     let cue = hexapod(
-        &dir,
-        &[
-            "cue",
-            "--port",
-            &board.path,
-            "--listen",
-            &listen,
-            "--settings",
-            "build.toml",
-            "--record",
-            "flight.csv",
-            "--idle-exit-s",
-            "0.5",
-            "--wait-s",
-            "10",
-        ],
+        &flight.dir,
+        &flight.cue_args(&["--idle-exit-s", "0.5", "--wait-s", "10"]),
     );
+    let Flight {
+        dir, board, listen, ..
+    } = flight;
     sender.join().unwrap();
     let (out, err) = text(&cue);
     assert!(cue.status.success(), "{out}{err}");
@@ -142,16 +189,7 @@ fn telemetry_becomes_frames_bad_lines_are_counted_and_the_end_eases_home() {
 
     // The record: the forward push tilted the nose up (negative pitch, the board's pitch
     // lowering +x) and pushed the platform forward first.
-    let record = std::fs::read_to_string(dir.join("flight.csv")).unwrap();
-    let rows: Vec<Vec<f64>> = record
-        .lines()
-        .skip(2)
-        .map(|l| {
-            l.split(',')
-                .map(|f| f.parse().unwrap_or(f64::NAN))
-                .collect()
-        })
-        .collect();
+    let rows = record_rows(&dir);
     assert_eq!(rows.len() as u64, frames);
     let most_nose_up = rows.iter().map(|r| r[12]).fold(f64::MAX, f64::min);
     let most_forward = rows.iter().map(|r| r[8]).fold(f64::MIN, f64::max);
@@ -268,34 +306,16 @@ fn ctrl_c_eases_the_platform_home_before_exiting() {
     use std::sync::atomic::{AtomicBool, Ordering};
     use std::sync::Arc;
 
-    let dir = scratch("cue-ctrl-c");
-    let board = pass_through_board(&dir);
-    std::fs::write(
-        dir.join("build.toml"),
-        "[cue]\nease_s = 1.0\n[cue.tilt]\nrate_deg_s = 8\n",
-    )
-    .unwrap();
-    let port = free_port();
-    let listen = format!("127.0.0.1:{port}");
+    let flight = flight("cue-ctrl-c", "1.0");
+    let port = flight.port;
     let child = Command::new(env!("CARGO_BIN_EXE_hexapod"))
-        .args([
-            "cue",
-            "--port",
-            &board.path,
-            "--listen",
-            &listen,
-            "--settings",
-            "build.toml",
-            "--record",
-            "flight.csv",
-            "--wait-s",
-            "10",
-        ])
-        .current_dir(&dir)
+        .args(flight.cue_args(&["--wait-s", "10"]))
+        .current_dir(&flight.dir)
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
         .expect("hexapod runs");
+    let Flight { dir, board, .. } = flight;
     // A sustained forward push, sent until the test stops it (also after the Ctrl-C: it must
     // not be taken).
     let sending = Arc::new(AtomicBool::new(true));
@@ -304,13 +324,12 @@ fn ctrl_c_eases_the_platform_home_before_exiting() {
         thread::spawn(move || {
             thread::sleep(Duration::from_millis(700));
             let socket = UdpSocket::bind("127.0.0.1:0").unwrap();
-            let g_ft = 9.80665 / 0.3048;
-            let push_ft = 3.0 / 0.3048;
             let mut k = 0u32;
             while sending.load(Ordering::Relaxed) {
                 let t = f64::from(k) * 0.01;
-                let ax = if t < 0.3 { 0.0 } else { push_ft };
-                let _ = socket.send_to(line(t, [ax, 0.0, -g_ft]).as_bytes(), ("127.0.0.1", port));
+                let ax = if t < 0.3 { 0.0 } else { PUSH_FT_S2 };
+                let _ =
+                    socket.send_to(line(t, [ax, 0.0, -G_FT_S2]).as_bytes(), ("127.0.0.1", port));
                 k += 1;
                 thread::sleep(Duration::from_millis(10));
             }
@@ -340,16 +359,7 @@ fn ctrl_c_eases_the_platform_home_before_exiting() {
 
     // The record: away from home when stopped, then eased rows at the frame rate, ending at
     // home with no step larger than a smooth second-long ease allows.
-    let record = std::fs::read_to_string(dir.join("flight.csv")).unwrap();
-    let rows: Vec<Vec<f64>> = record
-        .lines()
-        .skip(2)
-        .map(|l| {
-            l.split(',')
-                .map(|f| f.parse().unwrap_or(f64::NAN))
-                .collect()
-        })
-        .collect();
+    let rows = record_rows(&dir);
     let last_live = rows
         .iter()
         .rposition(|r| r[15] == 0.0)

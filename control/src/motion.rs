@@ -419,6 +419,7 @@ impl From<SpeedLimits> for blend::Limits {
             deg_per_s: l.deg_per_s,
             mm_per_s2: l.mm_per_s2,
             deg_per_s2: l.deg_per_s2,
+            corner_scale: 1.0,
         }
     }
 }
@@ -442,10 +443,64 @@ impl Plan {
         limits: SpeedLimits,
         frame_hz: f32,
     ) -> Plan {
-        match Blend::plan::<M>(start, rate, target, limits.into(), frame_hz, CHECK_RULE) {
+        Plan::after_within::<M>(start, rate, target, limits, 1.0, frame_hz)
+    }
+
+    /// [`Plan::after`], a blend taking `corner_scale` (0..=1) of the largest velocity at its
+    /// corner ([`blend::Limits::corner_scale`]: less to keep the servos' rated speeds).
+    pub fn after_within<M: Math>(
+        start: Pose,
+        rate: [f32; 6],
+        target: Pose,
+        limits: SpeedLimits,
+        corner_scale: f32,
+        frame_hz: f32,
+    ) -> Plan {
+        let blend_limits = blend::Limits {
+            corner_scale,
+            ..limits.into()
+        };
+        match Blend::plan::<M>(start, rate, target, blend_limits, frame_hz, CHECK_RULE) {
             Some(blend) => Plan::Blend(blend),
             None => Plan::Straight(Segment::plan(start, target, limits, frame_hz)),
         }
+    }
+
+    /// The fastest it goes, per frame: the largest speed of the linear group (mm) and of the
+    /// angular group (rad) along the way.
+    pub fn fastest_per_frame(&self) -> [f32; 2] {
+        match self {
+            Plan::Straight(s) => {
+                let a = (*s.start()).to_array();
+                let b = (*s.target()).to_array();
+                let norm = |r: core::ops::Range<usize>| {
+                    libm::sqrtf(r.map(|i| (b[i] - a[i]) * (b[i] - a[i])).sum())
+                };
+                // The profile's top speed: 1 / (1 - ramp) of the average.
+                let peak = 1.0 / ((1.0 - s.ramp) * s.frames as f32);
+                [norm(0..3) * peak, norm(3..6) * peak]
+            }
+            Plan::Blend(b) => b.fastest_per_frame(),
+        }
+    }
+
+    /// The fewest frames the motion takes between two of its checkpoints `fractions` apart
+    /// (the difference of their fractions, as [`Plan::checkpoints`] gives them): a blend's
+    /// fractions, and a straight move's when it checks every frame, are of its frames; a
+    /// longer straight move's are of its path, which it covers at most at its top speed.
+    pub fn frames_spanned(&self, fractions: f32) -> f32 {
+        match self {
+            Plan::Straight(s) if s.frames > MAX_PATH_CHECKS => {
+                fractions * s.frames as f32 * (1.0 - s.ramp)
+            }
+            _ => fractions * self.frames() as f32,
+        }
+    }
+
+    /// True if its path check visits every frame's pose (the frames are at most
+    /// [`MAX_PATH_CHECKS`]).
+    pub fn checks_every_frame(&self) -> bool {
+        self.frames() <= MAX_PATH_CHECKS
     }
 
     /// Where the move starts.

@@ -14,7 +14,11 @@
 //!   if the path needs longer than estimated, the move is planned again with the measured time
 //!   and its path checked again (so the path taken is the one checked). The plan uses
 //!   [`PLAN_MARGIN`] of each rating, for what lies between checkpoints. With every speed limit
-//!   off such a move is no longer a jump.
+//!   off such a move is no longer a jump. A move taken over while moving (a blend,
+//!   [`crate::motion::blend`]) is measured per frame instead: its check finds the largest
+//!   share of its rating any arm turns by in a frame, from the IK's arm angles at every frame
+//!   it will command, and if that is over 1 the blend is planned again with its speeds and its
+//!   corner velocity slowed by it (`controller/path.rs`, `FrameTurns`).
 //! - a stream's step ([`crate::tracker`]) that would turn an arm by more than its rating times
 //!   the frame period is shortened, all axes alike, to the fraction of it the slowest arm can
 //!   follow ([`ServoSpeeds::step_scale`], at [`PLAN_MARGIN`]), so the platform keeps the step's

@@ -130,6 +130,31 @@ impl Tracker {
         }
     }
 
+    /// Moving from `pose` at `rate` (mm and rad per frame of `dt_s` s, each axis rounded to
+    /// its units): a stream that takes over from a planned move goes on at its velocity.
+    pub fn moving(pose: &Pose, rate: &[f32; 6], dt_s: f32) -> Tracker {
+        let mut tracker = Tracker::new(pose);
+        if positive_finite(dt_s) {
+            tracker.frame_s = dt_s;
+            for (i, r) in rate.iter().enumerate() {
+                // (An axis beyond its range is held where it is.)
+                if tracker.position[i] != OUTSIDE {
+                    tracker.velocity[i] = to_units(*r, frac_of(i)).unwrap_or(0);
+                }
+            }
+        }
+        tracker
+    }
+
+    /// The velocity, mm and rad per frame of `dt_s` s (0 at rest, or before the first step).
+    pub fn rate_per_frame(&self, dt_s: f32) -> [f32; 6] {
+        if self.at_rest() || !positive_finite(self.frame_s) {
+            return [0.0; 6];
+        }
+        let ratio = dt_s / self.frame_s;
+        core::array::from_fn(|i| to_f32(self.velocity[i], frac_of(i)) * ratio)
+    }
+
     /// The pose of the last step.
     pub fn pose(&self) -> Pose {
         Pose::from_array(self.pose)

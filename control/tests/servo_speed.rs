@@ -44,26 +44,34 @@ fn turns_rad(s: &Host, a: &[f32; LEGS], b: &[f32; LEGS]) -> [f32; LEGS] {
     core::array::from_fn(|i| (b[i] - a[i]).abs() / servos[i].rate_us_per_rad)
 }
 
+/// Stretches the straight paths below are cut into.
+const STRETCHES: usize = 2000;
+
+/// The arm angles (the host's IK) at the ends of the `STRETCHES` stretches of the straight
+/// path from `a` to `b`, `a` first, rad.
+fn arms_along(s: &Host, a: &Pose, b: &Pose) -> Vec<[f32; LEGS]> {
+    let solver = solver(s);
+    (0..=STRETCHES)
+        .map(|k| {
+            let p = lerp(a, b, k as f32 / STRETCHES as f32);
+            solver
+                .solve::<Libm>(&s.ctl.settings().servos, &p)
+                .unwrap()
+                .arm_rad
+        })
+        .collect()
+}
+
 /// The least time the servos need for the straight path from `a` to `b` at their ratings,
 /// s: the steepest of 2,000 stretches along it.
 fn path_time_s(s: &Host, a: &Pose, b: &Pose) -> f32 {
-    let solver = solver(s);
     let ratings = s.ctl.settings().servo_speed.s_per_60deg;
-    let arms = |p: &Pose| {
-        solver
-            .solve::<Libm>(&s.ctl.settings().servos, p)
-            .unwrap()
-            .arm_rad
-    };
-    let n = 2000;
-    let mut before = arms(a);
     let mut worst = 0.0f32;
-    for k in 1..=n {
-        let here = arms(&lerp(a, b, k as f32 / n as f32));
+    for w in arms_along(s, a, b).windows(2) {
         for i in 0..LEGS {
-            worst = worst.max((here[i] - before[i]).abs() * ratings[i] / SIXTY_DEG_RAD * n as f32);
+            worst = worst
+                .max((w[1][i] - w[0][i]).abs() * ratings[i] / SIXTY_DEG_RAD * STRETCHES as f32);
         }
-        before = here;
     }
     worst
 }
@@ -88,23 +96,12 @@ fn on_line(a: &Pose, b: &Pose, p: &Pose, tol_mm: f32, tol_rad: f32) -> Option<f3
 /// ratings, s: the servo whose arm turns furthest along it (its total turn, by the IK at 2,000
 /// poses) for its rating.
 fn turning_time_s(s: &Host, a: &Pose, b: &Pose) -> f32 {
-    let solver = solver(s);
     let ratings = s.ctl.settings().servo_speed.s_per_60deg;
-    let arms = |p: &Pose| {
-        solver
-            .solve::<Libm>(&s.ctl.settings().servos, p)
-            .unwrap()
-            .arm_rad
-    };
-    let n = 2000;
-    let mut before = arms(a);
     let mut turned = [0.0f32; LEGS];
-    for k in 1..=n {
-        let here = arms(&lerp(a, b, k as f32 / n as f32));
+    for w in arms_along(s, a, b).windows(2) {
         for i in 0..LEGS {
-            turned[i] += (here[i] - before[i]).abs();
+            turned[i] += (w[1][i] - w[0][i]).abs();
         }
-        before = here;
     }
     (0..LEGS)
         .map(|i| turned[i] * ratings[i] / SIXTY_DEG_RAD)
@@ -120,6 +117,55 @@ fn run_move(s: &mut Host) -> Vec<([f32; LEGS], Pose)> {
         assert!(seen.len() < 100_000, "the move never ends");
     }
     seen
+}
+
+/// Asserts every step of `seen` (each frame's pulses and pose, the start first) turns no arm
+/// further than its rating allows in a frame, lands on the straight line from `start` to
+/// `target`, no less far along it than the step before and not past it, and gives the pulses
+/// the IK gives for its pose (within `pulse_tol_us`).
+fn assert_rated_steps_along_line(
+    s: &Host,
+    seen: &[([f32; LEGS], Pose)],
+    start: &Pose,
+    target: &Pose,
+    pulse_tol_us: f32,
+    label: &str,
+) {
+    let solver = solver(s);
+    let limit = max_turn_rad(s);
+    let mut last_u = 0.0;
+    for (frame, w) in seen.windows(2).enumerate().map(|(k, w)| (k + 1, w)) {
+        let (pulses, pose) = w[1];
+        let turns = turns_rad(s, &w[0].0, &pulses);
+        for i in 0..LEGS {
+            assert!(
+                turns[i] <= limit[i] * 1.0001,
+                "{label} frame {frame}: servo {} turns {} rad, rated {} rad a frame",
+                i + 1,
+                turns[i],
+                limit[i]
+            );
+        }
+        let u = on_line(start, target, &pose, 1e-4, 1e-6)
+            .unwrap_or_else(|| panic!("{label} frame {frame}: {pose:?} off the line"));
+        assert!(
+            u >= last_u - 1e-6 && u <= 1.0 + 1e-6,
+            "{label} frame {frame}: {u}"
+        );
+        last_u = u;
+        let want = solver
+            .solve::<Libm>(&s.ctl.settings().servos, &pose)
+            .unwrap();
+        for i in 0..LEGS {
+            assert!(
+                (pulses[i] - want.pulse_us[i]).abs() < pulse_tol_us,
+                "{label} frame {frame} servo {}: {} vs {}",
+                i + 1,
+                pulses[i],
+                want.pulse_us[i]
+            );
+        }
+    }
 }
 
 #[test]
@@ -150,35 +196,14 @@ fn a_fast_move_turns_no_arm_faster_than_its_rating_and_keeps_its_straight_path()
             s.ok(second);
             let target = *s.ctl.target();
             let seen = run_move(&mut s);
-            let limit = max_turn_rad(&s);
-            let mut last_u = 0.0;
-            for (k, w) in seen.windows(2).enumerate() {
-                let turns = turns_rad(&s, &w[0].0, &w[1].0);
-                for i in 0..LEGS {
-                    assert!(
-                        turns[i] <= limit[i] * 1.0001,
-                        "{second} ({limits}, accel {accel}) frame {k}: servo {} turns {} rad, \
-                         rated {} rad a frame",
-                        i + 1,
-                        turns[i],
-                        limit[i]
-                    );
-                }
-                let u = on_line(&start, &target, &w[1].1, 1e-4, 1e-6)
-                    .unwrap_or_else(|| panic!("{second} frame {k}: {:?} off the line", w[1].1));
-                assert!(
-                    u >= last_u - 1e-6 && u <= 1.0 + 1e-6,
-                    "{second} frame {k}: {u}"
-                );
-                last_u = u;
-                // The pulses are the IK's of the pose commanded.
-                let want = solver(&s)
-                    .solve::<Libm>(&s.ctl.settings().servos, &w[1].1)
-                    .unwrap();
-                for i in 0..LEGS {
-                    assert!((w[1].0[i] - want.pulse_us[i]).abs() < 0.01);
-                }
-            }
+            assert_rated_steps_along_line(
+                &s,
+                &seen,
+                &start,
+                &target,
+                0.01,
+                &format!("{second} ({limits}, accel {accel})"),
+            );
             assert_eq!(*s.ctl.pose(), target);
             // No slower than the ratings need (at the 97 % the plan uses, plus the rounding
             // to whole frames), where the ratings are what limits it.
@@ -261,8 +286,6 @@ fn a_rated_stream_steps_within_the_ratings_along_its_line() {
     s.feed(&frame_of([0.5, -0.3, 0.3, 0.3, -0.3, 0.4]));
     s.apply_stream();
     assert!(s.ctl.take_new_pulses().is_none(), "not passed through");
-    let solver = solver(&s);
-    let limit = max_turn_rad(&s);
     // Until it settles (on the target: the last pose).
     let mut seen = vec![(s.ctl.pulses_us(), start)];
     while s.ctl.is_moving() {
@@ -275,38 +298,9 @@ fn a_rated_stream_steps_within_the_ratings_along_its_line() {
         target.x_mm > 12.4 && target.yaw_rad.to_degrees() > 7.9,
         "{target:?}"
     );
-    let mut last_u = 0.0;
-    let mut before = seen[0].0;
+    // A shortened step is solved where it ends.
+    assert_rated_steps_along_line(&s, &seen, &start, &target, 0.05, "stream");
     let frames = seen.len() - 1;
-    for (frame, &(pulses, pose)) in seen.iter().enumerate().skip(1) {
-        let turns = turns_rad(&s, &before, &pulses);
-        for i in 0..LEGS {
-            assert!(
-                turns[i] <= limit[i] * 1.0001,
-                "frame {frame} servo {}",
-                i + 1
-            );
-        }
-        // Along the straight line to the target, in order ...
-        let u = on_line(&start, &target, &pose, 1e-4, 1e-6)
-            .unwrap_or_else(|| panic!("frame {frame}: {pose:?} off the line"));
-        assert!(u >= last_u - 1e-6, "frame {frame}");
-        last_u = u;
-        // ... and the pulses the IK's for that pose (a shortened step is solved where it ends).
-        let want = solver
-            .solve::<Libm>(&s.ctl.settings().servos, &pose)
-            .unwrap();
-        for i in 0..LEGS {
-            assert!(
-                (pulses[i] - want.pulse_us[i]).abs() < 0.05,
-                "frame {frame} servo {}: {} vs {}",
-                i + 1,
-                pulses[i],
-                want.pulse_us[i]
-            );
-        }
-        before = pulses;
-    }
     assert!(frames > 3, "the ratings slowed it: {frames} frames");
     let needed = turning_time_s(&s, &start, &target);
     assert!(

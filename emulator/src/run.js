@@ -15,6 +15,7 @@ import { SharedInput } from './view-server/shared-input.js';
 import { DEFAULT_VIEW_PORT, startViewServer } from './view-server/view-server.js';
 
 const USAGE = `usage: ./dev run [--uart] [--pty] [--local-echo] [--no-view] [--view-port N] [--elf PATH]
+                 [--no-xip-cache]
 
 Runs the firmware in the emulator with a USB cable in the Pico's USB port and this terminal
 on the serial port it brings (as picocom /dev/ttyACM0 would be, in raw mode): the port opens
@@ -32,6 +33,8 @@ echo is off, --local-echo shows typed characters here. Ctrl-] or Ctrl-C quits.
              use --no-view to have that link free.
   --view-port N  the view's port (0: any free port)
   --elf PATH firmware ELF (default: ${DEFAULT_ELF})
+  --no-xip-cache  flash reads cost nothing (no XIP cache model, emulator gap 13; also
+             HEXAPOD_XIP_CACHE=off): by default a cache miss stalls the core as on a Pico
 The status line (stderr) shows the six measured servo pulse widths in microseconds.
 kill -USR2 <pid> power-cycles the emulated board (its flash, and saved settings, kept).`;
 
@@ -58,6 +61,7 @@ async function main() {
         'no-view': { type: 'boolean', default: false },
         'view-port': { type: 'string', default: String(DEFAULT_VIEW_PORT) },
         elf: { type: 'string', default: DEFAULT_ELF },
+        'no-xip-cache': { type: 'boolean', default: false },
         help: { type: 'boolean', short: 'h', default: false },
       },
     }));
@@ -75,6 +79,7 @@ async function main() {
     bootrom: loadBootrom({ log: (message) => process.stderr.write(`${message}\n`) }),
     // With the view, the USB port is there with --uart too: the view's own link.
     usb: !options.uart || !options['no-view'],
+    ...(options['no-xip-cache'] ? { xipCache: false } : {}),
   });
   // The serial link on this terminal: the USB port's, as a Pico owner uses it, or UART0's.
   const serial = options.uart ? board.uart : board.usb;

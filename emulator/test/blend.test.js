@@ -20,8 +20,10 @@ import {
   firmwareBootrom,
   heaveReader,
   heaveTrace,
+  COUNT_US,
   ok,
 } from '../src/test-support/e2e-support.js';
+import { binaryFrame } from '../src/bench/firmware-bench.js';
 import { HostReference } from '../src/test-support/host-reference.js';
 
 const HZ = 50;
@@ -45,10 +47,10 @@ function sendTimed(board, timed, afterMs) {
   const recording = board.recordPulses();
   let now = 0;
   try {
-    for (const { atMs, line } of timed) {
+    for (const { atMs, line, bytes } of timed) {
       board.runMs(atMs - now);
       now = atMs;
-      board.sendBytes(`${line}\n`);
+      board.sendBytes(bytes ?? `${line}\n`);
     }
     board.runMs(afterMs);
   } finally {
@@ -59,7 +61,13 @@ function sendTimed(board, timed, afterMs) {
   );
   const replies = board.lines.slice(from).filter((l) => FINAL_REPLY.test(l));
   board.lineCursor = board.lines.length;
-  return { zs: heaveTrace(pulses, read), replies };
+  return { zs: heaveTrace(pulses, read), replies, widths: framesUs(pulses) };
+}
+
+/** The six widths of each frame period, us (the pins pulse in step). */
+function framesUs(pulses) {
+  const n = Math.min(...pulses.map((servo) => servo.length));
+  return Array.from({ length: n }, (_, j) => pulses.map((servo) => servo[j].widthNanos / 1000));
 }
 
 /**
@@ -144,4 +152,103 @@ test("without an acceleration limit a retarget is today's: a new line from rest 
     flip > 0 && v.slice(flip, flip + 2).some((s) => s < -30),
     `${v.map((s) => s.toFixed(0))}`,
   );
+});
+
+// With the servos' rated speeds set as well (docs/commands.md, the blend "With servo speed
+// ratings"): the same retargets blend in, and no arm turns by more than its rating in any
+// frame, read from the pins (eq. 13, 14: an arm turns by |dW| / r for a pulse change dW at the
+// servo rate r, the default 1600 / pi us/rad), within two PWM counts.
+const RATE_US_RAD = 1600 / Math.PI;
+
+/**
+ * Asserts no arm turns by more than its rating (s per 60 degrees) in a frame; returns the
+ * largest share of it seen.
+ */
+function assertWithinRatings(widths, rating, label) {
+  const maxTurn = Math.PI / 3 / rating / HZ;
+  let most = 0;
+  for (let j = 1; j < widths.length; j += 1) {
+    for (let i = 0; i < 6; i += 1) {
+      const turn = Math.abs(widths[j][i] - widths[j - 1][i]) / RATE_US_RAD;
+      assert.ok(
+        turn <= maxTurn + (2 * COUNT_US) / RATE_US_RAD,
+        `${label}: frame ${j}, servo ${i + 1} turns ${turn} rad, rated ${maxTurn} rad a frame`,
+      );
+      most = Math.max(most, turn / maxTurn);
+    }
+  }
+  return most;
+}
+
+/** A board with fast limits that the ratings (s per 60 degrees), not the speed limit, slow. */
+function ratedBoard(rating) {
+  const board = bootQuiet(bootrom);
+  ok(board, 'set speed_mm_s 80');
+  ok(board, 'set accel_mm_s2 400');
+  ok(board, `set servos.speed_s_60deg ${rating}`);
+  return board;
+}
+
+test('with ratings, nudges every 50 ms and a turn back blend in within the limits and the ratings, never held', () => {
+  const board = ratedBoard(0.25);
+  const timed = [];
+  for (let i = 0; i < 6; i += 1) {
+    timed.push({ atMs: 50 * i, line: 'nudge z=2' });
+  }
+  timed.push({ atMs: 300, line: 'pose 0 0 -5 0 0 0' });
+  timed.push({ atMs: 350, line: 'nudge z=1' });
+  const { zs, replies, widths } = sendTimed(board, timed, 1500);
+  assert.deepEqual(
+    replies,
+    timed.map(() => 'ok'),
+  );
+  assertWithinLimits(zs, { hz: HZ, speed: 80, accel: 400, top: 12, label: 'rated jog' });
+  assertNeverHeld(zs, 'rated jog');
+  const most = assertWithinRatings(widths, 0.25, 'rated jog');
+  assert.ok(most > 0.8, `the ratings set the pace (fastest arm at ${most} of its)`);
+  assertPins(board, reference.solve(defaultSettings(), [[0, 0, -4, 0, 0, 0]])[0].pulse_us);
+});
+
+test('with ratings, pose lines at 60 Hz along a heave wave: within the limits and the ratings, never held', () => {
+  // Rated 0.6 s per 60 degrees: the arms follow about 40 mm/s of heave.
+  const board = ratedBoard(0.6);
+  // z = 6 sin(2 pi 1.2 t): up to 45 mm/s and 340 mm/s2, within the limits, faster than the
+  // ratings let the arms follow at the crossings; 2 s.
+  const timed = Array.from({ length: 120 }, (_, i) => {
+    const t = i / 60;
+    const z = 6 * Math.sin(2 * Math.PI * 1.2 * t);
+    return { atMs: (1000 * i) / 60, line: `pose 0 0 ${z.toFixed(3)} 0 0 0` };
+  });
+  const { zs, replies, widths } = sendTimed(board, timed, 1000);
+  assert.deepEqual(
+    replies,
+    timed.map(() => 'ok'),
+  );
+  assertWithinLimits(zs, { hz: HZ, speed: 80, accel: 400, top: 6, label: 'rated wave' });
+  assertNeverHeld(zs, 'rated wave');
+  const most = assertWithinRatings(widths, 0.6, 'rated wave');
+  assert.ok(most > 0.8, `the ratings set the pace (fastest arm at ${most} of its)`);
+});
+
+test('with ratings, a pose line while a stream is tracked takes over from its motion: within the limits and the ratings, never held', () => {
+  const board = ratedBoard(0.25);
+  // A heave stream at 60 Hz (binary frames, z full scale 15 mm) climbing at 15 mm/s for
+  // 0.6 s, then, with the tracker moving, `pose 0 0 -5 0 0 0`, and the stream stops.
+  const count = (z) => Math.round(32768 + (z / 15) * 32768);
+  /** @type {{ atMs: number, line?: string, bytes?: Buffer }[]} */
+  const timed = Array.from({ length: 36 }, (_, i) => {
+    const z = 15 * (i / 60);
+    return {
+      atMs: (1000 * i) / 60,
+      bytes: binaryFrame([32768, 32768, count(z), 32768, 32768, 32768]),
+    };
+  });
+  timed.push({ atMs: 600, line: 'pose 0 0 -5 0 0 0' });
+  const { zs, replies, widths } = sendTimed(board, timed, 1500);
+  assert.deepEqual(replies, ['ok']);
+  assertWithinLimits(zs, { hz: HZ, speed: 80, accel: 400, top: 9.5, label: 'stream, then pose' });
+  assertNeverHeld(zs, 'stream, then pose');
+  const most = assertWithinRatings(widths, 0.25, 'stream, then pose');
+  assert.ok(most > 0.8, `the ratings set the pace (fastest arm at ${most} of its)`);
+  assertPins(board, reference.solve(defaultSettings(), [[0, 0, -5, 0, 0, 0]])[0].pulse_us);
 });

@@ -13,7 +13,13 @@ import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 import { after, before, test } from 'node:test';
 
-import { COUNT_US, firmwareBootrom, numbersIn } from '../src/test-support/e2e-support.js';
+import {
+  COUNT_US,
+  expectedTrim,
+  firmwareBootrom,
+  pinsReach,
+  servosFromListings,
+} from '../src/test-support/e2e-support.js';
 import { buildTool, runProgram, startPtyRunner } from '../src/test-support/pty-runner.js';
 
 let tool;
@@ -43,50 +49,11 @@ async function send(...lines) {
   return outcome.stdout.split('\n').filter((line) => line !== '');
 }
 
-/** The pins' widths the runner printed last (`servos us: ...`). */
-function pinsUs() {
-  const lines = board
-    .log()
-    .split(/[\r\n]/)
-    .filter((line) => line.startsWith('servos us:'));
-  return numbersIn(lines.at(-1).replace(/\|.*$/, ''));
-}
-
-/** Waits (generously) until the pins show `expected` within one PWM count; the pins then. */
-async function pinsReach(expected) {
-  const until = Date.now() + 30_000;
-  const near = () => pinsUs().every((w, i) => Math.abs(w - expected[i]) <= COUNT_US + 1e-9);
-  while (!near() && Date.now() < until) {
-    await new Promise((resolve) => setTimeout(resolve, 100));
-  }
-  return pinsUs();
-}
+const round2 = (us) => Math.round(us * 100) / 100;
 
 /** Each servo's trim, rate (us/rad) and direction sign from `config`, alpha0 (rad) from `geometry`. */
 async function servos() {
-  const lines = await send('geometry', 'config');
-  return [1, 2, 3, 4, 5, 6].map((n) => {
-    const leg = lines.find((l) => l.startsWith(`# leg ${n}:`));
-    const servo = lines.find((l) => l.startsWith(`# servo${n}:`));
-    return {
-      alpha0: (Number(leg.match(/alpha0_deg=(\S+)/)[1]) * Math.PI) / 180,
-      trim: Number(servo.match(/trim_us=(\S+)/)[1]),
-      rate: Number(servo.match(/rate_us_rad=(\S+)/)[1]),
-      sign: servo.includes('dir=reversed') ? -1 : 1,
-    };
-  });
-}
-
-const round2 = (us) => Math.round(us * 100) / 100;
-
-/**
- * The trim the flow must take for a servo whose arm is made level `steps` us from where a
- * trimmed arm would be level: eq. 13 / 14 at alpha = 0 gives the level pulse
- * W0 - d r alpha0 (where the flow starts), and W0 = level + d r alpha0.
- */
-function expectedTrim(servo, steps) {
-  const start = round2(servo.trim - servo.sign * servo.rate * servo.alpha0);
-  return start + steps + servo.sign * servo.rate * servo.alpha0;
+  return servosFromListings(await send('geometry', 'config'));
 }
 
 /** `config`'s lines that are the settings and whether they are saved. */
@@ -110,7 +77,10 @@ test('the end of input midway puts the pulses back and leaves the settings as th
   const status = await send('status');
   assert.ok(status.includes('# state: idle'), status.join('\n'));
   assert.ok(status.includes('# pose: x=0.000 y=0.000 z=0.000 roll=0.000 pitch=0.000 yaw=0.000'));
-  const pins = await pinsReach(start.map((s) => s.trim));
+  const pins = await pinsReach(
+    board.log,
+    start.map((s) => s.trim),
+  );
   start.forEach((s, i) => assert.ok(Math.abs(pins[i] - s.trim) <= COUNT_US + 1e-9, `${pins}`));
 });
 
@@ -171,7 +141,7 @@ test('the whole flow: trims in the build file (the rest kept), saved, listed, ke
   after.trims.forEach((t, i) => assert.ok(Math.abs(t - expected[i]) <= 0.011, `${after.trims}`));
   assert.match(after.saved, /^# saved: yes/);
   // At home, each servo at its new trim.
-  const pins = await pinsReach(after.trims);
+  const pins = await pinsReach(board.log, after.trims);
   after.trims.forEach((t, i) => assert.ok(Math.abs(pins[i] - t) <= COUNT_US + 1e-9, `${pins}`));
 
   // A change left unsaved, then the board power-cycled: the saved trims come back, not it.

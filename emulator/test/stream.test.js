@@ -14,6 +14,7 @@ import {
   assertWithinLimits,
   bootQuiet,
   bootQuietUsb,
+  bootWith,
   capture,
   COUNT_US,
   defaultSettings,
@@ -60,11 +61,7 @@ function solve(pose, settings = defaultSettings()) {
 }
 
 function trackingBoard({ hz = 50, speed = 40, accel = 400 } = {}) {
-  const board = bootQuiet(bootrom);
-  ok(board, `set frame_hz ${hz}`);
-  ok(board, `set speed_mm_s ${speed}`);
-  ok(board, `set accel_mm_s2 ${accel}`);
-  return board;
+  return bootWith({ frame_hz: hz, speed_mm_s: speed, accel_mm_s2: accel });
 }
 
 test('a step: the pins follow within the speed and acceleration limits, settle on the target, never overshoot', () => {
@@ -128,9 +125,7 @@ test('a 60 Hz staircase becomes smooth motion at the frame rate within the limit
 });
 
 test('pass-through: with every limit off a frame is on the pins at the next period', () => {
-  const board = bootQuiet(bootrom);
-  ok(board, 'set speed_mm_s off');
-  ok(board, 'set speed_deg_s off');
+  const board = bootWith({ speed_mm_s: 'off', speed_deg_s: 'off' });
   const pose = [3, -2, 1.5, 2, -1, 4];
   const pulses = capture(board, () => board.sendBytes(frameFor(pose)), 3);
   const want = solve(carried(pose));
@@ -144,9 +139,7 @@ test('pass-through: with every limit off a frame is on the pins at the next peri
 });
 
 test('garbage, truncated frames and random bytes mid-stream: resynchronised, counted, nothing wrong applied', () => {
-  const board = bootQuiet(bootrom);
-  ok(board, 'set speed_mm_s off');
-  ok(board, 'set speed_deg_s off');
+  const board = bootWith({ speed_mm_s: 'off', speed_deg_s: 'off' });
   const good = [
     [1, 0, 1, 0, 0, 0],
     [2, 1, 0, 1, 0, 0],
@@ -189,9 +182,7 @@ test('garbage, truncated frames and random bytes mid-stream: resynchronised, cou
 });
 
 test('a target outside the workspace is clamped on the way to it, counted, pulses within limits', () => {
-  const board = bootQuiet(bootrom);
-  ok(board, 'set speed_mm_s off');
-  ok(board, 'set speed_deg_s off');
+  const board = bootWith({ speed_mm_s: 'off', speed_deg_s: 'off' });
   ok(board, 'set stream.z_mm 100');
   board.sendBytes(binaryFrame([32768, 32768, count(80, 100), 32768, 32768, 32768]));
   runFrames(board, 3);
@@ -211,9 +202,7 @@ test('a target outside the workspace is clamped on the way to it, counted, pulse
 });
 
 test('text frames: an existing SimTools profile (8 bits, its own axis order) works unchanged', () => {
-  const board = bootQuiet(bootrom);
-  ok(board, 'set speed_mm_s off');
-  ok(board, 'set speed_deg_s off');
+  const board = bootWith({ speed_mm_s: 'off', speed_deg_s: 'off' });
   // The profile sends roll, pitch, heave, yaw, surge, sway.
   const order = ['roll', 'pitch', 'z', 'yaw', 'x', 'y'];
   order.forEach((_, i) => ok(board, `set stream.axis${i + 1} none`));
@@ -329,9 +318,8 @@ test('a stream that is clamped on every frame keeps every main-loop pass under 1
 });
 
 test('over USB: a frame with LF and CR bytes in its counts, then a line, in one packet: both taken', () => {
-  const board = bootQuietUsb(bootrom); // helpers speak over USB; board.uart is UART0
-  ok(board, 'set speed_mm_s off');
-  ok(board, 'set speed_deg_s off');
+  // Helpers speak over USB; board.uart is UART0.
+  const board = bootWith({ speed_mm_s: 'off', speed_deg_s: 'off' }, { usb: true });
   // Every count's low byte is LF (0x0A) or CR (0x0D): the frame's bytes hold line ends that
   // are not line ends (docs/streaming.md: binary frames are `A5 5A`, six counts, `0D 0A`).
   const counts = [0x800a, 0x7f0d, 0x8a0a, 0x800d, 0x7f0a, 0x8a0d];

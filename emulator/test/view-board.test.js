@@ -18,24 +18,17 @@
 import assert from 'node:assert/strict';
 import { test } from 'node:test';
 
-import { COUNT_US, firmwareBootrom, numbersIn } from '../src/test-support/e2e-support.js';
+import { COUNT_US, firmwareBootrom, pinsUs } from '../src/test-support/e2e-support.js';
 import { buildTool, startPtyRunner, startToolView } from '../src/test-support/pty-runner.js';
 import {
-  CHROMIUM,
-  haveChromium,
-  launchChromium,
-  readPose,
+  jogRightSampled,
+  openPage,
+  skipWithoutChromium,
   typeLine,
   waitForPose,
 } from '../src/test-support/view-browser.js';
 
 const SETTLE_TIMEOUT_MS = 30_000;
-
-/** The pins the runner measured last (`servos us: ...` on its stderr). */
-function pinsUs(log) {
-  const lines = log.split('\n').filter((line) => line.startsWith('servos us:'));
-  return numbersIn(lines.at(-1).replace(/\|.*$/, ''));
-}
 
 /** The page's update rate as it shows it (`..., N updates/s`). */
 async function rateShown(page) {
@@ -52,27 +45,19 @@ for (const { name, args } of [
   { name: 'UART0', args: ['--uart'] },
 ]) {
   test(`hexapod view of a board on ${name}: the page follows a pose, the jog moves the board`, async (t) => {
-    if (!haveChromium()) {
-      const why = `SKIPPED: no Chromium at ${CHROMIUM}: the browser test of hexapod view did not run`;
-      console.error(why);
-      t.skip(why);
+    if (skipWithoutChromium(t, 'the browser test of hexapod view')) {
       return;
     }
     firmwareBootrom(); // the ELF built and the boot ROM cached before the runner needs them
     const tool = buildTool();
     const board = await startPtyRunner({ args: ['--no-view', ...args] });
     let view;
-    let browser;
-    t.after(async () => {
-      await browser?.close();
+    t.after(() => {
       view?.child.kill('SIGINT');
       board.runner.kill();
     });
     view = await startToolView(tool, board.port);
-    browser = await launchChromium();
-    const page = await browser.newPage({ viewport: { width: 1200, height: 800 } });
-    const pageErrors = [];
-    page.on('pageerror', (error) => pageErrors.push(error.message));
+    const { page, pageErrors } = await openPage(t, { width: 1200, height: 800 });
     await page.goto(view.url);
     await page.waitForSelector('#fk-status[data-status="solved"]', { timeout: SETTLE_TIMEOUT_MS });
     assert.match(await page.textContent('#title-source'), new RegExp(`board on ${board.port}`));
@@ -96,20 +81,13 @@ for (const { name, args } of [
     // The jog: five presses of the right arrow, x to 5 mm, sampled on the way.
     await page.locator('#stage').click();
     await page.waitForTimeout(1700); // the sliders follow the pose again
-    const seen = new Set();
-    const sampler = setInterval(async () => {
-      const pose = await readPose(page).catch(() => null);
-      if (pose) {
-        seen.add(pose[0].toFixed(1));
-      }
-    }, 30);
-    for (let i = 0; i < 5; i++) {
-      await page.keyboard.press('ArrowRight');
-    }
-    await waitForPose(page, [5, 0, 10, 0, 0, 0], 0.05, SETTLE_TIMEOUT_MS);
-    clearInterval(sampler);
-    const between = [...seen].map(Number).filter((x) => x > 0.2 && x < 4.8);
-    assert.ok(between.length >= 1, `x on the way to 5 mm: ${[...seen].join(', ')}`);
+    const { seen, between } = await jogRightSampled(page, {
+      expected: [5, 0, 10, 0, 0, 0],
+      tolerance: 0.05,
+      timeout: SETTLE_TIMEOUT_MS,
+      everyMs: 30,
+    });
+    assert.ok(between.length >= 1, `x on the way to 5 mm: ${seen.join(', ')}`);
     // At the pins: what the emulator measures is what the page shows (one PWM count).
     await page.waitForTimeout(1500);
     const shown = await page.evaluate(() =>

@@ -8,10 +8,10 @@
 import assert from 'node:assert/strict';
 import { test } from 'node:test';
 
+import { expectedTrim, servosFromListings } from '../src/test-support/e2e-support.js';
 import {
-  CHROMIUM,
-  haveChromium,
-  launchChromium,
+  openPage,
+  skipWithoutChromium,
   startRunner,
   typeLine,
 } from '../src/test-support/view-browser.js';
@@ -67,39 +67,20 @@ async function press(page, stage, key) {
 }
 
 test('the page calibration: quit leaves the settings; the whole flow saves the trims', async (t) => {
-  if (!haveChromium()) {
-    const why = `SKIPPED: no Chromium at ${CHROMIUM}, so the page calibration did not run`;
-    console.error(why);
-    t.skip(why);
+  if (skipWithoutChromium(t, 'the page calibration')) {
     return;
   }
   const runner = startRunner();
-  let browser;
-  t.after(async () => {
-    await browser?.close();
-    runner.kill('SIGKILL');
-  });
+  t.after(() => runner.kill('SIGKILL'));
   const url = await runner.url;
-  browser = await launchChromium();
-  const page = await browser.newPage({ viewport: { width: 1200, height: 1000 } });
-  const pageErrors = [];
-  page.on('pageerror', (error) => pageErrors.push(error.message));
+  const { page, pageErrors } = await openPage(t, { width: 1200, height: 1000 });
   await page.goto(url);
   await page.waitForSelector('#fk-status[data-status="solved"]', { timeout: TIMEOUT_MS });
 
   // The board's listings, for the expected trims.
   const listed = await (await replyTo(runner, 'geometry'))(page);
   const settingsBefore = await config(runner, page);
-  const servos = [1, 2, 3, 4, 5, 6].map((n) => {
-    const leg = listed.find((l) => l.startsWith(`# leg ${n}:`));
-    const servo = settingsBefore.find((l) => l.startsWith(`# servo${n}:`));
-    return {
-      alpha0: (Number(leg.match(/alpha0_deg=(\S+)/)[1]) * Math.PI) / 180,
-      trim: Number(servo.match(/trim_us=(\S+)/)[1]),
-      rate: Number(servo.match(/rate_us_rad=(\S+)/)[1]),
-      sign: servo.includes('dir=reversed') ? -1 : 1,
-    };
-  });
+  const servos = servosFromListings([...listed, ...settingsBefore]);
 
   await t.test('quit after one servo: config as it was', async () => {
     await page.click('#calibrate-start');
@@ -133,10 +114,7 @@ test('the page calibration: quit leaves the settings; the whole flow saves the t
       await page.waitForSelector('#calibrate[data-stage="saved"]', { timeout: TIMEOUT_MS });
       // eq. 13 / 14 at alpha = 0: the flow starts at W0 - d r alpha0 (to 0.01 us); the trim of an
       // arm level at W is W + d r alpha0.
-      const expected = servos.map((s, i) => {
-        const start = Math.round((s.trim - s.sign * s.rate * s.alpha0) * 100) / 100;
-        return start + steps[i] + s.sign * s.rate * s.alpha0;
-      });
+      const expected = servos.map((s, i) => expectedTrim(s, steps[i]));
       const trimsIn = (lines) =>
         [1, 2, 3, 4, 5, 6].map((n) =>
           Number(lines.find((l) => l.startsWith(`# servo${n}:`)).match(/trim_us=(\S+)/)[1]),

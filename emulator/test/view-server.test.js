@@ -8,9 +8,10 @@ import assert from 'node:assert/strict';
 import { request } from 'node:http';
 import { before, test } from 'node:test';
 
-import { ListingReader, listingsChangedBy } from '../view/board-listings.js';
+import { ListingReader } from '../view/board-listings.js';
 import { EmulatedBoard } from '../src/chip/board.js';
 import { bootedBoard, firmwareBootrom } from '../src/test-support/e2e-support.js';
+import { listingsChangedBy } from '../src/view-server/listing-changes.js';
 import { SharedInput } from '../src/view-server/shared-input.js';
 import { startViewServer } from '../src/view-server/view-server.js';
 

@@ -18,10 +18,10 @@ import assert from 'node:assert/strict';
 import { test } from 'node:test';
 
 import {
-  CHROMIUM,
-  haveChromium,
-  launchChromium,
+  jogRightSampled,
+  openPage,
   readPose,
+  skipWithoutChromium,
   startRunner,
   typeLine,
   waitForPose,
@@ -83,25 +83,13 @@ async function plateEdges(page, decoder) {
 }
 
 test('the 3D view shows the pose the pins carry, tilts with a roll, and says when the emulator stops', async (t) => {
-  if (!haveChromium()) {
-    const why =
-      `SKIPPED: no Chromium at ${CHROMIUM}, so the browser test of the 3D view did not run ` +
-      `(./dev test installs Debian's chromium package with apt-get; CHROMIUM=path picks another)`;
-    console.error(why);
-    t.skip(why);
+  if (skipWithoutChromium(t, 'the browser test of the 3D view')) {
     return;
   }
   const runner = startRunner();
-  let browser;
-  t.after(async () => {
-    await browser?.close();
-    runner.kill('SIGKILL');
-  });
+  t.after(() => runner.kill('SIGKILL'));
   const url = await runner.url;
-  browser = await launchChromium();
-  const page = await browser.newPage({ viewport: { width: 1200, height: 800 } });
-  const pageErrors = [];
-  page.on('pageerror', (error) => pageErrors.push(error.message));
+  const { browser, page, pageErrors } = await openPage(t, { width: 1200, height: 800 });
   const decoder = await browser.newPage();
 
   // The side camera looks along -x from +x: the base y axis points right on the screen.
@@ -164,20 +152,13 @@ test('the 3D view shows the pose the pins carry, tilts with a roll, and says whe
     await waitForPose(page, [0, 0, 0, 0, 0, 0], JOG_TOLERANCE, SETTLE_TIMEOUT_MS);
     await page.waitForTimeout(1700); // the sliders follow the pose again
     // Five presses of the right arrow: x = 5 mm, sampled on the way (a move, never a jump).
-    const seen = new Set();
-    const sampler = setInterval(async () => {
-      const pose = await readPose(page).catch(() => null);
-      if (pose) {
-        seen.add(pose[0].toFixed(1));
-      }
-    }, 40);
-    for (let i = 0; i < 5; i++) {
-      await page.keyboard.press('ArrowRight');
-    }
-    await waitForPose(page, [5, 0, 0, 0, 0, 0], JOG_TOLERANCE, SETTLE_TIMEOUT_MS);
-    clearInterval(sampler);
-    const between = [...seen].map(Number).filter((x) => x > 0.2 && x < 4.8);
-    assert.ok(between.length >= 2, `x on the way to 5 mm: ${[...seen].join(', ')}`);
+    const { seen, between } = await jogRightSampled(page, {
+      expected: [5, 0, 0, 0, 0, 0],
+      tolerance: JOG_TOLERANCE,
+      timeout: SETTLE_TIMEOUT_MS,
+      everyMs: 40,
+    });
+    assert.ok(between.length >= 2, `x on the way to 5 mm: ${seen.join(', ')}`);
     // A slider: z to 4 mm.
     await page.locator('#jog-z').fill('4');
     await waitForPose(page, [5, 0, 4, 0, 0, 0], JOG_TOLERANCE, SETTLE_TIMEOUT_MS);

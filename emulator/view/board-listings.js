@@ -129,27 +129,3 @@ export class ListingReader {
     return { kind: 'config', config: { settings: open.settings, servos: open.servos } };
   }
 }
-
-/**
- * Which listings a command line can change, so the view asks for them again: `[]`, or some of
- * `'geometry'` and `'config'` (`defaults`; `set` of a geometry, servo or pivot setting).
- */
-export function listingsChangedBy(line) {
-  const words = line
-    .trim()
-    .toLowerCase()
-    .split(/[\s,]+/);
-  if (words[0] === 'defaults') {
-    return ['geometry', 'config'];
-  }
-  if (words[0] !== 'set' || words.length < 2) {
-    return [];
-  }
-  if (/^(base_|platform_|arm_mm$|rod_mm$)/.test(words[1])) {
-    return ['geometry'];
-  }
-  if (/^(servo|pivot_)/.test(words[1])) {
-    return ['config'];
-  }
-  return [];
-}

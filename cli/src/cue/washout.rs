@@ -490,6 +490,11 @@ mod tests {
         out
     }
 
+    /// A unit step from rest, at 1 ms steps.
+    fn unit_step(tf: &TransferFunction, until_s: f64) -> Vec<(f64, f64)> {
+        run(tf, until_s, |_| 1e-3, |_| 1.0)
+    }
+
     fn worst(out: &[(f64, f64)], want: impl Fn(f64) -> f64) -> f64 {
         out.iter()
             .map(|&(t, y)| (y - want(t)).abs())
@@ -508,7 +513,7 @@ mod tests {
                 * ((wd * t).cos() + zeta / (1.0 - zeta * zeta).sqrt() * (wd * t).sin()))
                 / (w * w)
         };
-        let out = run(&tf, 6.0, |_| 1e-3, |_| 1.0);
+        let out = unit_step(&tf, 6.0);
         // Error of order dt: the trapezoid takes the step as a ramp over the first step.
         assert!(worst(&out, want) < 2e-3 / (w * w), "{}", worst(&out, want));
         // A sustained force leaves the platform displaced by 1 / w^2: why order 3 is the
@@ -516,66 +521,66 @@ mod tests {
         assert!((out.last().unwrap().1 - 1.0 / (w * w)).abs() < 1e-4);
     }
 
-    #[test]
-    fn third_order_translation_step_rises_then_washes_back_to_centre() {
-        // HP3 / s^2 = s / ((s + a)^2 (s + b)) (zeta = 1): a unit step gives
-        // 1 / ((s + a)^2 (s + b)) = A / (s + b) - A / (s + a) + C / (s + a)^2,
-        // A = 1 / (a - b)^2, C = 1 / (b - a): y = A e^(-bt) - A e^(-at) + C t e^(-at).
+    /// The third-order translation channel of the next two tests, `a` = 1 Hz, `b` = 0.1 Hz,
+    /// zeta = 1, and its unit step response worked out by hand: HP3 / s^2 =
+    /// s / ((s + a)^2 (s + b)), so a unit step gives
+    /// 1 / ((s + a)^2 (s + b)) = A / (s + b) - A / (s + a) + C / (s + a)^2,
+    /// A = 1 / (a - b)^2, C = 1 / (b - a): y = A e^(-bt) - A e^(-at) + C t e^(-at).
+    fn third_order_step() -> (TransferFunction, impl Fn(f64) -> f64) {
         let (a, b) = (2.0 * PI * 1.0, 2.0 * PI * 0.1);
         let tf = TransferFunction::high_pass_integrated(3, a, 1.0, b, 2);
         let big_a = 1.0 / ((a - b) * (a - b));
         let c = 1.0 / (b - a);
         let want =
-            |t: f64| big_a * (-b * t).exp() - big_a * (-a * t).exp() + c * t * (-a * t).exp();
-        let out = run(&tf, 40.0, |_| 1e-3, |_| 1.0);
+            move |t: f64| big_a * (-b * t).exp() - big_a * (-a * t).exp() + c * t * (-a * t).exp();
+        (tf, want)
+    }
+
+    /// The largest output's size; asserts that no output is further from `want` than
+    /// `tolerance` of it.
+    fn assert_within_of_peak(out: &[(f64, f64)], want: impl Fn(f64) -> f64, tolerance: f64) -> f64 {
         let peak = out.iter().map(|p| p.1.abs()).fold(0.0, f64::max);
         assert!(
-            worst(&out, want) < 2e-3 * peak,
+            worst(out, &want) < tolerance * peak,
             "{} of {peak}",
-            worst(&out, want)
+            worst(out, &want)
         );
+        peak
+    }
+
+    #[test]
+    fn third_order_translation_step_rises_then_washes_back_to_centre() {
+        let (tf, want) = third_order_step();
+        let out = unit_step(&tf, 40.0);
+        let peak = assert_within_of_peak(&out, want, 2e-3);
         assert!(out.last().unwrap().1.abs() < 1e-3 * peak);
     }
 
     #[test]
     fn a_changing_time_step_gives_the_same_response() {
         // The simulation's steps vary: 0.5 to 2.1 ms here, in a fixed pseudo-random order.
-        let (a, b) = (2.0 * PI * 1.0, 2.0 * PI * 0.1);
-        let tf = TransferFunction::high_pass_integrated(3, a, 1.0, b, 2);
-        let big_a = 1.0 / ((a - b) * (a - b));
-        let c = 1.0 / (b - a);
-        let want =
-            |t: f64| big_a * (-b * t).exp() - big_a * (-a * t).exp() + c * t * (-a * t).exp();
+        let (tf, want) = third_order_step();
         let dt = |k: usize| 5e-4 + 1.6e-3 * (((k * 7919) % 101) as f64 / 100.0);
         let out = run(&tf, 10.0, dt, |_| 1.0);
-        let peak = out.iter().map(|p| p.1.abs()).fold(0.0, f64::max);
-        assert!(
-            worst(&out, want) < 4e-3 * peak,
-            "{} of {peak}",
-            worst(&out, want)
-        );
+        assert_within_of_peak(&out, want, 4e-3);
     }
 
     #[test]
     fn rotation_channels_steps() {
         // Order 2: s / (s + w)^2 -> t e^(-wt); order 1: 1 / (s + w) -> (1 - e^(-wt)) / w.
         let w = 2.0 * PI * 0.2;
-        let two = run(
+        let two = unit_step(
             &TransferFunction::high_pass_integrated(2, w, 1.0, 0.0, 1),
             20.0,
-            |_| 1e-3,
-            |_| 1.0,
         );
         assert!(
             worst(&two, |t| t * (-w * t).exp()) < 1e-3,
             "{}",
             worst(&two, |t| t * (-w * t).exp())
         );
-        let one = run(
+        let one = unit_step(
             &TransferFunction::high_pass_integrated(1, w, 1.0, 0.0, 1),
             20.0,
-            |_| 1e-3,
-            |_| 1.0,
         );
         let want = |t: f64| (1.0 - (-w * t).exp()) / w;
         assert!(worst(&one, want) < 1e-3, "{}", worst(&one, want));
@@ -626,6 +631,19 @@ mod tests {
         (s.hypot(c), c.atan2(s))
     }
 
+    /// Asserts a filter's measured response to `sin(2 pi f t)` is `h`: its amplitude within
+    /// 1 %, its phase within 0.02 rad.
+    fn assert_response(tf: &TransferFunction, f: f64, h: C) {
+        let (amp, phase) = measured(tf, f);
+        assert!(
+            (amp / h.abs() - 1.0).abs() < 0.01,
+            "{f} Hz: {amp} vs {}",
+            h.abs()
+        );
+        let dphase = (phase - h.arg() + PI).rem_euclid(2.0 * PI) - PI;
+        assert!(dphase.abs() < 0.02, "{f} Hz: phase {phase} vs {}", h.arg());
+    }
+
     #[test]
     fn frequency_responses_match_h_of_jw() {
         let (w0, zeta, wb) = (2.0 * PI * 1.0, 0.8, 2.0 * PI * 0.1);
@@ -635,27 +653,14 @@ mod tests {
             let quad = C(quad.0 + w0 * w0, quad.1 + 2.0 * zeta * w0 * jw.1);
             // Translation, order 3: jw / ((jw^2 + 2 zeta w0 jw + w0^2)(jw + wb)).
             let h3 = jw.div(quad.mul(C(wb, jw.1)));
-            let (amp, phase) = measured(
+            assert_response(
                 &TransferFunction::high_pass_integrated(3, w0, zeta, wb, 2),
                 f,
+                h3,
             );
-            assert!(
-                (amp / h3.abs() - 1.0).abs() < 0.01,
-                "{f} Hz: {amp} vs {}",
-                h3.abs()
-            );
-            let dphase = (phase - h3.arg() + PI).rem_euclid(2.0 * PI) - PI;
-            assert!(dphase.abs() < 0.02, "{f} Hz: phase {phase} vs {}", h3.arg());
             // Tilt low pass, order 2: w0^2 / (jw^2 + 2 zeta w0 jw + w0^2).
             let lp = C(w0 * w0, 0.0).div(quad);
-            let (amp, phase) = measured(&TransferFunction::low_pass(2, w0, zeta), f);
-            assert!(
-                (amp / lp.abs() - 1.0).abs() < 0.01,
-                "{f} Hz: {amp} vs {}",
-                lp.abs()
-            );
-            let dphase = (phase - lp.arg() + PI).rem_euclid(2.0 * PI) - PI;
-            assert!(dphase.abs() < 0.02, "{f} Hz: phase {phase} vs {}", lp.arg());
+            assert_response(&TransferFunction::low_pass(2, w0, zeta), f, lp);
         }
     }
 

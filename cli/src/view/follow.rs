@@ -15,25 +15,40 @@ use crate::link::{Link, Reply};
 /// Most updates a second the view asks for (a page draws at most about 60 frames a second).
 pub const MAX_RATE_HZ: f64 = 60.0;
 
-/// Which listings a line may change (so they are asked again): `defaults`, a `set` of a
-/// geometry or servo setting; anything else changes neither.
-pub fn listings_changed_by(line: &str) -> &'static [&'static str] {
+/// The rule of which listings a command line can change, shared with `./dev run`'s view server
+/// (`emulator/src/view-server/listing-changes.js` reads the same file): a rule a line, the
+/// line's first words (`*` at a word's end: any word that starts so), `->`, the listings.
+const LISTING_CHANGES: &str = include_str!("../../../emulator/src/view-server/listing-changes.txt");
+
+/// A line's words as the board reads them: split at spaces, tabs and commas.
+fn words(line: &str) -> impl Iterator<Item = &str> {
+    line.split([' ', '\t', ',']).filter(|w| !w.is_empty())
+}
+
+/// Which listings a line may change (so they are asked again), by the first rule of
+/// `LISTING_CHANGES` whose words begin the line (compared without case): `defaults`, a `set`
+/// of a geometry, servo or pivot setting; anything else changes neither.
+pub fn listings_changed_by(line: &str) -> Vec<&'static str> {
     let lower = line.trim().to_ascii_lowercase();
-    let mut words = lower.split([' ', '\t', ',']).filter(|w| !w.is_empty());
-    match (words.next(), words.next()) {
-        (Some("defaults"), _) => &["geometry", "config"],
-        (Some("set"), Some(name))
-            if name.starts_with("base_")
-                || name.starts_with("platform_")
-                || name == "arm_mm"
-                || name == "rod_mm"
-                || name == "layout" =>
-        {
-            &["geometry"]
-        }
-        (Some("set"), Some(name)) if name.starts_with("servo") => &["config"],
-        _ => &[],
-    }
+    let said: Vec<&str> = words(&lower).collect();
+    let matches = |pattern: &str, word: &str| match pattern.strip_suffix('*') {
+        Some(start) => word.starts_with(start),
+        None => word == pattern,
+    };
+    LISTING_CHANGES
+        .lines()
+        .filter(|rule| !rule.trim().is_empty() && !rule.starts_with('#'))
+        .filter_map(|rule| rule.split_once("->"))
+        .find(|(pattern, _)| {
+            let pattern: Vec<&str> = words(pattern).collect();
+            pattern.len() <= said.len()
+                && pattern
+                    .iter()
+                    .zip(&said)
+                    .all(|(p, w)| matches(&p.to_ascii_lowercase(), w))
+        })
+        .map(|(_, listings)| words(listings).collect())
+        .unwrap_or_default()
 }
 
 /// The six widths of a `pulses` reply (`# pulse_us: 1500.00 ...`), or `None`.
@@ -138,7 +153,7 @@ fn run_job(link: &mut Link, pages: &Mutex<Pages>, job: Job) -> Result<(), Error>
             let _ = answer.send(reply);
         }
     }
-    ask_listings(link, pages, listings_changed_by(&line))
+    ask_listings(link, pages, &listings_changed_by(&line))
 }
 
 /// Starts following the board on `link` in a thread of its own; returns the jobs' sender, the
@@ -176,6 +191,33 @@ mod tests {
         assert_eq!(listings_changed_by("defaults"), ["geometry", "config"]);
         assert!(listings_changed_by("set speed_mm_s 10").is_empty());
         assert!(listings_changed_by("pose 0 0 5 0 0 0").is_empty());
+        // The pivot is in `config` (the page's kinematics turn about it).
+        assert_eq!(listings_changed_by("set pivot_z_mm 100"), ["config"]);
+        assert_eq!(
+            listings_changed_by("set\tplatform_radius_mm,55"),
+            ["geometry"]
+        );
+        assert!(listings_changed_by("").is_empty());
+        assert!(listings_changed_by("set").is_empty());
+    }
+
+    #[test]
+    fn every_rule_is_words_then_known_listings() {
+        let rules: Vec<&str> = LISTING_CHANGES
+            .lines()
+            .filter(|l| !l.trim().is_empty() && !l.starts_with('#'))
+            .collect();
+        assert!(rules.len() >= 7, "{rules:?}");
+        for rule in rules {
+            let (pattern, listings) = rule.split_once("->").expect("words -> listings");
+            assert!(words(pattern).next().is_some(), "{rule}");
+            let listings: Vec<&str> = words(listings).collect();
+            assert!(!listings.is_empty(), "{rule}");
+            assert!(
+                listings.iter().all(|l| ["geometry", "config"].contains(l)),
+                "{rule}"
+            );
+        }
     }
 
     #[test]

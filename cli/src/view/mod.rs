@@ -4,7 +4,8 @@
 //! second; between two queries it sends the lines typed on the page (their replies go to the
 //! page's terminal) and the page's own commands (the jog: their replies go back to the page
 //! only). The board's `geometry` and `config` listings are asked at the start and after a line
-//! that may change them, and passed to the page as the board wrote them (the page reads them
+//! that may change them (the rule shared with `./dev run`'s server, a data file both read:
+//! `emulator/src/view-server/listing-changes.txt`), and passed to the page as the board wrote them (the page reads them
 //! with `board-listings.js`). The query traffic never shows in the page's terminal.
 //!
 //! The wire, per update: `pulses` and its line end out (7 bytes), `# pulse_us: ` and six widths

@@ -24,10 +24,11 @@
 //!   between slices.
 //!
 //! One job at a time: while [`Controller::is_busy`], the board feeds no bytes (they wait in the
-//! link's receive queue, or the USB host waits). A move checked while the platform moves, with
-//! an acceleration limit set and no servo speed rated, is a blend ([`crate::motion::blend`]): the motion goes on while
-//! it is checked, and it takes over at a hand-over frame planned ahead (`moves.rs`). Without an
-//! acceleration limit (or while streaming, or with servo speed ratings), the platform holds where it was when the command
+//! link's receive queue, or the USB host waits). A move checked while the platform moves (or a
+//! stream is tracked), with an acceleration limit set, is a blend ([`crate::motion::blend`],
+//! within the servos' rated speeds if they have any): the motion goes on while it is checked,
+//! and it takes over at a hand-over frame planned ahead (`moves.rs`). Without an acceleration
+//! limit (or while a stream is passed through), the platform holds where it was when the command
 //! arrived until the check ends (a few milliseconds; at most about 150 ms on the RP2040 for the
 //! longest check), then starts from there. A refused move lets the move in progress go on.
 //! `check` does not hold anything.
@@ -591,12 +592,8 @@ impl<M: Math> Controller<M> {
         };
         match self.job.as_mut()? {
             Job::Path(path) if path.replan => {
-                // A missed hand-over: planned again from here, in a slice of its own.
-                let target = *path.plan.target();
-                let (plan, hand_over) = self.blend_plan(target, self.speed_limits());
-                if let Some(Job::Path(path)) = &mut self.job {
-                    *path = path.replanned(plan, hand_over);
-                }
+                // Planned (again) from the motion as it is now, in a slice of its own.
+                self.replan();
                 None
             }
             Job::Path(path) => {
@@ -604,8 +601,11 @@ impl<M: Math> Controller<M> {
                 // Copied out (not the whole job, which `take` would move), then ended.
                 let path = *path;
                 self.job = None;
-                let missed =
-                    result.is_ok() && !self.estop.stops_motion() && self.missed_hand_over(&path);
+                // (`check` takes nothing over: what it checked is what it reports.)
+                let missed = result.is_ok()
+                    && path.purpose != Purpose::Check
+                    && !self.estop.stops_motion()
+                    && self.missed_hand_over(&path);
                 self.learn_check_rate(&path, missed);
                 if missed {
                     // Too late to take over as planned: planned (next slice) and checked again.

@@ -13,25 +13,37 @@
 //!
 //! A new target while moving, with an acceleration limit set: a blend
 //! ([`crate::motion::blend`]), checked while the motion in progress goes on. It takes over at
-//! the hand-over, a frame chosen when the line arrives, as far ahead as the check is expected
+//! the hand-over, a frame chosen in the job's first slice (the line's own pass has parsed it and
+//! solved the target: [`Controller::replan`]), as far ahead as the check is expected
 //! to take (its number of poses over the poses a frame has been seen to fit, `check_rate`,
 //! with a quarter to spare), and it is planned from the pose and velocity the motion will have
 //! then ([`crate::motion::Motion::state_after`]), so the path checked is the path taken. A
 //! check that ends after its hand-over (or after the motion changed: a fault) is planned and
 //! checked again from the motion as it is then, with half the rate; the motion goes on
 //! meanwhile. A blend waiting for its hand-over is replaced by the next target's, which
-//! therefore takes over no later than it would. Without an acceleration limit, while
-//! streaming, or with servo speed ratings set (a known limit: a blend is not yet planned or
-//! measured within the ratings), the platform holds during the check and starts from rest
-//! (the speed may jump).
+//! therefore takes over no later than it would. Without an acceleration limit (or while a
+//! stream is passed through), the platform holds during the check and starts from rest (the
+//! speed may jump).
+//!
+//! With servo speed ratings a blend is planned first no faster than the arm angles at its ends
+//! allow, then its check measures every frame's arm turns against the ratings and, if one is
+//! too fast, it is planned again from the motion as it is then, slower
+//! (`path.rs`, `FrameTurns`; at most four passes, the last braking to rest at its corner).
+//!
+//! A move while a stream is tracked (its limits on, the tracker moving): the stream ends as
+//! the move's check begins (its first slice) and its motion goes on as a planned one, a blend from the tracker's pose
+//! and velocity to the stream's goal ([`Controller::stream_as_motion`]), which the move takes
+//! over from like any motion in progress. `check` plans the same as a `pose` at that moment
+//! would (from the stream as a motion, without ending it), and takes nothing over.
 
 use kinematics_core::{Math, Pose};
 
-use super::path::{HandOver, PathCheck, Purpose};
+use super::path::{FrameTurns, HandOver, PathCheck, Purpose};
 use super::{Begun, Controller, Done, Job};
 use crate::error::Error;
 use crate::motion::{Motion, Plan, Segment, SpeedLimits};
 use crate::report::{Listing, Notice};
+use crate::servo_speed::ServoSpeeds;
 
 /// The most frames a blend's hand-over is put ahead (10 s at 50 Hz, 1.5 s at 333 Hz; a check
 /// takes about 0.2 s at most, 0.7 s with torque ratings).
@@ -50,16 +62,21 @@ impl<M: Math> Controller<M> {
 
     pub(super) fn move_to(&mut self, target: Pose) -> Result<Begun, Error> {
         let limits = self.speed_limits();
-        // (With servo speed ratings a move takes as long as the servos need: never a jump.)
-        let jump =
-            !(limits.mm_per_s > 0.0 || limits.deg_per_s > 0.0 || self.settings.servo_speed.rated());
+        let jump = self.jumps(&limits);
         self.start_path(target, limits, Purpose::Move { jump })
     }
 
+    /// Whether a move at `limits` is a jump: no speed limit and no servo speed rating (with
+    /// ratings a move takes as long as the servos need).
+    fn jumps(&self, limits: &SpeedLimits) -> bool {
+        !(limits.mm_per_s > 0.0 || limits.deg_per_s > 0.0 || self.settings.servo_speed.rated())
+    }
+
     /// Checks the target now (its error is the most useful one), then starts the check of the
-    /// path to it as a job: the straight line from the current pose, or, for a move while the
-    /// platform moves with an acceleration limit set, a blend from the motion in progress
-    /// ([`Controller::blend_plan`]).
+    /// path to it as a job: the straight line from the current pose, or, for a move (or
+    /// `check`) while the platform moves with an acceleration limit set, a blend from the
+    /// motion in progress ([`Controller::blend_plan`]); a stream being tracked is that motion
+    /// once it is planned ([`Controller::stream_as_motion`]).
     pub(super) fn start_path(
         &mut self,
         target: Pose,
@@ -71,34 +88,124 @@ impl<M: Math> Controller<M> {
             return Err(Error::NoPose(e));
         }
         let solution = self.solver.solve::<M>(&self.settings.servos, &target)?;
-        // With servo speed ratings a new target while moving does not blend (a known limit,
-        // docs/commands.md): the straight move from rest within the ratings, as below.
-        let blends = purpose == Purpose::Move { jump: false }
-            && (limits.mm_per_s2 > 0.0 || limits.deg_per_s2 > 0.0)
-            && !self.is_streaming()
-            && !self.settings.servo_speed.rated();
-        let (plan, hand_over, servo_time) = if blends {
-            let (plan, hand_over) = self.blend_plan(target, limits);
-            (plan, hand_over, None)
+        let accel = limits.mm_per_s2 > 0.0 || limits.deg_per_s2 > 0.0;
+        let blends = accel
+            && match purpose {
+                Purpose::Move { jump } => !jump,
+                Purpose::Check => !self.jumps(&limits),
+                _ => false,
+            };
+        // Blended into: the motion in progress, or a stream being tracked (which goes on as a
+        // planned motion: [`Controller::stream_as_motion`]).
+        let takes_over = blends && (self.motion.is_moving() || self.tracks_stream());
+        let rated = self.settings.servo_speed.rated();
+        let (plan, hand_over, servo_time, frame_turns) = if takes_over {
+            let hz = f32::from(self.settings.frame_hz);
+            let turns = rated.then(|| {
+                // First planned at most as fast as the arm angles at its two ends allow (the
+                // servos' now, the target's), then measured frame by frame (`path.rs`).
+                let least = self
+                    .settings
+                    .servo_speed
+                    .least_time_s(&self.solution.arm_rad, &solution.arm_rad);
+                let here = self.motion.pose();
+                let capped = ServoSpeeds::capped_limits(limits, here, &target, least);
+                FrameTurns::new(capped, 1.0, hz)
+            });
+            // The blend is planned in the job's first slice (`Controller::replan`), from the
+            // motion as it is then: this pass has parsed the line and solved the target.
+            let placeholder = Segment::plan(*self.motion.pose(), target, limits, hz);
+            (Plan::Straight(placeholder), None, None, turns)
         } else {
             // Within the servos' rated speeds, if they have any (`controller/servo_speed.rs`).
             let (segment, servo_time) = self.plan_within_servo_speed(target, &solution, limits);
-            (Plan::Straight(segment), None, servo_time)
+            (Plan::Straight(segment), None, servo_time, None)
         };
         // A move checked while moving (or streaming) without a blend: the platform holds here
         // until the check ends.
         self.holding = purpose != Purpose::Check
-            && hand_over.is_none()
+            && !takes_over
             && (self.motion.is_moving() || self.is_streaming());
-        self.job = Some(Job::Path(PathCheck::new(
+        let path = PathCheck::new(
             purpose,
             solution,
             plan,
             hand_over,
             &self.settings,
             servo_time,
-        )));
+            frame_turns,
+        );
+        self.job = Some(Job::Path(if takes_over { path.to_replan() } else { path }));
         Ok(Begun::Pending)
+    }
+
+    /// The slice that plans (again) the move of a path check that takes over from the motion
+    /// in progress: its first slice, after a missed hand-over, or after its arms were found too
+    /// fast for their ratings; with the limits the ratings need, from the motion as it is now
+    /// (a stream being tracked becomes that motion here, for a move; `check` only plans from
+    /// it).
+    pub(super) fn replan(&mut self) {
+        let Some(Job::Path(path)) = &self.job else {
+            return;
+        };
+        let (target, purpose) = (*path.plan.target(), path.purpose);
+        let (limits, corner) = path
+            .frame_turns
+            .map_or((self.speed_limits(), 1.0), |t| (t.limits, t.corner_scale));
+        let motion = match self.stream_as_motion() {
+            Some(motion) if purpose != Purpose::Check => {
+                // A move ends the stream; its motion goes on, planned.
+                self.stream = None;
+                self.motion = motion;
+                motion
+            }
+            Some(motion) => motion,
+            None => self.motion,
+        };
+        let (plan, hand_over) = self.blend_plan(&motion, target, limits, corner);
+        if let Some(Job::Path(path)) = &mut self.job {
+            *path = path.replanned(plan, hand_over);
+        }
+    }
+
+    /// A stream is being tracked (not passed through) and its tracker moves.
+    fn tracks_stream(&self) -> bool {
+        self.stream
+            .as_ref()
+            .is_some_and(|s| !s.tracker.at_rest() && !self.passes_through())
+    }
+
+    /// The stream's tracker, moving, as a planned motion: from its pose and velocity, a blend
+    /// to the stream's goal within the move's limits (with servo speed ratings, braking to rest
+    /// first and on from rest no faster than the arm angles at the goal allow), so that a move
+    /// can take over from it. `None` when no stream is being tracked (pass-through, or none),
+    /// or its tracker is at rest.
+    fn stream_as_motion(&self) -> Option<Motion> {
+        if !self.tracks_stream() {
+            return None;
+        }
+        let stream = self.stream.as_ref()?;
+        let hz = f32::from(self.settings.frame_hz.max(1));
+        let rate = stream.tracker.rate_per_frame(1.0 / hz);
+        let pose = stream.tracker.pose();
+        let mut limits = self.speed_limits();
+        let mut corner = 1.0;
+        if self.settings.servo_speed.rated() {
+            let goal = self
+                .solver
+                .solve::<M>(&self.settings.servos, &stream.goal)
+                .ok()?;
+            let least = self
+                .settings
+                .servo_speed
+                .least_time_s(&self.solution.arm_rad, &goal.arm_rad);
+            limits = ServoSpeeds::capped_limits(limits, &pose, &stream.goal, least);
+            corner = 0.0;
+        }
+        let plan = Plan::after_within::<M>(pose, rate, stream.goal, limits, corner, hz);
+        let mut motion = Motion::new(pose);
+        motion.start_after(plan, 0);
+        Some(motion)
     }
 
     /// The straight move from the current pose.
@@ -107,22 +214,29 @@ impl<M: Math> Controller<M> {
         Plan::Straight(Segment::plan(*self.motion.pose(), target, limits, hz))
     }
 
-    /// The move to `target` taking over from the motion in progress a few frames from now,
-    /// when its check will have ended (the hand-over): planned from the pose and velocity the
-    /// motion will have then, so the motion goes on while the check runs and the path checked
-    /// is the path taken. The lead is the check's size over the checks a frame has been
+    /// The move to `target` taking over from `motion` (the motion in progress) a few frames
+    /// from now, when its check will have ended (the hand-over): planned from the pose and
+    /// velocity the motion will have then (a blend taking `corner` of its largest corner
+    /// velocity), so the motion goes on while the check runs and the path checked is the path
+    /// taken. The lead is the check's size over the checks a frame has been
     /// seen to fit (`check_rate`), with a quarter to spare: planned first with the lead the
     /// last blend's size needed, and again if this one needs more, or much less. A check that ends too
     /// late is planned and checked again ([`Controller::missed_hand_over`]). Standing still:
     /// the straight move.
-    pub(super) fn blend_plan(&self, target: Pose, limits: SpeedLimits) -> (Plan, Option<HandOver>) {
-        if !self.motion.is_moving() {
+    pub(super) fn blend_plan(
+        &self,
+        motion: &Motion,
+        target: Pose,
+        limits: SpeedLimits,
+        corner: f32,
+    ) -> (Plan, Option<HandOver>) {
+        if !motion.is_moving() {
             return (self.straight_plan(target, limits), None);
         }
         let hz = f32::from(self.settings.frame_hz);
         let plan_after = |lead: u32| {
-            let (pose, rate) = self.motion.state_after(lead);
-            let plan = Plan::after::<M>(pose, rate, target, limits, hz);
+            let (pose, rate) = motion.state_after(lead);
+            let plan = Plan::after_within::<M>(pose, rate, target, limits, corner, hz);
             let hand_over = HandOver {
                 begun: self.frame_ticks,
                 at: self.frame_ticks.wrapping_add(lead),
@@ -133,7 +247,7 @@ impl<M: Math> Controller<M> {
         };
         // A move queued and not started yet is replaced, so the new one takes over no later
         // than it would (if the check takes longer, it is planned again once that one runs).
-        let latest = self.motion.queued_after().unwrap_or(MAX_LEAD_FRAMES);
+        let latest = motion.queued_after().unwrap_or(MAX_LEAD_FRAMES);
         let lead_for = |checks: u32| {
             let lead = (checks.saturating_mul(5) / 4).div_ceil(self.check_rate.max(1));
             lead.clamp(1, MAX_LEAD_FRAMES).min(latest)
@@ -512,59 +626,135 @@ mod tests {
         assert_eq!(*c.pose(), *untouched.pose());
     }
 
+    /// Per frame, the largest share of its rating any arm turned by (from the pulses, eq. 13,
+    /// 14: an arm turns by |dW| / r).
+    fn rating_shares(c: &crate::Controller, pulses: &[[f32; 6]]) -> std::vec::Vec<f32> {
+        let s = c.settings();
+        let dt = 1.0 / f32::from(s.frame_hz);
+        pulses
+            .windows(2)
+            .map(|w| {
+                (0..6)
+                    .map(|i| {
+                        let turn = (w[1][i] - w[0][i]).abs() / s.servos.0[i].rate_us_per_rad;
+                        let rated = core::f32::consts::FRAC_PI_3 / s.servo_speed.s_per_60deg[i];
+                        turn / (rated * dt)
+                    })
+                    .fold(0.0, f32::max)
+            })
+            .collect()
+    }
+
+    /// Per frame, the change of velocity of the linear (mm) and angular (deg) groups, Euclidean.
+    fn velocity_changes(poses: &[Pose]) -> std::vec::Vec<[f32; 2]> {
+        let v: std::vec::Vec<[f32; 6]> = poses
+            .windows(2)
+            .map(|w| {
+                let (a, b) = (w[0].to_array(), w[1].to_array());
+                core::array::from_fn(|i| {
+                    let d = b[i] - a[i];
+                    if i < 3 {
+                        d
+                    } else {
+                        d.to_degrees()
+                    }
+                })
+            })
+            .collect();
+        v.windows(2)
+            .map(|w| {
+                let n = |r: core::ops::Range<usize>| {
+                    libm::sqrtf(r.map(|i| (w[1][i] - w[0][i]).powi(2)).sum())
+                };
+                [n(0..3), n(3..6)]
+            })
+            .collect()
+    }
+
     #[test]
-    fn with_servo_speed_ratings_a_new_target_holds_for_its_check_then_starts_from_rest() {
-        // The known limit (docs/commands.md): with ratings set nothing is blended; the same
-        // lines without ratings blend in (the contrast, so the rule is what is pinned).
-        for rated in [true, false] {
-            let (mut c, mut link) = (quiet(), program());
-            let mut out = std::string::String::new();
-            if rated {
-                c.execute_line(&mut link, "set servos.speed_s_60deg 0.1", &mut out);
-            }
-            c.execute_line(&mut link, "set speed_mm_s 40", &mut out);
-            c.execute_line(&mut link, "set accel_mm_s2 200", &mut out);
-            c.execute_line(&mut link, "pose 0 0 10 0 0 0", &mut out);
-            assert!(!out.contains("error"), "{out}");
-            let mut poses = std::vec![*c.pose()];
-            for _ in 0..10 {
-                c.on_frame();
-                poses.push(*c.pose());
-            }
-            let here = *c.pose();
-            assert!(here.z_mm > 1.0 && c.is_moving(), "{here:?}");
-            let before = poses.len();
-            let reply = line_while_moving(&mut c, &mut link, "pose 0 0 -5 0 0 0", 6, &mut poses);
-            assert_eq!(reply, "ok\r\n");
-            let during = &poses[before..];
-            assert!(during.len() > 1, "the check took frames: {}", during.len());
-            if rated {
-                assert!(
-                    during.iter().all(|p| *p == here),
-                    "held where it was during the check: {during:?}"
-                );
-            } else {
-                assert!(
-                    during[0] != here && during[1] != during[0],
-                    "moving on during the check: {during:?}"
-                );
-            }
-            let last = poses.len() - 1;
-            c.on_frame();
-            poses.push(*c.pose());
-            let first = poses[last + 1].z_mm - poses[last].z_mm;
-            if rated {
-                // From rest, downwards: at most the acceleration of one frame
-                // (200 mm/s2 at 50 Hz: 0.08 mm per frame per frame).
-                assert!(first < 0.0 && first > -0.08 - 1e-4, "first step {first}");
-            }
-            while c.is_moving() {
-                c.on_frame();
-                poses.push(*c.pose());
-            }
-            assert_eq!(*c.pose(), Pose::from_degrees(0.0, 0.0, -5.0, 0.0, 0.0, 0.0));
-            assert!(c.fault().is_none());
+    fn with_servo_speed_ratings_a_new_target_blends_in_within_the_ratings_and_the_limits() {
+        // (Until now, with ratings a new target while moving held the platform during its
+        // check and started from rest; now it blends in as without ratings, slowed where an
+        // arm would turn faster than its rating.) Targets every 5 frames, across and turning,
+        // each checked over a frame or more (six slices a frame).
+        let (mut c, mut link) = (quiet(), program());
+        let mut out = std::string::String::new();
+        for line in [
+            "set servos.speed_s_60deg 0.4",
+            "set servo4.speed_s_60deg 0.6",
+            "set speed_mm_s 60",
+            "set speed_deg_s 60",
+            "set accel_mm_s2 300",
+            "set accel_deg_s2 300",
+            "pose 0 0 10 0 0 0",
+        ] {
+            c.execute_line(&mut link, line, &mut out);
         }
+        assert!(!out.contains("error"), "{out}");
+        let (mut poses, mut pulses) = (std::vec![*c.pose()], std::vec![c.pulses_us()]);
+        for _ in 0..8 {
+            pulses.push(c.on_frame());
+            poses.push(*c.pose());
+        }
+        let lines = [
+            "pose 15 0 0 0 0 10",
+            "nudge z=-4",
+            "pose -12 5 -3 0 5 -8",
+            "pose -12 -5 -3 0 -5 8",
+            "move x=10",
+            "home",
+        ];
+        for line in lines {
+            let before = poses.len();
+            let mut reply = std::string::String::new();
+            for &b in line.as_bytes().iter().chain(b"\n") {
+                c.on_byte(&mut link, b, &mut reply);
+            }
+            while link.awaits_reply() {
+                pulses.push(c.on_frame());
+                poses.push(*c.pose());
+                for _ in 0..6 {
+                    c.work(&mut link, &mut reply);
+                }
+            }
+            assert_eq!(reply, "ok\r\n", "{line}");
+            assert!(
+                poses[before - 1..].windows(2).all(|w| w[0] != w[1]),
+                "{line}: held during its check"
+            );
+            while poses.len() - before < 5 {
+                pulses.push(c.on_frame());
+                poses.push(*c.pose());
+            }
+        }
+        while c.is_moving() {
+            pulses.push(c.on_frame());
+            poses.push(*c.pose());
+        }
+        assert_eq!(*c.pose(), Pose::HOME);
+        assert!(c.fault().is_none());
+        // No arm faster than its rating in any frame; and the ratings set the pace somewhere.
+        let shares = rating_shares(&c, &pulses);
+        let most = shares.iter().copied().fold(0.0, f32::max);
+        assert!(most <= 1.0001, "{shares:?}");
+        assert!(most > 0.8, "the ratings never bound: {most}");
+        // Within the acceleration limits at every frame (300 mm/s2 and deg/s2 at 50 Hz: 0.12
+        // per frame per frame; f32 rounding of poses of tens of mm: 1e-4).
+        for (k, d) in velocity_changes(&poses).iter().enumerate() {
+            assert!(
+                d[0] <= 0.12 + 2e-4 && d[1] <= 0.12 + 2e-4,
+                "frame {}: {d:?}",
+                k + 1
+            );
+        }
+        // Never held still mid-way: no two frames in a row without a step before it arrived.
+        let end = poses.iter().rposition(|p| *p != Pose::HOME).unwrap();
+        assert!(
+            poses[..=end]
+                .windows(3)
+                .all(|w| w[0] != w[1] || w[1] != w[2]),
+            "held still"
+        );
     }
 
     #[test]
@@ -581,6 +771,56 @@ mod tests {
         assert!(!c.is_moving());
         // The hold of `a_move_checked_while_moving_holds_the_platform_then_starts_from_there`
         // is the rule with speed limits and no acceleration limit.
+    }
+
+    #[test]
+    fn check_while_moving_reports_the_blend_a_pose_would_take() {
+        // Going up at 40 mm/s, `check` of a target below: a `pose` would brake (0.2 s) and
+        // come back, which takes longer than the straight line from rest `check` used to give.
+        let (mut c, mut link) = (quiet(), program());
+        let mut out = std::string::String::new();
+        for line in [
+            "set speed_mm_s 40",
+            "set accel_mm_s2 200",
+            "pose 0 0 12 0 0 0",
+        ] {
+            c.execute_line(&mut link, line, &mut out);
+        }
+        for _ in 0..10 {
+            c.on_frame();
+        }
+        let target = Pose::from_degrees(0.0, 0.0, -4.0, 0.0, 0.0, 0.0);
+        let from_rest =
+            crate::motion::Segment::plan(*c.pose(), target, c.speed_limits(), 50.0).frames();
+        let mut twin = c.clone();
+        let mut twin_link = link.clone();
+        let mut poses = std::vec::Vec::new();
+        let reply = line_while_moving(&mut c, &mut link, "check 0 0 -4 0 0 0", 6, &mut poses);
+        let duration: f32 = reply
+            .lines()
+            .find_map(|l| l.strip_prefix("# duration_s: "))
+            .unwrap()
+            .parse()
+            .unwrap();
+        let frames = (duration * 50.0).round() as u32;
+        // The same line as a `pose`, from the same moment: frames from the line to arrival.
+        let mut seen = std::vec::Vec::new();
+        let reply = line_while_moving(&mut twin, &mut twin_link, "pose 0 0 -4 0 0 0", 6, &mut seen);
+        assert_eq!(reply, "ok\r\n");
+        let mut taken = seen.len() as u32;
+        while twin.is_moving() {
+            twin.on_frame();
+            taken += 1;
+        }
+        // From its hand-over (a few frames after the line: the check's expected length, with
+        // a quarter to spare) to arrival.
+        assert!(frames <= taken && taken <= frames + 8, "{frames} {taken}");
+        assert!(frames > from_rest + 4, "{frames} vs {from_rest} from rest");
+        // And nothing moved differently for it.
+        assert_eq!(
+            *c.target(),
+            Pose::from_degrees(0.0, 0.0, 12.0, 0.0, 0.0, 0.0)
+        );
     }
 
     #[test]

@@ -6,8 +6,9 @@
 //! to (a move, a jump, `check`'s listing, the way home) is the controller's
 //! (`controller/moves.rs`). With servo speed ratings ([`crate::servo_speed`]) the check also
 //! measures the path time from its IK solutions ([`ServoTime`]), and if the move was planned
-//! too fast for it, plans it again and checks the new plan's poses (straight moves only: with
-//! ratings a new target while moving does not blend).
+//! too fast for it, plans it again and checks the new plan's poses; a move taken over while
+//! moving (a blend, `controller/moves.rs`) has its frames' arm turns measured instead
+//! ([`FrameTurns`]), and is planned again, slower, until they are within the ratings.
 
 use kinematics_core::ik::Solution;
 use kinematics_core::{Math, Pose, LEGS};
@@ -16,7 +17,7 @@ use super::pose_check::{PoseCheck, Torques};
 use crate::error::Error;
 use crate::motion::{Plan, PlanCheckpoints, Segment, SpeedLimits};
 use crate::payload::TorqueError;
-use crate::servo_speed::{PathTime, ServoSpeeds};
+use crate::servo_speed::{PathTime, ServoSpeeds, PLAN_MARGIN};
 use crate::settings::Settings;
 
 /// What a checked path is for.
@@ -80,6 +81,120 @@ pub(super) struct PathCheck {
     torque: Option<Option<Torques>>,
     /// With servo speed ratings, on the first pass over the path: its time being measured.
     servo_time: Option<ServoTime>,
+    /// With servo speed ratings, a move taken over while moving: its frames' arm turns being
+    /// measured, on every pass.
+    pub frame_turns: Option<FrameTurns>,
+}
+
+/// The most passes a rated move taken over while moving is planned and checked (the last
+/// plan brakes to rest at its corner, then goes on from rest, and is taken as measured).
+pub(super) const MAX_RATED_PASSES: u32 = 4;
+
+/// With servo speed ratings, a move taken over while moving (a blend from the motion in
+/// progress, or a straight move from where it ends): the arm turns between its checkpoints,
+/// from their IK solutions, over the fewest frames the plan takes between them
+/// ([`Plan::frames_spanned`]), against each servo's rating; and the limits it was planned with,
+/// which a pass that finds an arm too fast tightens for the next plan (see
+/// [`FrameTurns::tightened`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct FrameTurns {
+    /// The speed limits the plan was made with (the move's own, capped).
+    pub limits: SpeedLimits,
+    /// The share of the blend's largest corner velocity it takes (see
+    /// [`crate::motion::blend::Limits::corner_scale`]).
+    pub corner_scale: f32,
+    /// Which pass this is (1 for the first plan).
+    pub pass: u32,
+    /// A servo frame, s.
+    pub frame_s: f32,
+    /// The last checkpoint's fraction and arm angles (`None` before the start's are solved).
+    last: Option<(f32, [f32; LEGS])>,
+    /// The largest share of its rating any arm has needed so far.
+    worst: f32,
+}
+
+impl FrameTurns {
+    /// The first pass of a plan made with `limits` and `corner_scale`.
+    pub fn new(limits: SpeedLimits, corner_scale: f32, frame_hz: f32) -> FrameTurns {
+        FrameTurns {
+            limits,
+            corner_scale,
+            pass: 1,
+            frame_s: 1.0 / frame_hz,
+            last: None,
+            worst: 0.0,
+        }
+    }
+
+    /// The same limits, measured from the start again (the plan was made again from another
+    /// hand-over).
+    fn restarted(self) -> FrameTurns {
+        FrameTurns {
+            last: None,
+            worst: 0.0,
+            ..self
+        }
+    }
+
+    /// One more checkpoint, in order: its fraction and its arm angles.
+    fn visit(&mut self, speeds: &ServoSpeeds, plan: &Plan, fraction: f32, arm_rad: &[f32; LEGS]) {
+        if let Some((before, arms)) = self.last {
+            let frames = plan.frames_spanned(fraction - before);
+            if frames > 0.0 {
+                let share = speeds.least_time_s(&arms, arm_rad) / (frames * self.frame_s);
+                if share.is_nan() || share > self.worst {
+                    self.worst = if share.is_nan() { f32::INFINITY } else { share };
+                }
+            }
+        }
+        self.last = Some((fraction, *arm_rad));
+    }
+
+    /// At the end of a pass: `None` if no arm turned faster than its rating (within
+    /// [`PLAN_MARGIN`] where the check did not visit every frame), or if this was the last pass;
+    /// else the next pass's limits: every speed of the plan (the fastest it went, or the limit)
+    /// and the share of the corner velocity, slowed by the share measured (at [`PLAN_MARGIN`]);
+    /// on the last pass the corner velocity is 0 (brake to rest there, then start from rest).
+    fn tightened(&self, plan: &Plan) -> Option<FrameTurns> {
+        let allowed = if plan.checks_every_frame() {
+            1.0
+        } else {
+            PLAN_MARGIN
+        };
+        if self.worst <= allowed || self.pass >= MAX_RATED_PASSES {
+            return None;
+        }
+        let scale = PLAN_MARGIN / self.worst;
+        let hz = 1.0 / self.frame_s;
+        let fastest = plan.fastest_per_frame();
+        let slower = |limit: f32, fastest: f32| {
+            let top = if limit > 0.0 && limit < fastest {
+                limit
+            } else {
+                fastest
+            };
+            if top > 0.0 {
+                top * scale
+            } else {
+                limit
+            }
+        };
+        let pass = self.pass + 1;
+        Some(FrameTurns {
+            limits: SpeedLimits {
+                mm_per_s: slower(self.limits.mm_per_s, fastest[0] * hz),
+                deg_per_s: slower(self.limits.deg_per_s, (fastest[1] * hz).to_degrees()),
+                ..self.limits
+            },
+            corner_scale: if pass >= MAX_RATED_PASSES {
+                0.0
+            } else {
+                self.corner_scale * scale
+            },
+            pass,
+            ..self.restarted()
+        })
+    }
 }
 
 /// The path time of a move with servo speed ratings, measured on the first pass of its check
@@ -105,6 +220,7 @@ impl PathCheck {
         hand_over: Option<HandOver>,
         settings: &Settings,
         servo_time: Option<ServoTime>,
+        frame_turns: Option<FrameTurns>,
     ) -> PathCheck {
         PathCheck {
             purpose,
@@ -121,6 +237,7 @@ impl PathCheck {
                 Some(None)
             },
             servo_time,
+            frame_turns,
         }
     }
 
@@ -133,6 +250,7 @@ impl PathCheck {
             solved: 0,
             replan: false,
             checkpoints: plan.checkpoints(),
+            frame_turns: self.frame_turns.map(FrameTurns::restarted),
             ..*self
         }
     }
@@ -198,9 +316,26 @@ impl PathCheck {
         let per_slice = check.per_slice();
         let target = self.plan.target().to_array().map(f32::to_bits);
         let mut solved = 0;
+        if let Some(turns) = &mut self.frame_turns {
+            if turns.last.is_none() {
+                // The arm angles where the plan starts, to measure its first frame from.
+                solved += 1;
+                self.solved += 1;
+                let start = self.plan.start();
+                match check.pose::<M>(&start, false) {
+                    Ok(there) => turns.last = Some((0.0, there.arm_rad)),
+                    Err(cause) => {
+                        return Some(Err(Error::PathBlocked {
+                            percent: 0.0,
+                            cause,
+                        }))
+                    }
+                }
+            }
+        }
         while solved < per_slice {
             let Some((pose, fraction)) = self.checkpoints.next() else {
-                return if self.planned_again() {
+                return if self.planned_again() || self.tightened() {
                     None // the new plan's poses are checked next
                 } else {
                     Some(Ok(()))
@@ -211,14 +346,15 @@ impl PathCheck {
             if pose.to_array().map(f32::to_bits) == target {
                 // Checked when the command came and in the first slice.
                 let arm_rad = self.solution.arm_rad;
-                self.measure(&check.settings.servo_speed, &pose, &arm_rad);
+                self.measure(&check.settings.servo_speed, &pose, fraction, &arm_rad);
                 continue;
             }
             solved += 1;
             self.solved += 1;
             match check.pose::<M>(&pose, torque) {
                 Ok(solution) => {
-                    self.measure(&check.settings.servo_speed, &pose, &solution.arm_rad);
+                    let arm_rad = solution.arm_rad;
+                    self.measure(&check.settings.servo_speed, &pose, fraction, &arm_rad);
                 }
                 Err(cause) => {
                     return Some(Err(Error::PathBlocked {
@@ -233,10 +369,26 @@ impl PathCheck {
 
     /// With servo speed ratings, on the first pass: the path time measured at one more pose of
     /// the path (in order), from its IK solution's arm angles.
-    fn measure(&mut self, speeds: &ServoSpeeds, pose: &Pose, arm_rad: &[f32; LEGS]) {
+    fn measure(&mut self, speeds: &ServoSpeeds, pose: &Pose, fraction: f32, arm_rad: &[f32; LEGS]) {
         if let Some(time) = &mut self.servo_time {
             time.measured.visit(speeds, pose, arm_rad);
         }
+        if let Some(turns) = &mut self.frame_turns {
+            turns.visit(speeds, &self.plan, fraction, arm_rad);
+        }
+    }
+
+    /// At the end of a pass over a move taken over while moving with servo speed ratings: if
+    /// an arm turned faster than its rating, the limits tightened and the plan marked stale
+    /// (the controller plans it again, slower, from the motion as it is then: true); false if
+    /// the plan stands.
+    fn tightened(&mut self) -> bool {
+        let Some(next) = self.frame_turns.and_then(|t| t.tightened(&self.plan)) else {
+            return false;
+        };
+        self.frame_turns = Some(next);
+        self.replan = true;
+        true
     }
 
     /// At the end of the first pass with servo speed ratings: if the path needs longer than the
@@ -250,8 +402,8 @@ impl PathCheck {
         if measured_s <= time.planned_s {
             return false;
         }
-        // Only straight moves are measured (with ratings a move never blends,
-        // `controller/moves.rs`).
+        // Only straight moves from where the platform is are measured this way (a move taken
+        // over while moving is measured frame by frame: `FrameTurns`).
         let Plan::Straight(planned) = self.plan else {
             return false;
         };

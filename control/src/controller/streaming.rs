@@ -10,9 +10,11 @@
 //! ([`crate::tracker`]), each step shortened to the servos' rated speeds if they have any
 //! (`controller/servo_speed.rs`); a step that would leave the workspace (the axes' own paths to a
 //! reachable goal can) stops the tracker where it is, counted as a clamp too. An accepted
-//! move (`pose`, `move`, `nudge`, `home`) or `stop` ends the stream (while a move's path is
-//! checked the stream holds, as a move in progress does; a refused one lets it go on); the
-//! next frame starts it again from wherever the platform is.
+//! move (`pose`, `move`, `nudge`, `home`) or `stop` ends the stream; with acceleration limits
+//! a move ends it as its check begins, the tracker's motion going on as a planned one that
+//! the move takes over from (`controller/moves.rs`), while in pass-through the stream holds
+//! during the move's check (a refused one lets it go on). The next frame starts the stream
+//! again from wherever the platform is, at the velocity it has there.
 //!
 //! The stream's state and the clamp's bisection are `controller/stream_goal.rs`'s; here is what
 //! frames do to the platform.
@@ -128,8 +130,11 @@ impl<M: Math> Controller<M> {
                 stream.last_frame_tick = self.frame_ticks;
             }
             None => {
-                // The stream starts (again) from where the platform is; a move in progress ends,
-                // and so does driving the servos one by one.
+                // The stream starts (again) from where the platform is, at the velocity it has
+                // (a move in progress ends, and its velocity goes on in the tracker), and
+                // driving the servos one by one ends.
+                let (_, rate) = self.motion.state_after(0);
+                let frame_s = 1.0 / f32::from(self.settings.frame_hz.max(1));
                 self.motion = Motion::new(here);
                 self.returning_home = false;
                 self.direct = None;
@@ -137,7 +142,7 @@ impl<M: Math> Controller<M> {
                     target,
                     fresh: true,
                     goal: here,
-                    tracker: Tracker::new(&here),
+                    tracker: Tracker::moving(&here, &rate, frame_s),
                     taken: fractions,
                     seen: fractions,
                     last_frame_tick: self.frame_ticks,
@@ -303,6 +308,93 @@ mod tests {
         let line = std::format!("set stream.max_step_pct {guard}");
         assert_eq!(run(&mut c, &mut link, &line), "ok\r\n");
         (c, link)
+    }
+
+    #[test]
+    fn a_move_while_a_stream_is_tracked_takes_over_from_its_motion_within_the_limits() {
+        // With acceleration limits and servo speed ratings: the tracker chases a frame, then
+        // a `pose` line comes; the motion goes on while it is checked (as a planned motion to
+        // the stream's goal) and the move takes over from its pose and velocity.
+        let (mut c, mut link) = (quiet(), program());
+        for line in [
+            "set servos.speed_s_60deg 0.4",
+            "set speed_mm_s 60",
+            "set speed_deg_s 60",
+            "set accel_mm_s2 300",
+            "set accel_deg_s2 300",
+        ] {
+            assert_eq!(run(&mut c, &mut link, line), "ok\r\n");
+        }
+        send(&mut c, &mut link, "128,150,230,128,128,160X");
+        let (mut poses, mut pulses) = (std::vec![*c.pose()], std::vec![c.pulses_us()]);
+        for _ in 0..12 {
+            pulses.push(c.on_frame());
+            poses.push(*c.pose());
+        }
+        assert!(c.is_streaming() && c.is_moving());
+        let mut reply = std::string::String::new();
+        for &b in b"pose 5 0 -4 0 0 -5\n" {
+            c.on_byte(&mut link, b, &mut reply);
+        }
+        let line_at = poses.len();
+        while link.awaits_reply() {
+            pulses.push(c.on_frame());
+            poses.push(*c.pose());
+            for _ in 0..6 {
+                c.work(&mut link, &mut reply);
+            }
+        }
+        assert_eq!(reply, "ok\r\n");
+        assert!(poses.len() > line_at + 1, "the check took frames");
+        while c.is_moving() {
+            pulses.push(c.on_frame());
+            poses.push(*c.pose());
+        }
+        let target = crate::controller::test_support::pose([5.0, 0.0, -4.0, 0.0, 0.0, -5.0]);
+        assert_eq!(*c.pose(), target);
+        assert!(!c.is_streaming() && c.fault().is_none());
+        // Never held still from the first step to arrival.
+        let end = poses.iter().position(|p| *p == target).unwrap();
+        assert!(
+            poses[1..=end].windows(2).all(|w| w[0] != w[1]),
+            "held still"
+        );
+        // From the frame before the line on, every axis' change of velocity within its limit
+        // (0.12 mm or deg per frame per frame at 50 Hz: the tracker's steps shortened to the
+        // ratings before it may drop more), and no arm over its rating all along.
+        let v: std::vec::Vec<[f32; 6]> = poses
+            .windows(2)
+            .map(|w| {
+                let (a, b) = (w[0].to_array(), w[1].to_array());
+                core::array::from_fn(|i| {
+                    let d = b[i] - a[i];
+                    if i < 3 {
+                        d
+                    } else {
+                        d.to_degrees()
+                    }
+                })
+            })
+            .collect();
+        for (k, w) in v.windows(2).enumerate().skip(line_at - 2) {
+            for i in 0..6 {
+                assert!(
+                    (w[1][i] - w[0][i]).abs() <= 0.12 + 2e-4,
+                    "frame {} axis {i}: {:?} then {:?}",
+                    k + 1,
+                    w[0],
+                    w[1]
+                );
+            }
+        }
+        let s = c.settings();
+        for (k, w) in pulses.windows(2).enumerate() {
+            for (i, servo) in s.servos.0.iter().enumerate() {
+                let turn = (w[1][i] - w[0][i]).abs() / servo.rate_us_per_rad;
+                let rated = core::f32::consts::FRAC_PI_3 / 0.4 / 50.0;
+                assert!(turn <= rated * 1.0001, "frame {} servo {}", k + 1, i + 1);
+            }
+        }
     }
 
     #[test]

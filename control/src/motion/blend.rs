@@ -19,7 +19,9 @@
 //! taken that keeps, for each group, the blend's acceleration `|w_g - v_g| / T` within `a_g`,
 //! `|w_g|` within the speed limit, and the tail able to stop on `C` (`|w_g|^2 / (2 a_g)` within
 //! its length). A target straight ahead (a jog of repeated `nudge`s) keeps its speed; a gentle
-//! turn keeps most of it.
+//! turn keeps most of it. A share of it may be taken instead ([`Limits::corner_scale`]: the
+//! servos' rated speeds; 0 brakes to rest at the corner): any `lambda` from 0 to the largest
+//! keeps every constraint.
 //!
 //! Both phases are continuous-time curves whose velocity is continuous (at the hand-over, the
 //! corner and the end) and whose acceleration stays within each group's limit; frame `k`
@@ -45,6 +47,10 @@ pub struct Limits {
     pub mm_per_s2: f32,
     /// Angular acceleration, deg/s^2.
     pub deg_per_s2: f32,
+    /// The share (0..=1) of the largest velocity at the corner that is taken: 1 normally;
+    /// less to keep the servos within their rated speeds, 0 to brake to rest at the corner
+    /// (see `controller/moves.rs`).
+    pub corner_scale: f32,
 }
 
 /// How densely a path is checked and how long a move may be (the straight moves' rule, which
@@ -260,8 +266,10 @@ impl Blend {
             // |w_g| within the speed limit.
             lambda = lambda.min(l.speed[g] / un);
         }
+        // (Any lambda from 0 to the largest keeps every constraint: each holds at both ends
+        // of that range and is convex in lambda.)
         let lambda = if lambda.is_finite() {
-            lambda.max(0.0)
+            lambda.max(0.0) * limits.corner_scale.clamp(0.0, 1.0)
         } else {
             0.0
         };
@@ -375,6 +383,22 @@ impl Blend {
             let c = self.target.to_array();
             core::array::from_fn(|i| (c[i] - self.corner[i]) * f)
         }
+    }
+
+    /// The fastest it goes, per frame: the largest speed of the linear group (mm) and of the
+    /// angular group (rad) along the way (the start's, the corner's or the tail's top speed).
+    pub fn fastest_per_frame(&self) -> [f32; 2] {
+        let c = self.target.to_array();
+        let d: Six = core::array::from_fn(|i| c[i] - self.corner[i]);
+        let peak = if self.tail.peak.is_finite() {
+            self.tail.peak
+        } else {
+            1.0
+        };
+        core::array::from_fn(|g| {
+            let norm = |x: &Six| libm::sqrtf(dot(x, x, g));
+            norm(&self.v).max(norm(&self.w)).max(norm(&d) * peak)
+        })
     }
 
     /// The poses a path check visits, `(pose, fraction of the frames)`, in order (see the

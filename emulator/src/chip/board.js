@@ -68,7 +68,7 @@ export class EmulatedBoard {
    *   power-on (default: nothing plugged in). It enumerates the firmware and opens its serial
    *   port (DTR) unless `{ open: false }`; `board.usb` is that link.
    * @param {boolean} [options.xipCache] model the XIP flash cache (../gaps/xip-cache.js, gap
-   *   13; default: off, unless HEXAPOD_XIP_CACHE=on or `setXipCacheByDefault(true)`)
+   *   13; default: on, unless HEXAPOD_XIP_CACHE=off or `setXipCacheByDefault(false)`)
    */
   constructor({
     elf = DEFAULT_ELF,
@@ -311,6 +311,7 @@ export class EmulatedBoard {
   /** Executes instructions (or skips sleep to the next timer event) until `endNanos`. */
   runSlice(endNanos, condition) {
     let { core, clock } = this.mcu;
+    let { xip } = this;
     while (clock.nanos < endNanos) {
       if (core.waiting && !wakeIfInterruptPending(core)) {
         // Asleep in WFI: nothing happens until the next timer event (or the end).
@@ -318,17 +319,24 @@ export class EmulatedBoard {
         const toEnd = endNanos - clock.nanos;
         clock.tick(next ? Math.min(Math.max(next.nanos - clock.nanos, 0), toEnd) : toEnd);
       } else {
-        clock.tick(core.executeInstruction() * this.nanosPerCycle);
+        let cycles = core.executeInstruction();
+        if (xip !== null) {
+          // Gap 13: the flash's stalls, emulated time with the instruction (or handler entry).
+          cycles += xip.takeUnclockedCycles();
+        }
+        clock.tick(cycles * this.nanosPerCycle);
       }
       if (this.eventPending) {
         this.eventPending = false;
         if (this.resetPending) {
           this.watchdogReset();
           ({ core, clock } = this.mcu);
+          ({ xip } = this);
         }
         if (this.powerCutPending) {
           this.powerCycle({ offMs: this.cutOffMs ?? 50 });
           ({ core, clock } = this.mcu);
+          ({ xip } = this);
         }
         if (this.fault) {
           throw this.fault;

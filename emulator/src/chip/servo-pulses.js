@@ -1,6 +1,9 @@
 // Measures the servo outputs the way a logic analyser would: from the pins' edges, in
 // emulated time. rp2040js drives a PWM pin at the exact instants its counter wraps and
-// passes the compare value, so widths and periods come out exact to the nanosecond.
+// passes the compare value, so widths and periods come out exact to the nanosecond, the
+// meter's resolution: emulated time is a sum of floats (a clock of 12 MHz, a UART bit at
+// 115,200 baud are fractions of a nanosecond), so an instant carries noise of about 1e-8 ns,
+// and a width or period is rounded to the nanosecond (20,000,000, not 20,000,000.000000007).
 
 import { GPIOPinState } from 'rp2040js';
 
@@ -32,11 +35,11 @@ export class ServoPulseMeter {
     const now = this.clock.nanos;
     if (state === GPIOPinState.High) {
       if (pin.lastRiseNanos !== null) {
-        pin.periodNanos = now - pin.lastRiseNanos;
+        pin.periodNanos = Math.round(now - pin.lastRiseNanos);
       }
       pin.lastRiseNanos = now;
     } else if (state === GPIOPinState.Low && pin.lastRiseNanos !== null) {
-      const width = now - pin.lastRiseNanos;
+      const width = Math.round(now - pin.lastRiseNanos);
       const changed = width !== pin.widthNanos;
       pin.widthNanos = width;
       pin.pulses++;

@@ -16,7 +16,13 @@
 //    usbd-serial (rightly: CDC PSTN 6.3.12 addresses it to the communication interface)
 //    rejects, so the device never saw DTR. `UsbCdcHost` sends its own request, recipient
 //    Interface, wIndex 0 (the communication interface), whenever the host opens (DTR and RTS
-//    up) or closes (both down) its port, one control transfer at a time.
+//    up) or closes (both down) its port, one control transfer at a time. And `USBCDC` sends
+//    its next request the instant SET_ADDRESS's status stage reaches it; a real host leaves
+//    the device the SetAddress() recovery interval, 2 ms (USB 2.0, 9.2.6.3). Without it, a
+//    firmware whose interrupt had not handled the status stage yet (usb-device applies the
+//    address then) saw the next SETUP first, applied the address after SET_CONFIGURATION and
+//    fell back from Configured to Addressed: the port never opened (with the XIP cache model,
+//    gap 13, the USB stack runs slower from flash). `UsbCdcHost` holds that request 2 ms.
 // 11. IN timing: an IN buffer the firmware arms counts as taken at once (its buffer-status bit
 //    is set on the spot, the data reaches the host 10 us later), whatever the host or the bus.
 //    That flatters the firmware: it never waits for the bus and never meets a host that does
@@ -52,6 +58,7 @@ const BUF_CTRL_LEN_MASK = 0x3ff;
 const SET_CONTROL_LINE_STATE = 0x22;
 const SET_LINE_CODING = 0x20;
 const GET_DESCRIPTOR = 6;
+const SET_ADDRESS = 5;
 const DTR_AND_RTS = 0b11;
 /** The communication interface of the firmware's CDC ACM function. */
 const CDC_COMM_INTERFACE = 0;
@@ -63,6 +70,8 @@ export const BULK_PACKET_NANOS = FRAME_NANOS / BULK_PACKETS_PER_FRAME;
 export const BULK_PACKET_BYTES = 64;
 /** An idle bus for this long makes a device suspend (USB 2.0, 7.1.7.6). */
 const SUSPEND_AFTER_NANOS = 3e6;
+/** The SetAddress() recovery interval: no request before it has passed (USB 2.0, 9.2.6.3). */
+export const SET_ADDRESS_RECOVERY_NANOS = 2e6;
 
 /**
  * A USB host with a CDC ACM (serial) port on the emulated chip's USB controller: it
@@ -111,6 +120,7 @@ export class UsbCdcHost {
     this.readAlarm = this.clock.createAlarm(() => this.readDue());
     this.outAlarm = this.clock.createAlarm(() => this.outDelivered());
     this.suspendAlarm = this.clock.createAlarm(() => this.suspendDevice());
+    this.recoveryAlarm = this.clock.createAlarm(() => this.recovered());
     // Gap 12: SUSPENDED is write-one-to-clear.
     const usb = this.usb;
     const writeRegister = usb.writeUint32.bind(usb);
@@ -143,6 +153,8 @@ export class UsbCdcHost {
     this.inScheduled = false;
     this.inAlarm.cancel();
     this.readAlarm.cancel();
+    this.recoveryAlarm.cancel();
+    this.afterRecovery = null;
     this.controlQueue = [];
     this.control = null;
     this.configured = false;
@@ -189,10 +201,30 @@ export class UsbCdcHost {
         this.controlPacket(buffer); // ours, not `USBCDC`'s enumeration
         return;
       }
+      if (endpoint === 0 && this.isSetAddress(this.mcu.usbDPRAM)) {
+        // Gap 10: SET_ADDRESS's status stage: `USBCDC` would send its next request at once.
+        this.afterRecovery = () => endpointWrite(endpoint, buffer);
+        this.recoveryAlarm.schedule(SET_ADDRESS_RECOVERY_NANOS);
+        return;
+      }
       endpointWrite(endpoint, buffer);
     };
     if (reset) {
       this.usb.resetDevice();
+    }
+  }
+
+  /** The setup packet at the start of DPRAM (the last one sent) is a SET_ADDRESS. */
+  isSetAddress(dpram) {
+    return dpram[0] === 0 && dpram[1] === SET_ADDRESS;
+  }
+
+  /** The SetAddress() recovery interval has passed: `USBCDC` goes on enumerating. */
+  recovered() {
+    const next = this.afterRecovery;
+    this.afterRecovery = null;
+    if (this.plugged) {
+      next?.();
     }
   }
 

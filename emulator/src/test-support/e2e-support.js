@@ -22,6 +22,27 @@ export function firmwareBootrom() {
 export const FRAME_MS = 20;
 
 /**
+ * A timing bound the firmware is known to miss with the XIP cache modelled (emulator gap 13),
+ * `why`: the code that runs from flash there, until it runs from RAM (issue 23 item 2). With
+ * the model, `check()` must fail, and its message goes to the test's diagnostics; once it
+ * passes, this fails, so the exception is removed as soon as it is not needed. Without the
+ * model (HEXAPOD_XIP_CACHE=off) `check()` must pass, as before.
+ */
+export function knownSlowWithCache(t, board, why, check) {
+  if (!board.xipCacheModelled) {
+    check();
+    return;
+  }
+  try {
+    check();
+  } catch (error) {
+    t.diagnostic(`known to miss its bound with the XIP cache model (${why}): ${error.message}`);
+    return;
+  }
+  assert.fail(`now within its bound with the XIP cache model: drop knownSlowWithCache (${why})`);
+}
+
+/**
  * Runs `frames` frames asserting that the pins hold still and keep pulsing; returns their
  * widths, us.
  */
@@ -161,6 +182,24 @@ export function bootQuietUsb(bootrom) {
   return viaUsb;
 }
 
+let sharedBootrom;
+
+/**
+ * Boots the firmware quiet (`bootQuiet`; over USB, `bootQuietUsb`, with `usb`) and sets
+ * `settings` in order, each `set name value` answered `ok`: `bootWith({ speed_mm_s: 'off',
+ * speed_deg_s: 'off' })`. The boot ROM is loaded once (`firmwareBootrom`) for every caller.
+ * @param {Record<string, string | number>} [settings]
+ * @param {{ usb?: boolean }} [options]
+ */
+export function bootWith(settings = {}, { usb = false } = {}) {
+  sharedBootrom ??= firmwareBootrom();
+  const board = usb ? bootQuietUsb(sharedBootrom) : bootQuiet(sharedBootrom);
+  for (const [name, value] of Object.entries(settings)) {
+    ok(board, `set ${name} ${value}`);
+  }
+  return board;
+}
+
 /**
  * Boots the firmware as a terminal meets it, echo on: on UART0, after the power-up banner; or,
  * with `usb`, on the USB port once the host has opened it and its banner came. Returns the
@@ -220,6 +259,61 @@ export function refused(board, line, code, { timeoutMs = 2000 } = {}) {
 /** Numbers in a data line's value (`key: 1.0 2.0 ...`). */
 export function numbersIn(text) {
   return (text.match(/-?\d+(?:\.\d+)?/g) ?? []).map(Number);
+}
+
+/**
+ * The pins' widths, us, that `./dev run` printed last in `log` (its `servos us: ...` lines, as
+ * `startPtyRunner`'s `log()` returns them).
+ * @param {string} log
+ */
+export function pinsUs(log) {
+  const lines = log.split(/[\r\n]/).filter((line) => line.startsWith('servos us:'));
+  assert.ok(lines.length > 0, 'the runner printed no pins yet');
+  return numbersIn(lines.at(-1).replace(/\|.*$/, ''));
+}
+
+/**
+ * Waits (generously: 30 s) until the pins the runner prints (`log()`) show `expected` within
+ * one PWM count; returns the pins then, us (the caller asserts they arrived).
+ * @param {() => string} log
+ * @param {number[]} expected
+ */
+export async function pinsReach(log, expected) {
+  const until = Date.now() + 30_000;
+  const near = () => pinsUs(log()).every((w, i) => Math.abs(w - expected[i]) <= COUNT_US + 1e-9);
+  while (!near() && Date.now() < until) {
+    await new Promise((resolve) => setTimeout(resolve, 100));
+  }
+  return pinsUs(log());
+}
+
+/**
+ * Each servo's home arm angle `alpha0` (rad, from `geometry`'s `# leg N:` lines), `trim` (us),
+ * `rate` (us/rad) and direction `sign` (from `config`'s `# servoN:` lines), out of the lines of
+ * both listings (docs/commands.md).
+ * @param {string[]} lines
+ */
+export function servosFromListings(lines) {
+  return SERVOS.map((n) => {
+    const leg = lines.find((l) => l.startsWith(`# leg ${n}:`));
+    const servo = lines.find((l) => l.startsWith(`# servo${n}:`));
+    return {
+      alpha0: (Number(leg.match(/alpha0_deg=(\S+)/)[1]) * Math.PI) / 180,
+      trim: Number(servo.match(/trim_us=(\S+)/)[1]),
+      rate: Number(servo.match(/rate_us_rad=(\S+)/)[1]),
+      sign: servo.includes('dir=reversed') ? -1 : 1,
+    };
+  });
+}
+
+/**
+ * The trim a calibration must take for a servo (`servosFromListings`) whose arm is made level
+ * `steps` us from where it starts: eq. 13 / 14 at alpha = 0 give the level pulse W0 - d r alpha0
+ * (where the flow starts, to 0.01 us), and the trim of an arm level at W is W + d r alpha0.
+ */
+export function expectedTrim(servo, steps) {
+  const start = Math.round((servo.trim - servo.sign * servo.rate * servo.alpha0) * 100) / 100;
+  return start + steps + servo.sign * servo.rate * servo.alpha0;
 }
 
 /** `key=value` pairs of a pose line as six numbers in pose order. */

@@ -1,7 +1,7 @@
 // Drives the live 3D view from outside, as a user would: starts `./dev run` (UART0 on a pipe,
 // the view on a free port) and opens its page in headless Chromium (Debian's `chromium`
-// package, through playwright-core, which downloads no browser of its own). Used by
-// test/view.test.js and src/view-server/view-screenshot.js.
+// package, through playwright-core, which downloads no browser of its own). Used by the
+// browser tests (test/view*.test.js) and src/view-server/view-screenshot.js.
 
 import { spawn } from 'node:child_process';
 import { existsSync } from 'node:fs';
@@ -81,6 +81,36 @@ export async function launchChromium() {
   });
 }
 
+/**
+ * For a browser test: when Chromium is missing, skips `t`, saying on stderr that `what` did not
+ * run and how to get it, and returns true (the test returns); otherwise false.
+ */
+export function skipWithoutChromium(t, what) {
+  if (haveChromium()) {
+    return false;
+  }
+  const why =
+    `SKIPPED: no Chromium at ${CHROMIUM}, so ${what} did not run ` +
+    `(./dev test installs Debian's chromium package with apt-get; CHROMIUM=path picks another)`;
+  console.error(why);
+  t.skip(why);
+  return true;
+}
+
+/**
+ * Headless Chromium, closed when test `t` ends, and a page of `viewport` ({ width, height })
+ * whose script errors collect in `pageErrors`: `{ browser, page, pageErrors }`.
+ */
+export async function openPage(t, viewport) {
+  const browser = await launchChromium();
+  t.after(() => browser.close());
+  const page = await browser.newPage({ viewport });
+  /** @type {string[]} */
+  const pageErrors = [];
+  page.on('pageerror', (error) => pageErrors.push(error.message));
+  return { browser, page, pageErrors };
+}
+
 /** Types a line into the page's terminal input and presses Enter. */
 export async function typeLine(page, line) {
   await page.fill('#line', line);
@@ -94,6 +124,31 @@ export async function readPose(page) {
       Number(document.getElementById(`pose-${axis}`).textContent),
     ),
   );
+}
+
+/**
+ * From x = 0, jogs x to 5 mm by five presses of the right arrow (the page's focus must be off
+ * the typing line), sampling the readout's x every `everyMs` of wall-clock time until it shows
+ * `expected` within `tolerance`. Returns the x values seen (`seen`, to 0.1 mm) and those
+ * strictly between 0.2 and 4.8 mm (`between`: a move shows some on the way, a jump none).
+ */
+export async function jogRightSampled(page, { expected, tolerance, timeout, everyMs }) {
+  const seen = new Set();
+  const sampler = setInterval(async () => {
+    const pose = await readPose(page).catch(() => null);
+    if (pose) {
+      seen.add(pose[0].toFixed(1));
+    }
+  }, everyMs);
+  try {
+    for (let i = 0; i < 5; i++) {
+      await page.keyboard.press('ArrowRight');
+    }
+    await waitForPose(page, expected, tolerance, timeout);
+  } finally {
+    clearInterval(sampler);
+  }
+  return { seen: [...seen], between: [...seen].map(Number).filter((x) => x > 0.2 && x < 4.8) };
 }
 
 /** Waits until the readout shows `expected` within `tolerance` (mm and deg). */

@@ -20,7 +20,8 @@ import { createServer } from 'node:http';
 import { dirname, extname, join, resolve, sep } from 'node:path';
 import { fileURLToPath } from 'node:url';
 
-import { ListingReader, listingsChangedBy } from '../../view/board-listings.js';
+import { ListingReader } from '../../view/board-listings.js';
+import { listingsChangedBy } from './listing-changes.js';
 import { ViewLink } from './view-link.js';
 
 const EMULATOR = join(dirname(fileURLToPath(import.meta.url)), '..', '..');
