@@ -249,12 +249,7 @@ test('a burst far larger than the receive queue comes whole, in order, every lin
   const warnings = board.lines.slice(from).filter((line) => line.startsWith('# warning'));
   assert.deepEqual(warnings, [], 'nothing lost, nothing to warn of');
   assert.equal(board.usb.unsent, 0);
-  knownSlowWithCache(
-    t,
-    board,
-    'unknown-command replies: 126,454 cycles, control::report::near and errors from flash',
-    () => assertNoStall(board, 'a USB burst'),
-  );
+  assertNoStall(board, 'a USB burst');
   // The pins hold the last pose's pulses (the host core's).
   const last = lines.at(-1).split(' ').slice(1).map(Number);
   const [expected] = reference.solve(defaultSettings(), [last]);
