@@ -1,7 +1,7 @@
 // One benchmark of `./dev bench` alone, printed rather than written to BENCHMARKS.md: a quick
 // figure while working on one part (seconds to a minute instead of the whole bench's minutes).
 //
-//   node src/bench/quick-bench.js ik|stream|tracker-profile|pose-profile [--poses N] [--seed S]
+//   node src/bench/quick-bench.js ik|stream|tracker-profile|pose-profile|jump [--poses N] [--seed S]
 //
 //   ik               cycles per IK on the benchmark firmware (every variant it carries)
 //   stream           a clamp and tracker frames (`Controller::on_frame` while streaming), as
@@ -19,6 +19,8 @@
 //                    "Stream CPU" table (HEXAPOD_XIP_CACHE=on for the cache model)
 //   edge-profile     where that worst case's cycles go, per function, per servo frame (and
 //                    inclusive for a few functions: with what they call)
+//   jump             BENCHMARKS.md's 5 mm jumps (`pose` lines whose path is checked every 0.5 mm:
+//                    10 IKs): from the line end to the PWM at 115,200 baud, PL011 receive rules
 //
 // Expects `cargo fw` to have built the firmware and the benchmark firmware. The same
 // measurements, in the same harness, as `./dev bench` (emulator/src/bench/ik-bench.js).
@@ -26,7 +28,7 @@
 import { parseArgs } from 'node:util';
 
 import { DEFAULT_ELF, EmulatedBoard } from '../chip/board.js';
-import { streamingBoard } from './firmware-bench.js';
+import { measureLatency, streamingBoard } from './firmware-bench.js';
 import { measureStreamCpu } from './stream-bench.js';
 import { symbolRanges } from '../chip/elf.js';
 import { BENCH_ELF, benchPoses, runIkBench, runStreamBench } from './ik-bench.js';
@@ -70,6 +72,11 @@ if (which === 'ik') {
   }
 } else if (which === 'pose-profile') {
   profilePoseLines(200);
+} else if (which === 'jump') {
+  const us = measureLatency(['5 0 0 0 0 0', '0 0 0 0 0 0', '0 0 5 0 0 0']);
+  console.log(
+    `5 mm jumps to PWM at 115,200 baud: ${us.map((u) => `${u.toFixed(1)} us`).join(', ')}`,
+  );
 } else if (which === 'tracker-profile') {
   profileTracker(poses.slice(0, 40), 3);
 } else if (which === 'edge') {
@@ -81,7 +88,7 @@ if (which === 'ik') {
   profileEdge();
 } else {
   console.error(
-    'usage: node src/bench/quick-bench.js ik|stream|tracker-profile|pose-profile|edge|edge-profile [--poses N] [--seed S]',
+    'usage: node src/bench/quick-bench.js ik|stream|tracker-profile|pose-profile|jump|edge|edge-profile [--poses N] [--seed S]',
   );
   process.exit(2);
 }
