@@ -350,7 +350,10 @@ impl LineBuffer {
     /// a frame cut after one of its commas has fewer than six counts.
     fn judge_trust(&mut self) {
         let plain_line = match self.kind {
-            Kind::Start => self.spoiled.is_none(),
+            // An empty line, unless a line was abandoned (Ctrl-C, Ctrl-X) or garbage came since
+            // the sync point: `8`, Ctrl-X, LF before `000,...X` may be a frame's first count
+            // cut by the garbage, as in a line `8` ended by the LF.
+            Kind::Start => self.spoiled.is_none() && !self.unusual,
             Kind::Command => !self.unusual,
             Kind::Frame => false,
         };
@@ -885,6 +888,26 @@ mod tests {
         let mut c = rest;
         c[0] = i as u32 * 1000 + rest[0] % 1000;
         c
+    }
+
+    #[test]
+    fn a_count_cut_by_an_abandoned_line_does_not_make_a_frame() {
+        // `8000,...X` with Ctrl-X and LF after its first digit (line noise): what follows the LF
+        // looks like six counts (`000,5603,...`) but is the rest of a cut frame: dropped, as
+        // after a line `8` ended by the LF alone. The next whole frame is applied.
+        for noise in [b"\x18\n".as_slice(), b"\x03\n", b"\n", b"\x01\n"] {
+            let input = [
+                b"1,2,3,4,5,6X8".as_slice(),
+                noise,
+                b"000,5603,6,61971,579,0X1,2,3,4,5,7X",
+            ]
+            .concat();
+            assert_eq!(
+                applied(&input),
+                [[1, 2, 3, 4, 5, 6], [1, 2, 3, 4, 5, 7]],
+                "{noise:?}"
+            );
+        }
     }
 
     #[test]
