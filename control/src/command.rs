@@ -279,26 +279,39 @@ pub enum Command {
     Set(SettingId, SettingValue),
 }
 
-/// The words of a line.
+/// The words of a line: what lies between separators (spaces, tabs, commas), empty ones
+/// skipped. Separators are ASCII, so every cut is a character boundary; found byte by byte
+/// (no character decoding: this runs over every byte of every command line).
 struct Words<'a> {
-    inner: core::str::Split<'a, fn(char) -> bool>,
+    rest: &'a str,
 }
 
 impl<'a> Words<'a> {
     fn new(line: &'a str) -> Self {
-        fn separator(c: char) -> bool {
-            c == ' ' || c == '\t' || c == ','
-        }
-        Words {
-            inner: line.split(separator as fn(char) -> bool),
-        }
+        Words { rest: line }
     }
+}
+
+/// A byte that separates words.
+fn separator(b: u8) -> bool {
+    b == b' ' || b == b'\t' || b == b','
 }
 
 impl<'a> Iterator for Words<'a> {
     type Item = &'a str;
     fn next(&mut self) -> Option<&'a str> {
-        self.inner.by_ref().find(|w| !w.is_empty())
+        let bytes = self.rest.as_bytes();
+        let Some(start) = bytes.iter().position(|&b| !separator(b)) else {
+            self.rest = "";
+            return None;
+        };
+        let end = bytes[start..]
+            .iter()
+            .position(|&b| separator(b))
+            .map_or(bytes.len(), |len| start + len);
+        let (word, rest) = (self.rest.get(start..end)?, self.rest.get(end..)?);
+        self.rest = rest;
+        Some(word)
     }
 }
 
@@ -395,17 +408,16 @@ pub fn parse(line: &str) -> Result<Command, ParseError> {
     if line.len() > MAX_LINE {
         return Err(ParseError::Spoiled(Spoiled::TooLong));
     }
-    if let Some(&byte) = line
-        .as_bytes()
-        .iter()
-        .find(|b| !(0x20..=0x7E).contains(*b) && **b != b'\t')
-    {
-        return Err(ParseError::Spoiled(Spoiled::BadByte(byte)));
-    }
+    // Checked and lowered in one pass (the first byte that is not printable ASCII or a tab
+    // refuses the line).
     let mut lower = [0u8; MAX_LINE];
     let lower = &mut lower[..line.len()];
-    lower.copy_from_slice(line.as_bytes());
-    lower.make_ascii_lowercase();
+    for (slot, &byte) in lower.iter_mut().zip(line.as_bytes()) {
+        if !(0x20..=0x7E).contains(&byte) && byte != b'\t' {
+            return Err(ParseError::Spoiled(Spoiled::BadByte(byte)));
+        }
+        *slot = byte.to_ascii_lowercase();
+    }
     // Printable ASCII throughout, checked above.
     let line = core::str::from_utf8(lower).map_err(|_| ParseError::Spoiled(Spoiled::BadByte(0)))?;
 

@@ -98,6 +98,21 @@ pub fn angular_distance_deg(a: &Pose, b: &Pose) -> f32 {
     libm::sqrtf(dr * dr + dp * dp + dy * dy).to_degrees()
 }
 
+/// How many evenly spaced samples keep checks within [`PATH_STEP_MM`] and [`PATH_STEP_DEG`]
+/// along a path of these distances (mm, degrees).
+fn spacing_samples(linear_mm: f32, angular_deg: f32) -> u32 {
+    let by_mm = linear_mm / PATH_STEP_MM;
+    let by_deg = angular_deg / PATH_STEP_DEG;
+    let n = libm::ceilf(by_mm.max(by_deg));
+    if n >= MAX_FRAMES as f32 {
+        MAX_FRAMES
+    } else if n >= 1.0 {
+        n as u32
+    } else {
+        1
+    }
+}
+
 /// The pose a fraction `t` of the way from `a` to `b` (all six coordinates linearly).
 pub fn lerp(a: &Pose, b: &Pose, t: f32) -> Pose {
     let (va, vb) = (a.to_array(), b.to_array());
@@ -124,6 +139,9 @@ pub struct Segment {
     /// The fraction of the move's time spent speeding up (and as much slowing down): 0 for
     /// constant speed, up to 1/2 (a triangle).
     ramp: f32,
+    /// How many evenly spaced samples keep path checks within [`PATH_STEP_MM`] and
+    /// [`PATH_STEP_DEG`] (from the distances, computed once, when planned).
+    samples: u32,
 }
 
 /// The smallest ramp fraction treated as one (below, the profile is constant speed).
@@ -132,6 +150,8 @@ const MIN_RAMP: f32 = 1e-6;
 impl Segment {
     /// Plans a move at the given limits for a frame rate (Hz, > 0).
     pub fn plan(start: Pose, target: Pose, limits: SpeedLimits, frame_hz: f32) -> Segment {
+        // Both distances once: the speeds' fractions below and the path check's spacing
+        // ([`Segment::checkpoints`]) need them (square roots in software on the chip).
         let linear_mm = linear_distance_mm(&start, &target);
         let angular_deg = angular_distance_deg(&start, &target);
         // In path fraction u (0..=1) per second: the tighter group's speed and acceleration
@@ -179,6 +199,7 @@ impl Segment {
             target,
             frames,
             ramp: if ramp < MIN_RAMP { 0.0 } else { ramp },
+            samples: spacing_samples(linear_mm, angular_deg),
         }
     }
 
@@ -238,25 +259,11 @@ impl Segment {
         core::array::from_fn(|i| (b[i] - a[i]) * slope)
     }
 
-    /// How many evenly spaced samples keep checks within [`PATH_STEP_MM`] and [`PATH_STEP_DEG`].
-    fn spacing_samples(&self) -> u32 {
-        let by_mm = linear_distance_mm(&self.start, &self.target) / PATH_STEP_MM;
-        let by_deg = angular_distance_deg(&self.start, &self.target) / PATH_STEP_DEG;
-        let n = libm::ceilf(by_mm.max(by_deg));
-        if n >= MAX_FRAMES as f32 {
-            MAX_FRAMES
-        } else if n >= 1.0 {
-            n as u32
-        } else {
-            1
-        }
-    }
-
     /// The poses a path check visits (see the module docs for which), in order. The start
     /// pose is not among them (it is where the platform already is).
     pub fn checkpoints(&self) -> Checkpoints {
         let n = self.frames;
-        let samples = self.spacing_samples();
+        let samples = self.samples;
         let walk = if n <= MAX_PATH_CHECKS {
             // Every commanded pose, plus `sub - 1` poses inside each frame step.
             let sub = if samples > n {

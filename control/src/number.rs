@@ -28,14 +28,18 @@ pub fn parse_f32(text: &str) -> Result<f32, NumberError> {
         .strip_prefix('-')
         .or_else(|| text.strip_prefix('+'))
         .unwrap_or(text);
-    if ["nan", "inf", "infinity"]
-        .iter()
-        .any(|word| unsigned.eq_ignore_ascii_case(word))
-    {
-        return Err(NumberError::NotFinite);
-    }
     if !is_decimal(unsigned.as_bytes()) {
-        return Err(NumberError::Syntax);
+        // (None of these words is a decimal: asked only of what is not one.)
+        return Err(
+            if ["nan", "inf", "infinity"]
+                .iter()
+                .any(|word| unsigned.eq_ignore_ascii_case(word))
+            {
+                NumberError::NotFinite
+            } else {
+                NumberError::Syntax
+            },
+        );
     }
     if let Some(value) = short_decimal(unsigned.as_bytes()) {
         return Ok(if text.starts_with('-') { -value } else { value });

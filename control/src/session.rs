@@ -5,7 +5,7 @@
 
 use core::fmt::Write;
 
-use crate::protocol::{Feed, LineBuffer, Lost, MAX_LINE};
+use crate::protocol::{Feed, LineBuffer, Lost};
 use crate::report;
 
 /// The state of one link.
@@ -26,9 +26,6 @@ impl Default for Session {
         Self::new()
     }
 }
-
-/// A completed line, copied out of the line buffer.
-pub(crate) type Line = heapless::String<MAX_LINE>;
 
 impl Session {
     /// A link with echo on (for a terminal), nothing typed yet, every notice still to show.
@@ -115,13 +112,10 @@ impl Session {
         self.line.take_abandoned()
     }
 
-    /// The completed line (after [`Feed::Line`]); the buffer is free again.
-    pub(crate) fn take_line(&mut self) -> Line {
-        let mut copy = Line::new();
-        // The buffer holds at most MAX_LINE characters: this always fits.
-        let _ = copy.push_str(self.line.line());
+    /// Forgets the completed line (after [`Feed::Line`], once read with
+    /// [`Session::typed`]): the buffer is free again.
+    pub(crate) fn clear_line(&mut self) {
         self.line.clear();
-        copy
     }
 
     /// Bytes were lost on this link's way in: the line being received is refused when it ends.

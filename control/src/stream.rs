@@ -129,7 +129,7 @@ impl StreamSettings {
                 return Err(CountError::TooLarge { count: i as u8 + 1 });
             }
             if let Some(axis) = axis {
-                values[axis as usize] = (count as f32 - half as f32) / half as f32;
+                values[axis as usize] = centred_share(count as i32 - half as i32, bits - 1);
             }
         }
         Ok(values)
@@ -157,6 +157,18 @@ impl StreamSettings {
         };
         near(taken) || near(seen)
     }
+}
+
+/// `offset / 2^shift` (`|offset| <= 2^shift`, `shift` at most 15), exactly: the one conversion
+/// to `f32` (exact below 2^24) and the division by a power of two as an exponent lowered in
+/// integer instructions (the compiler's conversions, subtraction and division cost a frame's
+/// six axes about 2,000 cycles on the RP2040).
+fn centred_share(offset: i32, shift: u8) -> f32 {
+    if offset == 0 {
+        return 0.0;
+    }
+    // |offset| >= 1: the quotient is at least 2^-15, a normal number.
+    f32::from_bits((offset as f32).to_bits() - (u32::from(shift) << 23))
 }
 
 /// A step guard (percent, 0..=100) in tenths of a percent, rounded to the nearest (what the
@@ -285,6 +297,19 @@ pub fn parse_text_frame(text: &str) -> Option<Counts> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn centred_shares_are_the_exact_quotients() {
+        for bits in TEXT_BITS_MIN..=BINARY_BITS {
+            let half = 1i32 << (bits - 1);
+            for count in 0..2 * half {
+                let exact = (count as f64 - half as f64) / half as f64;
+                let share = centred_share(count - half, bits - 1);
+                assert_eq!(f64::from(share), exact, "{bits} bits, count {count}");
+                assert_eq!(share.to_bits(), (exact as f32).to_bits());
+            }
+        }
+    }
 
     fn frame(counts: [u16; 6]) -> std::vec::Vec<u8> {
         let mut bytes = std::vec![0xA5, 0x5A];

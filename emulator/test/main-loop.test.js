@@ -21,7 +21,6 @@ import {
   bootQuiet,
   firmwareBootrom,
   FRAME_MS,
-  knownSlowWithCache,
   ok,
   status,
 } from '../src/test-support/e2e-support.js';
@@ -185,7 +184,7 @@ test('every long command class back to back at 333 Hz, echo on: no stall, replie
   assertNoStall(board, 'every class');
 });
 
-test('servo (its pose found), limits, holding torques and torque-checked paths and clamps: no stall', (t) => {
+test('servo (its pose found), limits, holding torques and torque-checked paths and clamps: no stall', () => {
   const board = new EmulatedBoard({ bootrom });
   board.boot();
   typed(board, 'set frame_hz 333');
@@ -220,12 +219,7 @@ test('servo (its pose found), limits, holding torques and torque-checked paths a
     assert.ok(reply.startsWith(lines[i][1]), `${lines[i][0]}: ${reply}`);
   });
   board.runMs(100);
-  knownSlowWithCache(
-    t,
-    board,
-    'set servos.torque_kgcm: 168,850 cycles, the settings, the forward kinematics, Locate and Solver::arm_angles from flash',
-    () => assertNoStall(board, 'servo, limits, torques'),
-  );
+  assertNoStall(board, 'servo, limits, torques');
 });
 
 test('stream targets clamped to the torque ratings, a pose per pass: no stall', () => {

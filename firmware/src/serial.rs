@@ -2,11 +2,14 @@
 //!
 //! Receive: the `UART0_IRQ` handler (RX FIFO level and RX timeout interrupts) moves bytes from
 //! the 32-byte hardware FIFO into a lock-free queue that the main loop reads. While bytes keep
-//! coming, a timer alarm (`TIMER_IRQ_0`) also empties the FIFO every [`rx_poll_period_us`]
-//! (at most 100 us): the PL011 raises its interrupt only at the FIFO level (8 bytes) or after
-//! 32 bit times of silence (278 us at 115,200 baud), so without the poll the end of a line
-//! could wait that long in the FIFO. The poll stops at the first alarm that finds the FIFO
-//! empty (the level and timeout interrupts take over again). Neither handler waits:
+//! coming at the slower rates, a timer alarm (`TIMER_IRQ_0`) also empties the FIFO every
+//! [`rx_poll_period_us`] (100 us): the PL011 raises its interrupt only at the FIFO level
+//! (8 bytes) or after 32 bit times of silence (278 us at 115,200 baud), so without the poll the
+//! end of a line could wait that long in the FIFO. The poll stops at the first alarm that
+//! finds the FIFO empty (the level and timeout interrupts take over again). From 460,800 baud
+//! on the timeout (69 us, 35 us at 921,600) comes sooner than a poll could (every 4 character
+//! times, 87 us, 43 us): there is no poll, and the FIFO is emptied every 8 bytes, half as many
+//! interrupts and main-loop passes as with it. Neither handler waits:
 //! when the queue is full it drops the byte and counts it, and the main loop is told where in
 //! the byte stream the loss happened ([`Received::Lost`]), so exactly the damaged line can be
 //! refused, and, at once, that a loss happened ([`Serial::take_new_loss`]), so the host hears
@@ -32,7 +35,7 @@
 use core::{
     cell::RefCell,
     fmt,
-    sync::atomic::{AtomicBool, Ordering},
+    sync::atomic::{AtomicBool, AtomicU32, Ordering},
 };
 
 use control::protocol::Lost;
@@ -78,14 +81,19 @@ struct Shared {
     rx: Receiver,
     /// The alarm that polls the RX FIFO while bytes keep coming.
     poll: Alarm0,
-    /// Its period at the current baud rate.
-    poll_period_us: u32,
+    /// Its period at the current baud rate; `None`: no poll at this rate.
+    poll_period_us: Option<u32>,
 }
 
 /// How often the RX FIFO is polled while bytes keep coming, us: 4 character times (8N1),
-/// within 20..=100 us (100 us at 115,200 baud and below, 43 us at 921,600).
-pub fn rx_poll_period_us(baud: u32) -> u32 {
-    (4 * 10 * 1_000_000 / baud.max(1)).clamp(20, 100)
+/// within 20..=100 us (100 us at 230,400 baud and below); `None` where the PL011's receive
+/// timeout (32 bit times) comes sooner than that (460,800 baud and up): the poll would only
+/// add interrupts.
+pub fn rx_poll_period_us(baud: u32) -> Option<u32> {
+    let baud = baud.max(1);
+    let period_us = (4 * 10 * 1_000_000 / baud).clamp(20, 100);
+    let timeout_us = 32 * 1_000_000 / baud;
+    (period_us < timeout_us).then_some(period_us)
 }
 
 /// The interrupt's side of the receive queue.
@@ -98,8 +106,6 @@ struct Receiver {
     /// rp2040-hal reported an overrun from the status register (the FIFO was empty): the OE
     /// flag on the next byte is the same loss.
     overrun_counted: bool,
-    /// Framing, parity, break and hardware-FIFO overrun errors.
-    line_errors: u32,
 }
 
 static SHARED: Mutex<RefCell<Option<Shared>>> = Mutex::new(RefCell::new(None));
@@ -107,6 +113,10 @@ static SHARED: Mutex<RefCell<Option<Shared>>> = Mutex::new(RefCell::new(None));
 static RX_LOSS_PENDING: AtomicBool = AtomicBool::new(false);
 /// A loss began that the main loop has not announced yet ([`Serial::take_new_loss`]).
 static RX_LOSS_NEW: AtomicBool = AtomicBool::new(false);
+/// Framing, parity, break and hardware-FIFO overrun errors (wrapping). Only the interrupt
+/// handlers write it (inside their critical section); the main loop reads it every pass
+/// without one.
+static RX_LINE_ERRORS: AtomicU32 = AtomicU32::new(0);
 
 /// Lost bytes, and where: the gap begins after the first `after` bytes ever enqueued and ends
 /// after the first `resume` (bytes enqueued in between are dropped when the gap is reached).
@@ -177,7 +187,6 @@ impl Serial {
                     enqueued: 0,
                     loss: None,
                     overrun_counted: false,
-                    line_errors: 0,
                 },
                 poll,
                 poll_period_us: rx_poll_period_us(baud),
@@ -270,12 +279,7 @@ impl Serial {
 
     /// Framing, parity, break and hardware-FIFO overrun errors seen by the receiver.
     fn rx_line_errors(&self) -> u32 {
-        critical_section::with(|cs| {
-            SHARED
-                .borrow_ref(cs)
-                .as_ref()
-                .map_or(0, |shared| shared.rx.line_errors)
-        })
+        RX_LINE_ERRORS.load(Ordering::Relaxed)
     }
 
     /// True if the transmit buffer can take [`LONGEST_STEP_BYTES`] without waiting.
@@ -415,13 +419,13 @@ impl Shared {
     }
 
     /// Empties the RX FIFO; if it held anything, more may be on the way: polls again after
-    /// [`rx_poll_period_us`].
+    /// [`rx_poll_period_us`] (at the rates that poll).
     fn receive_and_poll(&mut self) {
         if self.receive() > 0 {
-            // Cannot fail: the period is far below the alarm's range.
-            let _ = self
-                .poll
-                .schedule(MicrosDurationU32::micros(self.poll_period_us));
+            if let Some(period_us) = self.poll_period_us {
+                // Cannot fail: the period is far below the alarm's range.
+                let _ = self.poll.schedule(MicrosDurationU32::micros(period_us));
+            }
         }
     }
 
@@ -491,7 +495,9 @@ impl Receiver {
 
     /// The UART lost at least one byte here.
     fn uart_loss(&mut self) {
-        self.line_errors = self.line_errors.wrapping_add(1);
+        // Only the handlers write it, never two at once (they run in a critical section).
+        let errors = RX_LINE_ERRORS.load(Ordering::Relaxed);
+        RX_LINE_ERRORS.store(errors.wrapping_add(1), Ordering::Relaxed);
         self.lose(1, true);
     }
 

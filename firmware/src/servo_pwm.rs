@@ -224,14 +224,62 @@ fn top_for(frame_hz: u16) -> Result<u16, FrameRateOutOfRange> {
 /// Microseconds -> compare counts, or `None` for a non-finite width. Clamps to `window`, then
 /// to `0..=top` (a pulse never outlasts its frame), and rounds half up.
 fn pulse_counts(width_us: f32, window: PulseWindowUs, top: u16) -> Option<u16> {
-    if !width_us.is_finite() {
+    if !is_finite(width_us) {
         return None;
     }
-    // `f32::max`/`min` ignore a NaN bound, so a broken window cannot produce NaN either.
-    let clamped_us = width_us.max(window.min_us).min(window.max_us);
+    // As `f32::max`/`min` would (a NaN bound is ignored, so a broken window cannot produce NaN
+    // either), compared as integers: no soft-float calls, six times a frame.
+    let mut clamped_us = width_us;
+    if !is_nan(window.min_us) && order_key(clamped_us) < order_key(window.min_us) {
+        clamped_us = window.min_us;
+    }
+    if !is_nan(window.max_us) && order_key(clamped_us) > order_key(window.max_us) {
+        clamped_us = window.max_us;
+    }
     let counts = clamped_us * COUNTS_PER_US + 0.5;
-    // `as` saturates (negative -> 0); the value is finite here.
-    Some((counts as u32).min(u32::from(top)) as u16)
+    Some(saturating_u32(counts).min(u32::from(top)) as u16)
+}
+
+/// `x as u32` for an `x` that is not NaN (towards zero, negative -> 0, too large -> `u32::MAX`),
+/// on the bits: the cast's range checks would be two soft-float comparisons.
+fn saturating_u32(x: f32) -> u32 {
+    let bits = x.to_bits();
+    let exponent = (bits >> 23) & 0xFF;
+    if bits & 0x8000_0000 != 0 || exponent < 127 {
+        0 // negative, or below 1
+    } else if exponent >= 127 + 32 {
+        u32::MAX
+    } else {
+        let mantissa = (bits & 0x007F_FFFF) | 0x0080_0000;
+        let shift = exponent as i32 - 127 - 23;
+        if shift >= 0 {
+            mantissa << shift
+        } else {
+            mantissa >> -shift
+        }
+    }
+}
+
+/// `f32::is_finite` on the bits (no soft-float comparison).
+fn is_finite(x: f32) -> bool {
+    x.to_bits() & 0x7F80_0000 != 0x7F80_0000
+}
+
+/// `f32::is_nan` on the bits.
+fn is_nan(x: f32) -> bool {
+    x.to_bits() & 0x7FFF_FFFF > 0x7F80_0000
+}
+
+/// An integer that orders floats that are not NaN as their values (IEEE 754 sign and
+/// magnitude, made two's complement-like: negative values flipped below the positive ones;
+/// -0 just below +0, which the rounding above maps to the same count).
+fn order_key(x: f32) -> u32 {
+    let bits = x.to_bits();
+    if bits & 0x8000_0000 != 0 {
+        !bits
+    } else {
+        bits | 0x8000_0000
+    }
 }
 
 #[interrupt]

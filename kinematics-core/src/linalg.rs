@@ -55,18 +55,7 @@ impl Lu6 {
             lu.swap(k, best);
             perm.swap(k, best);
             let pivot = lu[k][k];
-            let column = f32::from_bits(scale[k]);
-            let ratio = if column > 0.0 {
-                pivot.abs() / column
-            } else {
-                0.0
-            };
-            // Also refuses NaN (every comparison with it is false).
-            if !(ratio > PIVOT_TOLERANCE && ratio.is_finite()) {
-                return Err(KinematicsError::Singular {
-                    pivot_ratio: if ratio.is_finite() { ratio } else { 0.0 },
-                });
-            }
+            check_pivot::<M>(pivot, scale[k])?;
             inv_pivot[k] = 1.0 / pivot;
             for i in k + 1..6 {
                 let factor = r(lu[i][k]) * r(inv_pivot[k]);
@@ -139,6 +128,32 @@ impl Lu6 {
         }
         inv
     }
+}
+
+/// Whether a pivot may be divided by: finite, and larger than [`PIVOT_TOLERANCE`] times the
+/// largest magnitude of its column (`column_bits`, an `f32`'s bits), tested as
+/// `|pivot| > PIVOT_TOLERANCE * column` with one multiplication and integer comparisons
+/// (non-negative floats order like their bits; a division and a float comparison are library
+/// calls on the RP2040). Refused ([`KinematicsError::Singular`], with the ratio) otherwise,
+/// NaN and a zero column included.
+fn check_pivot<M: Math>(pivot: f32, column_bits: u32) -> Result<(), KinematicsError> {
+    const INFINITY: u32 = 0x7f80_0000;
+    let magnitude = abs_bits(pivot);
+    if column_bits != 0 && column_bits < INFINITY && magnitude < INFINITY {
+        let bound = M::mul(PIVOT_TOLERANCE, f32::from_bits(column_bits));
+        if magnitude > bound.to_bits() {
+            return Ok(());
+        }
+    }
+    let column = f32::from_bits(column_bits);
+    let ratio = if column > 0.0 {
+        pivot.abs() / column
+    } else {
+        0.0
+    };
+    Err(KinematicsError::Singular {
+        pivot_ratio: if ratio.is_finite() { ratio } else { 0.0 },
+    })
 }
 
 /// The 1-norm of a matrix: its largest column sum of absolute values.
@@ -215,5 +230,16 @@ mod tests {
         c[(2, 2)] = f32::NAN;
         assert!(Lu6::factor::<Libm>(&c).is_err());
         assert!(Lu6::factor::<Libm>(&Mat6::zeros()).is_err());
+        // A pivot just above the tolerance (of its column's largest entry, 1) is taken, one
+        // just below it is not.
+        let mut d = Mat6::identity();
+        d[(0, 5)] = 1.0;
+        d[(5, 5)] = 2e-6;
+        assert!(Lu6::factor::<Libm>(&d).is_ok());
+        d[(5, 5)] = 0.5e-6;
+        assert!(matches!(
+            Lu6::factor::<Libm>(&d),
+            Err(KinematicsError::Singular { pivot_ratio }) if pivot_ratio == 0.5e-6
+        ));
     }
 }

@@ -56,7 +56,7 @@ use core::marker::PhantomData;
 use kinematics_core::ik::{self, Solution};
 use kinematics_core::{Geometry, KinematicsError, Libm, Math, Pose, LEGS};
 
-use crate::command::{self, Command};
+use crate::command::{self, Command, ParseError};
 use crate::error::Error;
 use crate::motion::Motion;
 use crate::protocol::{Feed, Lost};
@@ -485,9 +485,11 @@ impl<M: Math> Controller<M> {
         }
         match feed {
             Feed::Line => {
-                // Copied out so the link can take the next line while the command runs.
-                let line = session.take_line();
-                if self.begin_line(session, &line, out) == Begun::Answered {
+                // Parsed where it lies (nothing copied), then the link's buffer is free for the
+                // next line while the command runs.
+                let parsed = parse_line(session.typed());
+                session.clear_line();
+                if self.begin_line(session, parsed, out) == Begun::Answered {
                     session.prompt(out);
                 }
                 Fed::LineEnded
@@ -545,7 +547,7 @@ impl<M: Math> Controller<M> {
     /// whose flash write is the board's: this returns with it waiting
     /// ([`Controller::awaits_flash`]); perform it, then call [`Controller::work`] for the reply.
     pub fn execute_line(&mut self, session: &mut Session, line: &str, out: &mut impl Write) {
-        if self.begin_line(session, line, out) == Begun::Pending {
+        if self.begin_line(session, parse_line(line), out) == Begun::Pending {
             while session.awaits_reply() && !self.awaits_flash() {
                 self.work(session, out);
             }
@@ -752,18 +754,24 @@ impl<M: Math> Controller<M> {
 
     // ----- commands -----
 
-    /// Starts a line: its reply at once, or a job whose reply comes later.
-    fn begin_line(&mut self, session: &mut Session, line: &str, out: &mut impl Write) -> Begun {
-        if line.bytes().all(|b| b == b' ' || b == b'\t') {
+    /// Starts a line (parsed by [`parse_line`]; `None`: blank, no reply): its reply at once,
+    /// or a job whose reply comes later.
+    fn begin_line(
+        &mut self,
+        session: &mut Session,
+        parsed: Option<Result<Command, ParseError>>,
+        out: &mut impl Write,
+    ) -> Begun {
+        let Some(parsed) = parsed else {
             return Begun::Answered;
-        }
+        };
         self.heard_from_host();
         self.flush_notices(session, out);
         if self.job.is_some() {
             report::write_error(out, &Error::Pending);
             return Begun::Answered;
         }
-        let result = command::parse(line)
+        let result = parsed
             .map_err(Error::from)
             .and_then(|cmd| self.run(session, cmd));
         match result {
@@ -935,6 +943,16 @@ impl<M: Math> Controller<M> {
                 w
             }
         })
+    }
+}
+
+/// A received line as a command: `None` for a blank one (spaces and tabs only, no reply), else
+/// [`command::parse`]'s answer.
+fn parse_line(line: &str) -> Option<Result<Command, ParseError>> {
+    if line.bytes().all(|b| b == b' ' || b == b'\t') {
+        None
+    } else {
+        Some(command::parse(line))
     }
 }
 

@@ -313,6 +313,8 @@ impl PathCheck {
     /// `Some(Ok)` if the whole path is clear, `Some(Err)` at the first that is not.
     fn check_slice<M: Math>(&mut self, check: PoseCheck<'_>) -> Option<Result<(), Error>> {
         let torque = check.settings.payload.checked();
+        let per_slice = check.per_slice();
+        let target = self.plan.target().to_array().map(f32::to_bits);
         let mut solved = 0;
         if let Some(turns) = &mut self.frame_turns {
             if turns.last.is_none() {
@@ -331,7 +333,7 @@ impl PathCheck {
                 }
             }
         }
-        while solved < check.per_slice() {
+        while solved < per_slice {
             let Some((pose, fraction)) = self.checkpoints.next() else {
                 return if self.planned_again() || self.tightened() {
                     None // the new plan's poses are checked next
@@ -339,7 +341,9 @@ impl PathCheck {
                     Some(Ok(()))
                 };
             };
-            if pose == *self.plan.target() {
+            // Compared bit for bit (float comparisons are library calls on the RP2040): a pose
+            // equal but for the sign of a zero is solved again, never one less.
+            if pose.to_array().map(f32::to_bits) == target {
                 // Checked when the command came and in the first slice.
                 let arm_rad = self.solution.arm_rad;
                 self.measure(&check.settings.servo_speed, &pose, fraction, &arm_rad);

@@ -4,7 +4,7 @@
 //! of work checks.
 //!
 //! Payload and torque ratings ([`crate::payload`]): with a payload, `check` and `status` show
-//! the holding torques (a slice of their own: about three IK solutions' worth); with ratings as
+//! the holding torques (a slice of their own: about five IK solutions' worth); with ratings as
 //! well, every pose checked (a target, each checkpoint of a path, each pose `limits` tries, a
 //! stream target and its clamp, the pose held when the settings change) must be within them,
 //! and a slice then checks one pose with its torques instead of [`CHECKS_PER_SLICE`] by the IK.
@@ -18,7 +18,7 @@ use crate::settings::Settings;
 /// Most IK solutions of a path check in one slice of work
 /// ([`Controller::work`](super::Controller::work)): on the RP2040 one takes about 0.09 ms, so a
 /// slice stays well under half a millisecond. With a payload and torque ratings, each pose
-/// checked also needs its holding torques (about 0.47 ms, five IK solutions' worth): then a
+/// checked also needs its holding torques (about 0.38 ms, five IK solutions' worth): then a
 /// slice checks one pose.
 pub const CHECKS_PER_SLICE: u32 = 3;
 

@@ -477,8 +477,7 @@ meant.
 - **Not modelled**: the M0+'s discarded prefetch after a taken branch, the second core and DMA
   (not used), the streaming FIFO; boot2 itself runs from SRAM on the chip and is not charged.
 
-The emulator runs with the model by default: every end-to-end test (with their timing bounds:
-those that code still in flash makes miss are named by \`knownSlowWithCache\`), every table
+The emulator runs with the model by default: every end-to-end test (with their timing bounds), every table
 below and \`./dev run\`. \`HEXAPOD_XIP_CACHE=off\`, a board's \`xipCache: false\` or
 \`./dev run --no-xip-cache\` takes it out (the "no cache model" column).
 
@@ -656,8 +655,10 @@ its target costs the tracker nothing), and all six moving every frame; then the 
 case (issue 23): all six moving with z just past the servo limits (14.3 to 14.9 mm, the reach
 from home 13.99 mm: each target fails only after a full IK, where targets far out of reach fail
 at the first leg), with a payload of 2 kg 30 mm above the centre and torque ratings of 20 kgf cm
-(the servo limit stays the boundary, but every target and every step of its clamp has its
-holding torques checked: \`measureStreamCpu\`'s \`edge\`, \`src/bench/stream-bench.js\`):
+(the servo limit stays the boundary, but every target within reach and the furthest drivable
+pose of every clamp have their holding torques checked: \`measureStreamCpu\`'s \`edge\`,
+\`src/bench/stream-bench.js\`; alone: \`node emulator/src/bench/quick-bench.js edge\`, and
+where its cycles go, per function: \`edge-profile\`):
 
 | axes moving | frames in | CPU busy | cycles per servo frame | frames applied / clamped | longest pass |
 |---|---|---:|---:|---:|---:|

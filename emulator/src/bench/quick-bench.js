@@ -1,7 +1,7 @@
 // One benchmark of `./dev bench` alone, printed rather than written to BENCHMARKS.md: a quick
 // figure while working on one part (seconds to a minute instead of the whole bench's minutes).
 //
-//   node src/bench/quick-bench.js ik|stream|tracker-profile|pose-profile [--poses N] [--seed S]
+//   node src/bench/quick-bench.js ik|stream|tracker-profile|pose-profile|jump [--poses N] [--seed S]
 //
 //   ik               cycles per IK on the benchmark firmware (every variant it carries)
 //   stream           a clamp and tracker frames (`Controller::on_frame` while streaming), as
@@ -13,6 +13,14 @@
 //                    off, 921,600 baud, 200 lines of small steps each answered before the
 //                    next): every cycle the core runs from a line's first byte to its reply, per
 //                    function, per line
+//   edge             the honest stream worst case (`measureStreamCpu`'s `edge`: all six axes,
+//                    z just past the servo limits, a payload and torque ratings, 333 frames/s
+//                    for 0.5 s): CPU share and cycles per servo frame, as BENCHMARKS.md's
+//                    "Stream CPU" table (HEXAPOD_XIP_CACHE=on for the cache model)
+//   edge-profile     where that worst case's cycles go, per function, per servo frame (and
+//                    inclusive for a few functions: with what they call)
+//   jump             BENCHMARKS.md's 5 mm jumps (`pose` lines whose path is checked every 0.5 mm:
+//                    10 IKs): from the line end to the PWM at 115,200 baud, PL011 receive rules
 //
 // Expects `cargo fw` to have built the firmware and the benchmark firmware. The same
 // measurements, in the same harness, as `./dev bench` (emulator/src/bench/ik-bench.js).
@@ -20,7 +28,8 @@
 import { parseArgs } from 'node:util';
 
 import { DEFAULT_ELF, EmulatedBoard } from '../chip/board.js';
-import { streamingBoard } from './firmware-bench.js';
+import { measureLatency, streamingBoard } from './firmware-bench.js';
+import { measureStreamCpu } from './stream-bench.js';
 import { symbolRanges } from '../chip/elf.js';
 import { BENCH_ELF, benchPoses, runIkBench, runStreamBench } from './ik-bench.js';
 import { pathPoses } from './headline.js';
@@ -38,7 +47,8 @@ const row = (what, s) =>
   `${what}: mean ${fmt(s.mean)}, min ${fmt(s.min)}, max ${fmt(s.max)} cycles`;
 
 /** Functions also measured with what they call, when they are not inlined. */
-const INCLUSIVE = /^(control::tracker::Tracker::step|kinematics_core::ik::Solver::solve)/;
+const INCLUSIVE =
+  /^(control::tracker::Tracker::step|kinematics_core::ik::Solver::solve|kinematics_core::statics::servo_holding_torques|kinematics_core::linalg::Lu6::|control::payload::)/;
 
 const which = positionals[0];
 const poses = which === 'pose-profile' ? [] : benchPoses(Number(args.poses), Number(args.seed));
@@ -62,11 +72,23 @@ if (which === 'ik') {
   }
 } else if (which === 'pose-profile') {
   profilePoseLines(200);
+} else if (which === 'jump') {
+  const us = measureLatency(['5 0 0 0 0 0', '0 0 0 0 0 0', '0 0 5 0 0 0']);
+  console.log(
+    `5 mm jumps to PWM at 115,200 baud: ${us.map((u) => `${u.toFixed(1)} us`).join(', ')}`,
+  );
 } else if (which === 'tracker-profile') {
   profileTracker(poses.slice(0, 40), 3);
+} else if (which === 'edge') {
+  const run = measureStreamCpu({ framesPerSecond: 333, seconds: 0.5, allAxes: true, edge: true });
+  console.log(
+    `edge at 333/s: CPU ${(run.cpuShare * 100).toFixed(2)} %, ${fmt(run.cyclesPerServoFrame)} cycles per servo frame, ${run.applied} applied / ${run.clamped} clamped, longest pass ${fmt(run.longestPassCycles)} cycles`,
+  );
+} else if (which === 'edge-profile') {
+  profileEdge();
 } else {
   console.error(
-    'usage: node src/bench/quick-bench.js ik|stream|tracker-profile|pose-profile [--poses N] [--seed S]',
+    'usage: node src/bench/quick-bench.js ik|stream|tracker-profile|pose-profile|jump|edge|edge-profile [--poses N] [--seed S]',
   );
   process.exit(2);
 }
@@ -133,6 +155,96 @@ function profileTracker(list, frames) {
   console.log('inclusive (with what they call):');
   for (const [name, cycles] of inclusive) {
     console.log(`${fmt(cycles / perFrame).padStart(8)}  ${name}`);
+  }
+}
+
+/** Where the stream's honest worst case (`edge`, 333 frames/s) spends its cycles. */
+function profileEdge() {
+  const nameOf = functionNames(DEFAULT_ELF);
+  const entries = new Map(
+    symbolRanges(DEFAULT_ELF, () => true)
+      .filter((r) => r.end > r.start && INCLUSIVE.test(r.name))
+      .map((r) => [r.start, r.name]),
+  );
+  // Every function's entry (to fold the float routines and the boot ROM into their callers).
+  const starts = new Map(
+    symbolRanges(DEFAULT_ELF, () => true)
+      .filter((r) => r.end > r.start)
+      .map((r) => [r.start, r.name]),
+  );
+  const FOLDED = /^(__aeabi_|__.*(add|sub|mul|div|cmp|fix|float)[sd]f|f(min|max)f?$|memcpy|memset)/;
+  const rows = new Map();
+  const folded = new Map();
+  const inclusive = new Map();
+  let restore = null;
+  const instrument = {
+    start(board) {
+      const core = board.mcu.core;
+      const execute = core.executeInstruction.bind(core);
+      const open = [];
+      const stack = [];
+      restore = () => {
+        core.executeInstruction = execute;
+      };
+      core.executeInstruction = () => {
+        const pc = core.PC;
+        const lr = core.registers[14];
+        const before = core.cycles;
+        const result = execute();
+        const cycles = core.cycles - before;
+        const name = nameOf(pc);
+        rows.set(name, (rows.get(name) ?? 0) + cycles);
+        while (open.length > 0 && open[open.length - 1].back === pc) {
+          open.pop();
+        }
+        const entered = entries.get(pc);
+        if (entered) {
+          open.push({ name: entered, back: lr & ~1 });
+        }
+        for (const n of new Set(open.map((o) => o.name))) {
+          inclusive.set(n, (inclusive.get(n) ?? 0) + cycles);
+        }
+        while (stack.length > 0 && stack[stack.length - 1].back === pc) {
+          stack.pop();
+        }
+        const callee = starts.get(pc);
+        if (callee && !FOLDED.test(callee)) {
+          stack.push({ name: callee, back: lr & ~1 });
+        }
+        const owner =
+          pc < 0x4000 || FOLDED.test(name) ? (stack[stack.length - 1]?.name ?? name) : name;
+        folded.set(owner, (folded.get(owner) ?? 0) + cycles);
+        return result;
+      };
+    },
+    stop() {
+      restore();
+    },
+  };
+  const run = measureStreamCpu({
+    framesPerSecond: 333,
+    seconds: 0.5,
+    allAxes: true,
+    edge: true,
+    instrument,
+  });
+  const frames = run.seconds * 333;
+  printPerFunction(
+    rows,
+    frames,
+    (total) =>
+      `per servo frame (${Math.round(frames)} frames, CPU ${(run.cpuShare * 100).toFixed(2)} %): ${fmt(total)} cycles`,
+    40,
+  );
+  printPerFunction(
+    folded,
+    frames,
+    () => 'the same with the float routines and the boot ROM counted in their callers:',
+    30,
+  );
+  console.log('inclusive (with what they call), per servo frame:');
+  for (const [name, cycles] of inclusive) {
+    console.log(`${fmt(cycles / frames).padStart(8)}  ${name}`);
   }
 }
 

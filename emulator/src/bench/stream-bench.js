@@ -101,8 +101,11 @@ export function highestFrameRate(rates, options) {
  * mm, where the default build's reach from home is 13.99 mm, a servo at its limit: found only
  * after a full IK, where targets far out of reach fail at the first leg), every axis moving,
  * and a payload with torque ratings (2 kg 30 mm above the centre, 20 kgf cm: the servo limit
- * stays the boundary, but every target and every step of its clamp has its holding torques
- * checked).
+ * stays the boundary, but every target within reach and the furthest drivable pose of every
+ * clamp have their holding torques checked).
+ *
+ * `instrument`: `{ start(board), stop(board) }`, called around the measured stretch (a
+ * profile of it: `quick-bench.js edge-profile`).
  */
 export function measureStreamCpu({
   framesPerSecond = 100,
@@ -110,6 +113,7 @@ export function measureStreamCpu({
   baud = 921600,
   allAxes = false,
   edge = false,
+  instrument = null,
 } = {}) {
   const { board } = streamingBoard({ baud });
   for (const line of [
@@ -147,10 +151,12 @@ export function measureStreamCpu({
   board.runMs(50);
   const startNanos = board.nanos;
   const startCycles = board.cycles;
+  instrument?.start(board);
   for (let k = 1; k <= count; k++) {
     board.runUntil(() => board.nanos >= startNanos + k * periodNanos, { timeoutMs: 1000 });
     board.sendBytes(binaryFrame(far(k)));
   }
+  instrument?.stop(board);
   const busyCycles = board.cycles - startCycles;
   const elapsedCycles = ((board.nanos - startNanos) / 1e9) * CLOCK_HZ;
   const after = streamCounters(board);

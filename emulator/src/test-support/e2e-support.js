@@ -22,27 +22,6 @@ export function firmwareBootrom() {
 export const FRAME_MS = 20;
 
 /**
- * A timing bound the firmware is known to miss with the XIP cache modelled (emulator gap 13),
- * `why`: the code that runs from flash there, until it runs from RAM (issue 23 item 2). With
- * the model, `check()` must fail, and its message goes to the test's diagnostics; once it
- * passes, this fails, so the exception is removed as soon as it is not needed. Without the
- * model (HEXAPOD_XIP_CACHE=off) `check()` must pass, as before.
- */
-export function knownSlowWithCache(t, board, why, check) {
-  if (!board.xipCacheModelled) {
-    check();
-    return;
-  }
-  try {
-    check();
-  } catch (error) {
-    t.diagnostic(`known to miss its bound with the XIP cache model (${why}): ${error.message}`);
-    return;
-  }
-  assert.fail(`now within its bound with the XIP cache model: drop knownSlowWithCache (${why})`);
-}
-
-/**
  * Runs `frames` frames asserting that the pins hold still and keep pulsing; returns their
  * widths, us.
  */
