@@ -492,13 +492,24 @@ export class EmulatedBoard {
   }
 
   /**
-   * Records every complete pulse from now on, like a logic analyser capture. Returns
+   * Records every complete pulse that rises from now on (see below), like a logic analyser
+   * capture started between frames. Returns
    * `{ servos, stop }`: `servos[i]` (servo i + 1) is an array of `{ riseNanos, widthNanos,
    * periodNanos }` in order (`periodNanos` = rise to the previous rise); `stop()` ends it.
    */
   recordPulses() {
     const servos = this.servoMeter.pins.map(() => []);
-    const listener = (index, pulse) => servos[index].push(pulse);
+    // A pulse already high when the recording starts belongs to the frame before it: left
+    // out for every servo alike (else a recording that starts mid-frame holds that frame's
+    // longer pulses only, and the servos' pulse k are not all frame k). The slices rise within
+    // a few microseconds of each other, so a pulse that rose up to 100 us before the start
+    // counts as this frame's, for all of them.
+    const fromNanos = this.nanos - 100_000;
+    const listener = (index, pulse) => {
+      if (pulse.riseNanos >= fromNanos) {
+        servos[index].push(pulse);
+      }
+    };
     this.servoMeter.pulseListeners.add(listener);
     return { servos, stop: () => this.servoMeter.pulseListeners.delete(listener) };
   }
