@@ -647,20 +647,7 @@ mod tests {
 
     /// Per frame, the change of velocity of the linear (mm) and angular (deg) groups, Euclidean.
     fn velocity_changes(poses: &[Pose]) -> std::vec::Vec<[f32; 2]> {
-        let v: std::vec::Vec<[f32; 6]> = poses
-            .windows(2)
-            .map(|w| {
-                let (a, b) = (w[0].to_array(), w[1].to_array());
-                core::array::from_fn(|i| {
-                    let d = b[i] - a[i];
-                    if i < 3 {
-                        d
-                    } else {
-                        d.to_degrees()
-                    }
-                })
-            })
-            .collect();
+        let v = frame_velocities(poses);
         v.windows(2)
             .map(|w| {
                 let n = |r: core::ops::Range<usize>| {

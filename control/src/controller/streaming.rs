@@ -362,20 +362,7 @@ mod tests {
         // From the frame before the line on, every axis' change of velocity within its limit
         // (0.12 mm or deg per frame per frame at 50 Hz: the tracker's steps shortened to the
         // ratings before it may drop more), and no arm over its rating all along.
-        let v: std::vec::Vec<[f32; 6]> = poses
-            .windows(2)
-            .map(|w| {
-                let (a, b) = (w[0].to_array(), w[1].to_array());
-                core::array::from_fn(|i| {
-                    let d = b[i] - a[i];
-                    if i < 3 {
-                        d
-                    } else {
-                        d.to_degrees()
-                    }
-                })
-            })
-            .collect();
+        let v = frame_velocities(&poses);
         for (k, w) in v.windows(2).enumerate().skip(line_at - 2) {
             for i in 0..6 {
                 assert!(

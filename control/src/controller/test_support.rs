@@ -55,3 +55,22 @@ pub(super) fn finish(c: &mut Controller, link: &mut Session, out: &mut std::stri
         c.work(link, out);
     }
 }
+
+/// Each frame's change of pose (mm for x, y, z; degrees for roll, pitch, yaw): the velocity
+/// per frame, between consecutive poses.
+pub(super) fn frame_velocities(poses: &[Pose]) -> std::vec::Vec<[f32; 6]> {
+    poses
+        .windows(2)
+        .map(|w| {
+            let (a, b) = (w[0].to_array(), w[1].to_array());
+            core::array::from_fn(|i| {
+                let d = b[i] - a[i];
+                if i < 3 {
+                    d
+                } else {
+                    d.to_degrees()
+                }
+            })
+        })
+        .collect()
+}
