@@ -240,15 +240,21 @@ const streamCpu = [
   { rate: 333, seconds: 0.5, allAxes: true },
   { rate: 100, seconds: 1, allAxes: true, edge: true },
   { rate: 333, seconds: 0.5, allAxes: true, edge: true },
-].map(({ rate, seconds, allAxes, edge = false }) => ({
+  { rate: 100, seconds: 1, allAxes: true, edge: true, inOut: true },
+  { rate: 333, seconds: 0.5, allAxes: true, edge: true, inOut: true },
+].map(({ rate, seconds, allAxes, edge = false, inOut = false }) => ({
   allAxes,
   edge,
-  ...measureStreamCpu({ framesPerSecond: rate, seconds, allAxes, edge }),
+  inOut,
+  ...measureStreamCpu({ framesPerSecond: rate, seconds, allAxes, edge, inOut }),
 }));
 const streamCpu333 = streamCpu.find(
   (run) => run.allAxes && !run.edge && run.framesPerSecond === 333,
 );
-const streamCpuEdge333 = streamCpu.find((run) => run.edge && run.framesPerSecond === 333);
+const streamCpuEdge333 = streamCpu.find(
+  (run) => run.edge && !run.inOut && run.framesPerSecond === 333,
+);
+const streamCpuInOut333 = streamCpu.find((run) => run.inOut && run.framesPerSecond === 333);
 
 // ---- sustained ----
 const lines = streamLines(Number(args.lines));
@@ -658,20 +664,25 @@ at the first leg), with a payload of 2 kg 30 mm above the centre and torque rati
 (the servo limit stays the boundary, but every target within reach and the furthest drivable
 pose of every clamp have their holding torques checked: \`measureStreamCpu\`'s \`edge\`,
 \`src/bench/stream-bench.js\`; alone: \`node emulator/src/bench/quick-bench.js edge\`, and
-where its cycles go, per function: \`edge-profile\`):
+where its cycles go, per function: \`edge-profile\`). There the platform stays at the edge, so
+most clamps find nothing to drive and few poses have their torques checked; the last rows are
+the other extreme, z in and out of reach in turn (8 mm, then just past the limits): every
+clamp starts inside and finds a drivable pose, and every other target is within reach, so
+every frame's target has its torques checked (\`measureStreamCpu\`'s \`inOut\`):
 
 | axes moving | frames in | CPU busy | cycles per servo frame | frames applied / clamped | longest pass |
 |---|---|---:|---:|---:|---:|
 ${streamCpu
   .map(
     (run) =>
-      `| ${run.edge ? 'all six, z just past the servo limits, payload and ratings' : run.allAxes ? 'all six' : 'x, z'} | ${run.framesPerSecond}/s | ${fmt(run.cpuShare * 100, 1)} % | ${fmt(run.cyclesPerServoFrame)} | ${run.applied} / ${run.clamped} | ${fmt(run.longestPassCycles)} cycles = ${fmt(us(run.longestPassCycles))} us |`,
+      `| ${run.inOut ? 'all six, z in and out of reach in turn, payload and ratings' : run.edge ? 'all six, z just past the servo limits, payload and ratings' : run.allAxes ? 'all six' : 'x, z'} | ${run.framesPerSecond}/s | ${fmt(run.cpuShare * 100, 1)} % | ${fmt(run.cyclesPerServoFrame)} | ${run.applied} / ${run.clamped} | ${fmt(run.longestPassCycles)} cycles = ${fmt(us(run.longestPassCycles))} us |`,
   )
   .join('\n')}
 
 Target: under 30 % of the CPU at 333 Hz with clamping active (all six axes moving:
 ${fmt(streamCpu333.cpuShare * 100, 2)} %; just past the servo limits with a payload and ratings:
-${fmt(streamCpuEdge333.cpuShare * 100, 2)} %). A tracker frame's own step is integer arithmetic
+${fmt(streamCpuEdge333.cpuShare * 100, 2)} %; in and out of reach in turn:
+${fmt(streamCpuInOut333.cpuShare * 100, 2)} %). A tracker frame's own step is integer arithmetic
 (\`control/src/tracker.rs\`); the IK is most of it.
 
 ## Sustained pose lines per second

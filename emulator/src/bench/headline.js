@@ -43,7 +43,7 @@ export const HEADLINES = {
 /** Headline figures `./dev bench` reports beside those and the guard leaves out (longer runs). */
 export const BENCH_HEADLINES = {
   streamEdgeCpuPercent:
-    'stream pipeline at 333 Hz, targets just past the servo limits, payload and ratings, % of the CPU',
+    'stream pipeline at 333 Hz, targets just past the servo limits, payload and ratings, % of the CPU (the worse of: the platform staying at the edge, or z in and out of reach in turn)',
 };
 
 /**
@@ -122,13 +122,17 @@ export function measureHeadlines(poses, sizes = GUARD_SIZES) {
     longestPassCycles: passes.longestPassCycles,
   };
   if (sizes.edgeSeconds) {
-    const edge = measureStreamCpu({
-      framesPerSecond: 333,
-      seconds: sizes.edgeSeconds,
-      allAxes: true,
-      edge: true,
-    });
-    figures.streamEdgeCpuPercent = round(edge.cpuShare * 100, 2);
+    const shares = [false, true].map(
+      (inOut) =>
+        measureStreamCpu({
+          framesPerSecond: 333,
+          seconds: sizes.edgeSeconds,
+          allAxes: true,
+          edge: true,
+          inOut,
+        }).cpuShare,
+    );
+    figures.streamEdgeCpuPercent = round(Math.max(...shares) * 100, 2);
   }
   return { figures, xip: ik.xip };
 }

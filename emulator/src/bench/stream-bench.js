@@ -104,6 +104,11 @@ export function highestFrameRate(rates, options) {
  * stays the boundary, but every target within reach and the furthest drivable pose of every
  * clamp have their holding torques checked).
  *
+ * `inOut` (with `edge`): z inside the reach (8 mm) and just past it in turn, so every clamp
+ * starts inside and finds a drivable pose, whose holding torques are checked, and every other
+ * target is within reach and checked too: a torque check for every frame's target, where
+ * `edge` alone (the platform staying at the edge, its clamps finding nothing to drive) has few.
+ *
  * `instrument`: `{ start(board), stop(board) }`, called around the measured stretch (a
  * profile of it: `quick-bench.js edge-profile`).
  */
@@ -113,6 +118,7 @@ export function measureStreamCpu({
   baud = 921600,
   allAxes = false,
   edge = false,
+  inOut = false,
   instrument = null,
 } = {}) {
   const { board } = streamingBoard({ baud });
@@ -137,8 +143,8 @@ export function measureStreamCpu({
   const moving = (k, n, step) => (allAxes || edge ? 32768 + (k % n) * step : 32768);
   // z: far above reach and far below in turn, or (edge) just past the top of reach (the
   // default stream.z_mm, 15 mm full scale).
-  const z = (k) =>
-    edge ? 32768 + Math.round(((14.3 + (k % 4) * 0.2) / 15) * 32768) : k % 2 === 0 ? 65535 : 0;
+  const zEdgeMm = (k) => (inOut && k % 2 === 0 ? 8 : 14.3 + (k % 4) * 0.2);
+  const z = (k) => (edge ? 32768 + Math.round((zEdgeMm(k) / 15) * 32768) : k % 2 === 0 ? 65535 : 0);
   const far = (k) => [
     32768 + (k % 7) * 200,
     moving(k, 5, 200),
