@@ -98,42 +98,20 @@ function profileTracker(list, frames) {
   const MARKER_GPIO = 16;
   const board = new EmulatedBoard({ elf: BENCH_ELF });
   board.waitForLine(/^bench ready/, { timeoutMs: 1000 });
-  const ranges = symbolRanges(BENCH_ELF, () => true)
-    .filter((r) => r.end > r.start)
-    .sort((a, b) => a.start - b.start);
-  const nameOf = functionNames(BENCH_ELF);
+  const tally = callTally(BENCH_ELF);
   let high = false;
   board.mcu.gpio[MARKER_GPIO].addListener((state) => {
     high = state === 1;
   });
   const core = board.mcu.core;
   const execute = core.executeInstruction.bind(core);
-  const rows = new Map();
-  // Inclusive: from the entry of a function not inlined to the return to its caller.
-  const inclusive = new Map();
-  const open = [];
-  const entries = new Map(
-    ranges.filter((r) => INCLUSIVE.test(r.name)).map((r) => [r.start, r.name]),
-  );
   core.executeInstruction = () => {
     const pc = core.PC;
     const lr = core.registers[14];
     const before = core.cycles;
     const result = execute();
     if (high) {
-      const name = nameOf(pc);
-      const cycles = core.cycles - before;
-      rows.set(name, (rows.get(name) ?? 0) + cycles);
-      while (open.length > 0 && open[open.length - 1].back === pc) {
-        open.pop();
-      }
-      const entered = entries.get(pc);
-      if (entered) {
-        open.push({ name: entered, back: lr & ~1 });
-      }
-      for (const name of new Set(open.map((o) => o.name))) {
-        inclusive.set(name, (inclusive.get(name) ?? 0) + cycles);
-      }
+      tally.count(pc, lr, core.cycles - before);
     }
     return result;
   };
@@ -149,6 +127,7 @@ function profileTracker(list, frames) {
     });
   }
   const perFrame = list.length * frames;
+  const { rows, inclusive } = tally;
   printPerFunction(rows, perFrame, (total) => {
     return `per frame (${perFrame} frames, empty brackets included): ${fmt(total)} cycles`;
   });
@@ -160,12 +139,8 @@ function profileTracker(list, frames) {
 
 /** Where the stream's honest worst case (`edge`, 333 frames/s) spends its cycles. */
 function profileEdge() {
-  const nameOf = functionNames(DEFAULT_ELF);
-  const entries = new Map(
-    symbolRanges(DEFAULT_ELF, () => true)
-      .filter((r) => r.end > r.start && INCLUSIVE.test(r.name))
-      .map((r) => [r.start, r.name]),
-  );
+  const tally = callTally(DEFAULT_ELF);
+  const { rows, inclusive } = tally;
   // Every function's entry (to fold the float routines and the boot ROM into their callers).
   const starts = new Map(
     symbolRanges(DEFAULT_ELF, () => true)
@@ -173,15 +148,12 @@ function profileEdge() {
       .map((r) => [r.start, r.name]),
   );
   const FOLDED = /^(__aeabi_|__.*(add|sub|mul|div|cmp|fix|float)[sd]f|f(min|max)f?$|memcpy|memset)/;
-  const rows = new Map();
   const folded = new Map();
-  const inclusive = new Map();
   let restore = null;
   const instrument = {
     start(board) {
       const core = board.mcu.core;
       const execute = core.executeInstruction.bind(core);
-      const open = [];
       const stack = [];
       restore = () => {
         core.executeInstruction = execute;
@@ -192,18 +164,7 @@ function profileEdge() {
         const before = core.cycles;
         const result = execute();
         const cycles = core.cycles - before;
-        const name = nameOf(pc);
-        rows.set(name, (rows.get(name) ?? 0) + cycles);
-        while (open.length > 0 && open[open.length - 1].back === pc) {
-          open.pop();
-        }
-        const entered = entries.get(pc);
-        if (entered) {
-          open.push({ name: entered, back: lr & ~1 });
-        }
-        for (const n of new Set(open.map((o) => o.name))) {
-          inclusive.set(n, (inclusive.get(n) ?? 0) + cycles);
-        }
+        const name = tally.count(pc, lr, cycles);
         while (stack.length > 0 && stack[stack.length - 1].back === pc) {
           stack.pop();
         }
@@ -246,6 +207,43 @@ function profileEdge() {
   for (const [name, cycles] of inclusive) {
     console.log(`${fmt(cycles / frames).padStart(8)}  ${name}`);
   }
+}
+
+/**
+ * Cycles per function of `elf` (inlined code counts in the function it was inlined into, the
+ * boot ROM as one: `rows`) and, for the functions `INCLUSIVE` names, with what they call
+ * (from their entry to the return to their caller: `inclusive`). `count(pc, lr, cycles)`
+ * takes one executed instruction and returns its function's name.
+ */
+function callTally(elf) {
+  const nameOf = functionNames(elf);
+  const entries = new Map(
+    symbolRanges(elf, () => true)
+      .filter((r) => r.end > r.start && INCLUSIVE.test(r.name))
+      .map((r) => [r.start, r.name]),
+  );
+  const rows = new Map();
+  const inclusive = new Map();
+  const open = [];
+  return {
+    rows,
+    inclusive,
+    count(pc, lr, cycles) {
+      const name = nameOf(pc);
+      rows.set(name, (rows.get(name) ?? 0) + cycles);
+      while (open.length > 0 && open[open.length - 1].back === pc) {
+        open.pop();
+      }
+      const entered = entries.get(pc);
+      if (entered) {
+        open.push({ name: entered, back: lr & ~1 });
+      }
+      for (const n of new Set(open.map((o) => o.name))) {
+        inclusive.set(n, (inclusive.get(n) ?? 0) + cycles);
+      }
+      return name;
+    },
+  };
 }
 
 /** Names the function of a PC from the ELF's symbol table (the boot ROM as one). */
