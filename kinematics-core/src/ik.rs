@@ -926,7 +926,7 @@ impl FloatTable {
 mod tests {
     use super::*;
     use crate::geometry::Leg;
-    use crate::test_support::xorshift;
+    use crate::test_support::uniform;
 
     /// Eq. 9's arm angles of all six legs, from either path.
     #[derive(Debug, Clone, Copy, PartialEq)]
@@ -1066,11 +1066,7 @@ mod tests {
                 ..PairedLayout::default()
             },
         ];
-        let mut seed = 0x9e37_79b9_u32;
-        let mut next = |scale: f32| {
-            let seed = xorshift(&mut seed);
-            (seed as f32 / u32::MAX as f32 * 2.0 - 1.0) * scale
-        };
+        let mut next = uniform(0x9e37_79b9_u32);
         for build in builds {
             let g = build.build().unwrap();
             let solver = Solver::new(g.clone()).expect("a valid geometry");
@@ -1127,11 +1123,7 @@ mod tests {
             rod_mm: 250.0,
             ..PairedLayout::default()
         };
-        let mut seed = 0x5eed_1234_u32;
-        let mut next = |scale: f32| {
-            let seed = xorshift(&mut seed);
-            (seed as f32 / u32::MAX as f32 * 2.0 - 1.0) * scale
-        };
+        let mut next = uniform(0x5eed_1234_u32);
         for (g, mm, deg) in [
             (Geometry::default(), 20.0, 15.0),
             (long.build().unwrap(), 80.0, 25.0),

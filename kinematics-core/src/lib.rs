@@ -85,4 +85,9 @@ mod test_support {
         *seed ^= *seed << 5;
         *seed
     }
+
+    /// Seeded numbers in -`scale`..`scale` (uniform, from [`xorshift`]), one per call.
+    pub(crate) fn uniform(mut seed: u32) -> impl FnMut(f32) -> f32 {
+        move |scale| (xorshift(&mut seed) as f32 / u32::MAX as f32 * 2.0 - 1.0) * scale
+    }
 }
