@@ -134,16 +134,19 @@ pub struct LineBuffer {
     /// Every byte since the last sync point (an `X` that ended a line, a line end) was a digit
     /// or a comma: an `X` now ends a text frame that may be applied.
     pure: bool,
-    /// A comma came since the last sync point.
-    comma: bool,
+    /// Commas since the last sync point (at most 255 counted).
+    commas: u8,
     /// The next text frame may be applied: what came before its sync point cannot have been
     /// the start of a frame cut there (its first count; see [`LineBuffer::sync`]).
     trusted: bool,
-    /// The last sync point was an `X` (not a line end).
+    /// The last sync point was an `X` (not a line end), or there was none yet: the first bytes
+    /// may be the middle of a frame (a stream already running at power-up), as after an `X`.
     after_x: bool,
     /// The last byte was a digit.
     after_digit: bool,
-    /// The command line in progress had a byte outside printable ASCII, or an `X`.
+    /// A byte outside printable ASCII (a line abandoned with Ctrl-C or Ctrl-X among them), or
+    /// an `X`, came since the last sync point: the line is not a plain one (see
+    /// [`LineBuffer::judge_trust`]).
     unusual: bool,
     /// A binary stream frame in progress.
     frame: BinaryFrame,
@@ -169,9 +172,9 @@ impl LineBuffer {
             escape: Escape::None,
             kind: Kind::Start,
             pure: true,
-            comma: false,
+            commas: 0,
             trusted: true,
-            after_x: false,
+            after_x: true,
             after_digit: false,
             unusual: false,
             frame: BinaryFrame::new(),
@@ -267,7 +270,7 @@ impl LineBuffer {
         }
         self.after_digit = byte.is_ascii_digit();
         if byte == b',' {
-            self.comma = true;
+            self.commas = self.commas.saturating_add(1);
         } else if !byte.is_ascii_digit() && byte != b'\r' && byte != b'\n' {
             // (A line end is a sync point itself; the LF of a CRLF is swallowed.)
             self.pure = false;
@@ -302,7 +305,7 @@ impl LineBuffer {
     fn add_plain(&mut self, byte: u8) -> Feed {
         self.after_digit = byte.is_ascii_digit();
         if byte == b',' {
-            self.comma = true;
+            self.commas = self.commas.saturating_add(1);
         } else if !self.after_digit {
             self.pure = false;
         }
@@ -332,7 +335,7 @@ impl LineBuffer {
             .then(|| core::str::from_utf8(&self.buf).ok())
             .flatten()
             .and_then(stream::parse_text_frame);
-        self.judge_trust();
+        self.judge_trust(false);
         self.sync();
         self.after_x = true;
         self.clear();
@@ -347,8 +350,11 @@ impl LineBuffer {
     /// is a stretch without a comma that was not plain digits after a line end (a frame's
     /// last count, cut from the rest by a line end, is), unless it was a plain command line or
     /// an empty one. A comma since the last sync point trusts what follows again: the rest of
-    /// a frame cut after one of its commas has fewer than six counts.
-    fn judge_trust(&mut self) {
+    /// a frame cut after one of its commas has fewer than six counts. But not a whole frame's
+    /// commas (five or more) before a line end: the frame's `X` may have been lost and the
+    /// line end have cut the next frame's first count (`...,0,07` LF `000,...X`): what follows
+    /// is not applied up to the next `X`, which ends a frame, so the frame after it is.
+    fn judge_trust(&mut self, at_line_end: bool) {
         let plain_line = match self.kind {
             // An empty line, unless a line was abandoned (Ctrl-C, Ctrl-X) or garbage came since
             // the sync point: `8`, Ctrl-X, LF before `000,...X` may be a frame's first count
@@ -357,7 +363,16 @@ impl LineBuffer {
             Kind::Command => !self.unusual,
             Kind::Frame => false,
         };
-        if self.comma {
+        // An `X` ending digits and commas that came after a line end: that `X` ends a frame
+        // (cut by the line end, or whole), so a frame begins after it.
+        let x_after_line_end = !at_line_end && !self.after_x && self.pure && self.spoiled.is_none();
+        if x_after_line_end {
+            self.trusted = true;
+        } else if at_line_end && usize::from(self.commas) >= stream::COUNTS - 1 {
+            if !plain_line {
+                self.trusted = false;
+            }
+        } else if self.commas > 0 {
             self.trusted = true;
         } else if (!self.pure || self.after_x) && !plain_line {
             self.trusted = false;
@@ -367,7 +382,7 @@ impl LineBuffer {
     /// A sync point (an `X` that ended a line, a line end): a text frame may begin.
     fn sync(&mut self) {
         self.pure = true;
-        self.comma = false;
+        self.commas = 0;
         self.after_digit = false;
         self.unusual = false;
         self.after_cr = false;
@@ -507,7 +522,7 @@ impl LineBuffer {
     }
 
     fn end_line(&mut self) -> Feed {
-        self.judge_trust();
+        self.judge_trust(true);
         let after_cr = self.after_cr;
         self.sync();
         self.after_cr = after_cr;
@@ -908,6 +923,17 @@ mod tests {
                 "{noise:?}"
             );
         }
+    }
+
+    #[test]
+    fn a_count_cut_by_a_line_end_after_a_frame_that_lost_its_x_does_not_make_a_frame() {
+        // `6000,0,0,0,0,0X` lost its `X`, then a LF fell after the next frame's first digit:
+        // the line ends `...,0,07`, and `000,7178,...X` after it is the rest of a cut frame.
+        let input = b"1,2,3,4,5,6X6000,0,0,0,0,07\n000,7178,88,4810,65,61X1,2,3,4,5,7X";
+        assert_eq!(applied(input), [[1, 2, 3, 4, 5, 6], [1, 2, 3, 4, 5, 7]]);
+        // A frame cut after one of its commas by a line end still lets the next one through.
+        let input = b"1,2,3,4,5,6X6000,0,\n0,0,0,0X1,2,3,4,5,7X";
+        assert_eq!(applied(input), [[1, 2, 3, 4, 5, 6], [1, 2, 3, 4, 5, 7]]);
     }
 
     #[test]
