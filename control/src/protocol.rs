@@ -937,6 +937,15 @@ mod tests {
     }
 
     #[test]
+    fn a_first_count_cut_by_a_line_end_at_the_streams_start_does_not_make_a_frame() {
+        // The first frame the board hears, `802,83,...X`, cut after `80` by a line end.
+        assert_eq!(
+            applied(b"80\n2,83,8,99,505,53X1,2,3,4,5,6X"),
+            [[1, 2, 3, 4, 5, 6]]
+        );
+    }
+
+    #[test]
     fn one_stray_byte_anywhere_costs_only_its_frame() {
         let sent: std::vec::Vec<[u32; 6]> = (0..5)
             .map(|i| counts(i + 1, [127 + i as u32, 0, 255, 9, 12, 130]))
