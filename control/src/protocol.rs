@@ -320,6 +320,56 @@ impl LineBuffer {
         }
     }
 
+    /// Takes the plain bytes ([`LineBuffer::is_plain`]) at the start of `bytes` at once, as
+    /// many as come before the first byte that is not plain (or the line is full): the run a
+    /// line's characters arrive in. Returns how many it took; each did what
+    /// [`LineBuffer::feed`] does with it ([`Feed::Added`]), and the rest are to be fed one by
+    /// one. (A plain byte never ends a line or a frame, and no binary frame is in progress, so
+    /// no time needs passing: [`LineBuffer::feed_at`] would do the same.) The short way's
+    /// short way: a few cycles a byte, where feeding each costs a call and a [`Feed`].
+    #[inline]
+    pub fn take_plain(&mut self, bytes: &[u8]) -> usize {
+        if !(self.kind == Kind::Command
+            && self.spoiled.is_none()
+            && self.escape == Escape::None
+            && self.frame.is_empty())
+        {
+            return 0;
+        }
+        let room = MAX_LINE - self.buf.len();
+        let bytes = &bytes[..bytes.len().min(room)];
+        // What `add_plain` does with each byte, for the run: commas add up (saturating, as one
+        // by one); a byte other than a digit or a comma makes the stretch since the sync point
+        // impure; the last byte says whether the next comes after a digit.
+        let mut run = 0;
+        let mut commas = 0usize;
+        let mut impure = false;
+        for &byte in bytes {
+            if !(0x20..=0x7E).contains(&byte) || byte == stream::TEXT_FRAME_END {
+                break;
+            }
+            if byte == b',' {
+                commas += 1;
+            } else if !byte.is_ascii_digit() {
+                impure = true;
+            }
+            run += 1;
+        }
+        let taken = &bytes[..run];
+        let Some(&last) = taken.last() else {
+            return 0;
+        };
+        self.pure &= !impure;
+        self.commas = self
+            .commas
+            .saturating_add(u8::try_from(commas).unwrap_or(u8::MAX));
+        self.after_digit = last.is_ascii_digit();
+        self.after_cr = false;
+        // Fits: at most `room` bytes.
+        let _ = self.buf.extend_from_slice(taken);
+        run
+    }
+
     /// Whether an `X` now ends the line as a text frame: unless the line is a command line
     /// (it began with a printable character other than a digit), not spoiled, and the `X` does
     /// not follow a digit (`MOVE X=1` stays a command).
@@ -1126,6 +1176,84 @@ mod tests {
                 }
             }
         }
+    }
+
+    proptest::proptest! {
+        /// A run of plain bytes taken at once ([`LineBuffer::take_plain`]) does what feeding
+        /// each does: each taken byte is one [`LineBuffer::feed`] would add, the byte it stops
+        /// at is one that is not plain (or the run was all it was given), and the state after
+        /// the run is the same; for any bytes, handed over in runs of any length.
+        #[test]
+        fn plain_runs_taken_at_once_do_what_feeding_each_byte_does(
+            bytes in proptest::collection::vec(
+                proptest::prop_oneof![
+                    8 => 0x20u8..=0x7E,
+                    1 => proptest::sample::select(std::vec![
+                        b'X', b'\r', b'\n', 0x1B, b'[', 0x08, 0x15, 0x03, 0xA5, 0x5A, b','
+                    ]),
+                    1 => proptest::num::u8::ANY,
+                ],
+                0..600,
+            ),
+            runs in proptest::collection::vec(0usize..200, 1..20),
+        ) {
+            let (mut at_once, mut each) = (LineBuffer::new(), LineBuffer::new());
+            let mut at = 0;
+            let mut run = runs.iter().cycle();
+            while at < bytes.len() {
+                let end = (at + run.next().copied().unwrap_or(1)).min(bytes.len());
+                let taken = at_once.take_plain(&bytes[at..end]);
+                proptest::prop_assert!(taken <= end - at);
+                for &b in &bytes[at..at + taken] {
+                    proptest::prop_assert!(each.is_plain(b), "byte {:#04x} taken", b);
+                    proptest::prop_assert_eq!(each.feed(b), Feed::Added(b));
+                }
+                at += taken;
+                if at < end {
+                    proptest::prop_assert!(!each.is_plain(bytes[at]), "{:#04x} left", bytes[at]);
+                }
+                proptest::prop_assert_eq!(std::format!("{at_once:?}"), std::format!("{each:?}"));
+                if at < bytes.len() {
+                    let b = bytes[at];
+                    let (a, e) = (at_once.feed(b), each.feed(b));
+                    proptest::prop_assert_eq!(a, e, "byte {:#04x}", b);
+                    if a == Feed::Line {
+                        at_once.clear();
+                        each.clear();
+                    }
+                    at += 1;
+                }
+            }
+            proptest::prop_assert_eq!(std::format!("{at_once:?}"), std::format!("{each:?}"));
+        }
+    }
+
+    /// A command line's characters after its first are taken as one run, up to what is not
+    /// plain (so the property above is not a test of nothing).
+    #[test]
+    fn a_command_lines_characters_are_taken_as_one_run() {
+        let mut lb = LineBuffer::new();
+        assert_eq!(
+            lb.take_plain(b"pose 1 2"),
+            0,
+            "a line's first byte says what it is"
+        );
+        assert_eq!(lb.feed(b'p'), Feed::Added(b'p'));
+        assert_eq!(lb.take_plain(b"ose 1,2 x=3\n"), 11);
+        assert_eq!(lb.line(), "pose 1,2 x=3");
+        assert_eq!(lb.take_plain(b"X=1"), 0, "an X goes the whole way");
+        assert_eq!(lb.feed(b'\n'), Feed::Line);
+        assert_eq!(lb.line(), "pose 1,2 x=3");
+        lb.clear();
+        lb.feed(b'm');
+        let long = [b'a'; 200];
+        assert_eq!(
+            lb.take_plain(&long),
+            MAX_LINE - 1,
+            "no more than the line holds"
+        );
+        assert_eq!(lb.take_plain(&long), 0);
+        assert_eq!(lb.feed(b'a'), Feed::Overflowed);
     }
 
     /// The short way is taken (so the property above is not a test of nothing; random input

@@ -107,6 +107,19 @@ impl Session {
         feed
     }
 
+    /// Takes the plain characters at the start of `bytes` into the line at once
+    /// ([`LineBuffer::take_plain`]: a command line's characters, up to anything else), echoing
+    /// them when echo is on, exactly as feeding each would ([`crate::Controller::on_byte`]: a
+    /// plain character only adds to the line, for the controller nothing happens). Returns how
+    /// many it took; the rest are for [`crate::Controller::on_byte`], one by one.
+    pub fn take_plain(&mut self, bytes: &[u8], out: &mut impl Write) -> usize {
+        let taken = self.line.take_plain(bytes);
+        if self.echo && taken > 0 {
+            report::write_echo_chars(out, &bytes[..taken]);
+        }
+        taken
+    }
+
     /// True (once) if a binary frame was dropped because its bytes stopped coming.
     pub(crate) fn take_abandoned_frame(&mut self) -> bool {
         self.line.take_abandoned()

@@ -41,6 +41,13 @@ pub trait Port: fmt::Write {
     fn has_room_for_step(&self) -> bool;
     /// The next received byte, or where bytes were lost.
     fn receive(&mut self) -> Option<Received>;
+    /// Takes the plain characters of a command line at the front of the bytes received into
+    /// `session`'s line at once ([`Session::take_plain`], echoed to this port), at most `most`;
+    /// returns how many. A port may take none (they then come one by one from
+    /// [`Port::receive`]).
+    fn take_plain(&mut self, _session: &mut Session, _most: usize) -> usize {
+        0
+    }
     /// Something waits to be received.
     fn rx_pending(&self) -> bool;
     /// Notices may be written now. (A port that says no, closed, gets them later: the
@@ -77,6 +84,10 @@ impl Port for Serial {
     }
     fn receive(&mut self) -> Option<Received> {
         self.read()
+    }
+    #[inline(always)]
+    fn take_plain(&mut self, session: &mut Session, most: usize) -> usize {
+        Serial::take_plain(self, session, most)
     }
     fn rx_pending(&self) -> bool {
         Serial::rx_pending(self)
@@ -246,6 +257,13 @@ impl<P: Port> Link<P> {
     ) -> bool {
         let Link { port, session } = self;
         while *budget > 0 && port.has_room_for_step() {
+            // A command line's characters, as many as have come, go into its line at once
+            // (for the controller they do nothing, see `Session::take_plain`); what ends the
+            // run (the line end, a byte that is not plain) goes the whole way below.
+            *budget -= port.take_plain(session, *budget);
+            if *budget == 0 {
+                break;
+            }
             match port.receive() {
                 Some(Received::Byte(byte)) => {
                     *budget -= 1;

@@ -17,6 +17,7 @@
 mod flash;
 mod link;
 mod pulses;
+mod rx_ring;
 mod safety_pins;
 mod serial;
 mod servo_pwm;

@@ -1,7 +1,8 @@
 //! UART0 on GP0 (TX) / GP1 (RX), 8N1, baud rate changeable at run time.
 //!
 //! Receive: the `UART0_IRQ` handler (RX FIFO level and RX timeout interrupts) moves bytes from
-//! the 32-byte hardware FIFO into a lock-free queue that the main loop reads. While bytes keep
+//! the 32-byte hardware FIFO into a lock-free queue ([`crate::rx_ring`]) that the main loop reads
+//! (a command line's characters a run at a time, [`Serial::take_plain`]). While bytes keep
 //! coming at the slower rates, a timer alarm (`TIMER_IRQ_0`) also empties the FIFO every
 //! [`rx_poll_period_us`] (100 us): the PL011 raises its interrupt only at the FIFO level
 //! (8 bytes) or after 32 bit times of silence (278 us at 115,200 baud), so without the poll the
@@ -39,11 +40,9 @@ use core::{
 };
 
 use control::protocol::Lost;
+use control::Session;
 use critical_section::Mutex;
-use heapless::{
-    spsc::{Consumer, Producer, Queue},
-    Deque,
-};
+use heapless::Deque;
 use rp2040_hal::{
     fugit::{HertzU32, MicrosDurationU32, RateExtU32},
     gpio::{bank0, DefaultTypeState, FunctionUart, Pin, PullNone, PullUp},
@@ -51,6 +50,8 @@ use rp2040_hal::{
     timer::{Alarm, Alarm0},
     uart::{DataBits, Enabled, FifoWatermark, ReadErrorType, StopBits, UartConfig, UartPeripheral},
 };
+
+use crate::rx_ring::{RxConsumer, RxProducer, RxRing};
 
 /// Receive queue size; holds `RX_QUEUE_BYTES - 1` bytes (355 ms of input at 115,200 baud,
 /// 44 ms at 921,600): a host's burst of lines waits here while the replies, which are often
@@ -98,7 +99,7 @@ pub fn rx_poll_period_us(baud: u32) -> Option<u32> {
 
 /// The interrupt's side of the receive queue.
 struct Receiver {
-    queue: Producer<'static, u8, RX_QUEUE_BYTES>,
+    queue: RxProducer<RX_QUEUE_BYTES>,
     /// Bytes put into the queue so far (wrapping): positions in the received stream.
     enqueued: u32,
     /// Bytes lost that the main loop has not reached yet.
@@ -140,7 +141,7 @@ pub struct BaudOutOfRange;
 
 /// The main loop's side of UART0.
 pub struct Serial {
-    rx_queue: Consumer<'static, u8, RX_QUEUE_BYTES>,
+    rx_queue: RxConsumer<RX_QUEUE_BYTES>,
     /// Bytes taken from the queue so far (wrapping), to match `Loss::after`.
     rx_dequeued: u32,
     /// The gap just reached: queued bytes before this position are dropped.
@@ -165,7 +166,7 @@ impl Serial {
         mut poll: Alarm0,
     ) -> Result<Self, BaudOutOfRange> {
         check_baud(baud)?;
-        let queue = cortex_m::singleton!(: Queue<u8, RX_QUEUE_BYTES> = Queue::new())
+        let queue = cortex_m::singleton!(: RxRing<RX_QUEUE_BYTES> = RxRing::new())
             .expect("Serial::new is called once");
         let (producer, consumer) = queue.split();
 
@@ -233,6 +234,32 @@ impl Serial {
                 None => return Some(Received::Byte(byte)),
             }
         }
+    }
+
+    /// Takes the plain characters of a command line at the front of the bytes received
+    /// ([`Session::take_plain`]: into `session`'s line, echoed to this port's output), at most
+    /// `most` of them; returns how many. None if bytes were lost and the main loop has not
+    /// reached the gap yet: up to the gap, and past it, bytes go one by one ([`Serial::read`]).
+    #[inline(always)]
+    pub fn take_plain(&mut self, session: &mut Session, most: usize) -> usize {
+        let Serial {
+            rx_queue,
+            rx_dequeued,
+            rx_skip_until,
+            tx_buffer,
+            ..
+        } = self;
+        // The bytes waiting are looked at before the flag: a loss recorded after the look is
+        // at a later position than any of them.
+        let run = rx_queue.waiting();
+        if RX_LOSS_PENDING.load(Ordering::Acquire) || rx_skip_until.is_some() {
+            return 0;
+        }
+        let run = &run[..run.len().min(most)];
+        let taken = session.take_plain(run, &mut TxWriter(tx_buffer));
+        rx_queue.consume(taken);
+        *rx_dequeued = rx_dequeued.wrapping_add(taken as u32);
+        taken
     }
 
     pub fn rx_pending(&self) -> bool {
@@ -308,36 +335,7 @@ impl Serial {
     /// (the FIFO is full), the TX interrupt is armed to wake the main loop when the FIFO has
     /// drained to half.
     pub fn send_some(&mut self) {
-        if self.tx_buffer.is_empty() {
-            return;
-        }
-        let written = critical_section::with(|cs| {
-            let mut shared = SHARED.borrow_ref_mut(cs);
-            let Some(uart) = shared.as_mut().and_then(|shared| shared.uart.as_mut()) else {
-                return 0;
-            };
-            let mut written = 0;
-            // Both halves of the ring buffer, as far as the FIFO takes them.
-            let (front, back) = self.tx_buffer.as_slices();
-            for part in [front, back] {
-                match uart.write_raw(part) {
-                    Ok(rest) => {
-                        written += part.len() - rest.len();
-                        if !rest.is_empty() {
-                            break;
-                        }
-                    }
-                    Err(_) => break, // nb::WouldBlock: FIFO full
-                }
-            }
-            if written < self.tx_buffer.len() {
-                uart.enable_tx_interrupt();
-            }
-            written
-        });
-        for _ in 0..written {
-            self.tx_buffer.pop_front();
-        }
+        send_some(&mut self.tx_buffer);
     }
 
     pub fn baud(&self) -> u32 {
@@ -382,12 +380,56 @@ impl Serial {
 /// never silent loss, since a host relies on every reply arriving whole.
 impl fmt::Write for Serial {
     fn write_str(&mut self, text: &str) -> fmt::Result {
+        TxWriter(&mut self.tx_buffer).write_str(text)
+    }
+}
+
+/// The transmit buffer as output: what [`Serial`]'s `fmt::Write` does, for code that holds
+/// the buffer beside the receive queue ([`Serial::take_plain`]).
+struct TxWriter<'a>(&'a mut Deque<u8, TX_BUFFER_BYTES>);
+
+impl fmt::Write for TxWriter<'_> {
+    fn write_str(&mut self, text: &str) -> fmt::Result {
         for &byte in text.as_bytes() {
-            while self.tx_buffer.push_back(byte).is_err() {
-                self.send_some();
+            while self.0.push_back(byte).is_err() {
+                send_some(self.0);
             }
         }
         Ok(())
+    }
+}
+
+/// [`Serial::send_some`], on the transmit buffer.
+fn send_some(tx_buffer: &mut Deque<u8, TX_BUFFER_BYTES>) {
+    if tx_buffer.is_empty() {
+        return;
+    }
+    let written = critical_section::with(|cs| {
+        let mut shared = SHARED.borrow_ref_mut(cs);
+        let Some(uart) = shared.as_mut().and_then(|shared| shared.uart.as_mut()) else {
+            return 0;
+        };
+        let mut written = 0;
+        // Both halves of the ring buffer, as far as the FIFO takes them.
+        let (front, back) = tx_buffer.as_slices();
+        for part in [front, back] {
+            match uart.write_raw(part) {
+                Ok(rest) => {
+                    written += part.len() - rest.len();
+                    if !rest.is_empty() {
+                        break;
+                    }
+                }
+                Err(_) => break, // nb::WouldBlock: FIFO full
+            }
+        }
+        if written < tx_buffer.len() {
+            uart.enable_tx_interrupt();
+        }
+        written
+    });
+    for _ in 0..written {
+        tx_buffer.pop_front();
     }
 }
 
@@ -485,7 +527,7 @@ impl Shared {
 impl Receiver {
     fn enqueue(&mut self, bytes: &[u8]) {
         for &byte in bytes {
-            if self.queue.enqueue(byte).is_ok() {
+            if self.queue.enqueue(byte) {
                 self.enqueued = self.enqueued.wrapping_add(1);
             } else {
                 self.lose(1, false);

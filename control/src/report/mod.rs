@@ -38,10 +38,10 @@ pub use errors::{usage, write_error_codes_doc, Code};
 pub use format::{degrees, Fixed, PoseText, Six, ValueText, Vector};
 pub use near::{nearest_setting, nearest_verb};
 pub use replies::{
-    board_id_digits, kinematics_refusal, refusal, write_banner, write_echo, write_error,
-    write_held_echo, write_notice, write_ok, write_prompt, Fault, Listing, MotionReport, Notice,
-    Saved, StatusReport, StreamCounts, EOL, HELP, PROMPT, USB_MANUFACTURER, USB_PID, USB_PRODUCT,
-    USB_VID, VERSION,
+    board_id_digits, kinematics_refusal, refusal, write_banner, write_echo, write_echo_chars,
+    write_error, write_held_echo, write_notice, write_ok, write_prompt, Fault, Listing,
+    MotionReport, Notice, Saved, StatusReport, StreamCounts, EOL, HELP, PROMPT, USB_MANUFACTURER,
+    USB_PID, USB_PRODUCT, USB_VID, VERSION,
 };
 
 #[cfg(test)]

@@ -115,6 +115,14 @@ pub fn write_echo(out: &mut impl Write, feed: Feed) {
     };
 }
 
+/// Echoes characters added to the line one after the other (printable ASCII: what
+/// [`write_echo`] writes for each one's [`Feed::Added`]).
+pub fn write_echo_chars(out: &mut impl Write, chars: &[u8]) {
+    if let Ok(text) = core::str::from_utf8(chars) {
+        let _ = out.write_str(text);
+    }
+}
+
 /// Echoes a whole line whose characters were held back as they came (it began with a digit,
 /// so it might have been a text frame), with its line end.
 pub fn write_held_echo(out: &mut impl Write, line: &str) {

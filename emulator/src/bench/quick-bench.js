@@ -290,12 +290,15 @@ function profilePoseLines(count) {
     return result;
   };
   let bytes = 0;
+  let passes = 0;
   for (const pose of pathPoses(count)) {
     const line = `pose ${pose}`;
     bytes += line.length + 1;
     board.runMs(3); // a quiet stretch between lines (frames run there, not counted)
     on = true;
+    const passesBefore = board.loop.passes;
     const { reply } = board.request(line);
+    passes += board.loop.passes - passesBefore;
     on = false;
     if (reply !== 'ok') {
       throw new Error(`${line}: ${reply}`);
@@ -308,6 +311,7 @@ function profilePoseLines(count) {
       `per line (${count} lines, ${(bytes / count).toFixed(1)} bytes each): ${fmt(total)} cycles`,
     40,
   );
+  console.log(`main-loop passes per line: ${(passes / count).toFixed(1)}`);
 }
 
 /**
