@@ -340,26 +340,24 @@ impl LineBuffer {
         let bytes = &bytes[..bytes.len().min(room)];
         // What `add_plain` does with each byte, for the run: commas add up (saturating, as one
         // by one); a byte other than a digit or a comma makes the stretch since the sync point
-        // impure; the last byte says whether the next comes after a digit.
+        // impure (looked for only while it is pure: a command line is not, from its first
+        // letter on); the last byte says whether the next comes after a digit.
         let mut run = 0;
         let mut commas = 0usize;
-        let mut impure = false;
-        for &byte in bytes {
-            if !(0x20..=0x7E).contains(&byte) || byte == stream::TEXT_FRAME_END {
+        while let Some(&byte) = bytes.get(run) {
+            if byte.wrapping_sub(0x20) > 0x7E - 0x20 || byte == stream::TEXT_FRAME_END {
                 break;
             }
-            if byte == b',' {
-                commas += 1;
-            } else if !byte.is_ascii_digit() {
-                impure = true;
-            }
+            commas += usize::from(byte == b',');
             run += 1;
         }
         let taken = &bytes[..run];
         let Some(&last) = taken.last() else {
             return 0;
         };
-        self.pure &= !impure;
+        if self.pure && taken.iter().any(|&b| b != b',' && !b.is_ascii_digit()) {
+            self.pure = false;
+        }
         self.commas = self
             .commas
             .saturating_add(u8::try_from(commas).unwrap_or(u8::MAX));

@@ -4,10 +4,14 @@
 //! instead of one call per byte. One producer and one consumer, on one core: each side owns
 //! its end's position (bytes ever written, bytes ever read: wrapping counts) and only reads
 //! the other's, so no lock is needed. Holds `N - 1` bytes (`N` a power of two).
+//!
+//! One core: the producer is an interrupt handler that preempts the consumer, never runs
+//! beside it, so ordering the accesses in the compiler (`compiler_fence`) is enough; the
+//! M0+'s `dmb` that atomic acquire and release would add costs cycles on every byte.
 
 use core::{
     cell::UnsafeCell,
-    sync::atomic::{AtomicUsize, Ordering},
+    sync::atomic::{compiler_fence, AtomicUsize, Ordering},
 };
 
 /// The ring; split once into its two ends ([`RxRing::split`]).
@@ -21,7 +25,8 @@ pub struct RxRing<const N: usize> {
 
 // SAFETY: the two ends touch disjoint bytes: the producer writes only at `written`, outside
 // the bytes waiting (`read..written`), and publishes them by storing `written` (Release) after;
-// the consumer reads only bytes waiting, and frees them by storing `read` after.
+// the consumer reads only bytes waiting, and frees them by storing `read` after. (Both ends
+// run on one core, the producer in an interrupt: a compiler fence orders each end's accesses.)
 unsafe impl<const N: usize> Sync for RxRing<N> {}
 
 impl<const N: usize> RxRing<N> {
@@ -50,25 +55,25 @@ pub struct RxProducer<const N: usize> {
 }
 
 impl<const N: usize> RxProducer<N> {
-    /// Queues `byte`; false if the ring is full (the byte is not queued).
+    /// Queues as many of `bytes` as there is room for, in order, all at once; returns how many.
     #[inline]
-    pub fn enqueue(&mut self, byte: u8) -> bool {
+    pub fn enqueue_all(&mut self, bytes: &[u8]) -> usize {
         let written = self.ring.written.load(Ordering::Relaxed);
-        let read = self.ring.read.load(Ordering::Acquire);
-        if written.wrapping_sub(read) >= N - 1 {
-            return false;
+        let read = self.ring.read.load(Ordering::Relaxed);
+        compiler_fence(Ordering::Acquire);
+        let room = (N - 1) - written.wrapping_sub(read);
+        let count = bytes.len().min(room);
+        let base = self.ring.bytes.get() as *mut u8;
+        for (offset, &byte) in bytes[..count].iter().enumerate() {
+            // SAFETY: within the room, none of these indices is among the bytes waiting, so
+            // the consumer does not read them until `written` is published below.
+            unsafe { base.add(written.wrapping_add(offset) % N).write(byte) };
         }
-        // SAFETY: index `written % N` is not among the bytes waiting (fewer than N - 1), so the
-        // consumer does not read it until `written` is published below.
-        unsafe {
-            (self.ring.bytes.get() as *mut u8)
-                .add(written % N)
-                .write(byte)
-        };
+        compiler_fence(Ordering::Release);
         self.ring
             .written
-            .store(written.wrapping_add(1), Ordering::Release);
-        true
+            .store(written.wrapping_add(count), Ordering::Relaxed);
+        count
     }
 }
 
@@ -83,7 +88,8 @@ impl<const N: usize> RxConsumer<N> {
     #[inline]
     pub fn waiting(&self) -> &[u8] {
         let read = self.ring.read.load(Ordering::Relaxed);
-        let written = self.ring.written.load(Ordering::Acquire);
+        let written = self.ring.written.load(Ordering::Relaxed);
+        compiler_fence(Ordering::Acquire);
         let start = read % N;
         let len = written.wrapping_sub(read).min(N - start);
         // SAFETY: `start..start + len` lies in the ring and holds bytes published by the
@@ -96,9 +102,10 @@ impl<const N: usize> RxConsumer<N> {
     #[inline]
     pub fn consume(&mut self, count: usize) {
         let read = self.ring.read.load(Ordering::Relaxed);
+        compiler_fence(Ordering::Release);
         self.ring
             .read
-            .store(read.wrapping_add(count), Ordering::Release);
+            .store(read.wrapping_add(count), Ordering::Relaxed);
     }
 
     /// The next byte, taken; `None` if nothing waits.
@@ -112,6 +119,6 @@ impl<const N: usize> RxConsumer<N> {
     /// Something waits.
     #[inline]
     pub fn ready(&self) -> bool {
-        self.ring.written.load(Ordering::Acquire) != self.ring.read.load(Ordering::Relaxed)
+        self.ring.written.load(Ordering::Relaxed) != self.ring.read.load(Ordering::Relaxed)
     }
 }
