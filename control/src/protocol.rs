@@ -322,39 +322,34 @@ impl LineBuffer {
 
     /// Takes the plain bytes ([`LineBuffer::is_plain`]) at the start of `bytes` at once, as
     /// many as come before the first byte that is not plain (or the line is full): the run a
-    /// line's characters arrive in. Returns how many it took; each did what
+    /// line's characters arrive in; with the line's first character, if it begins a command
+    /// line (printable, not a digit, not `X`). Returns how many it took; each did what
     /// [`LineBuffer::feed`] does with it ([`Feed::Added`]), and the rest are to be fed one by
     /// one. (A plain byte never ends a line or a frame, and no binary frame is in progress, so
     /// no time needs passing: [`LineBuffer::feed_at`] would do the same.) The short way's
     /// short way: a few cycles a byte, where feeding each costs a call and a [`Feed`].
     #[inline]
     pub fn take_plain(&mut self, bytes: &[u8]) -> usize {
-        if !(self.kind == Kind::Command
-            && self.spoiled.is_none()
-            && self.escape == Escape::None
-            && self.frame.is_empty())
-        {
+        // A line's first character too, when it begins a command line (not a digit, which may
+        // begin a text frame): that is all it does besides being added.
+        let starts_line = self.kind == Kind::Start
+            && bytes
+                .first()
+                .is_some_and(|&b| !stream::starts_text_frame(b));
+        if !(self.may_take_plain() && (self.kind == Kind::Command || starts_line)) {
             return 0;
         }
         let room = MAX_LINE - self.buf.len();
         let bytes = &bytes[..bytes.len().min(room)];
-        // What `add_plain` does with each byte, for the run: commas add up (saturating, as one
-        // by one); a byte other than a digit or a comma makes the stretch since the sync point
-        // impure (looked for only while it is pure: a command line is not, from its first
-        // letter on); the last byte says whether the next comes after a digit.
-        let mut run = 0;
-        let mut commas = 0usize;
-        while let Some(&byte) = bytes.get(run) {
-            if byte.wrapping_sub(0x20) > 0x7E - 0x20 || byte == stream::TEXT_FRAME_END {
-                break;
-            }
-            commas += usize::from(byte == b',');
-            run += 1;
-        }
+        let (run, commas) = plain_run(bytes);
         let taken = &bytes[..run];
         let Some(&last) = taken.last() else {
             return 0;
         };
+        // What `add_plain` does with each byte, for the run: commas add up (saturating, as one
+        // by one); a byte other than a digit or a comma makes the stretch since the sync point
+        // impure (looked for only while it is pure: a command line is not, from its first
+        // letter on); the last byte says whether the next comes after a digit.
         if self.pure && taken.iter().any(|&b| b != b',' && !b.is_ascii_digit()) {
             self.pure = false;
         }
@@ -363,9 +358,23 @@ impl LineBuffer {
             .saturating_add(u8::try_from(commas).unwrap_or(u8::MAX));
         self.after_digit = last.is_ascii_digit();
         self.after_cr = false;
+        if starts_line {
+            self.kind = Kind::Command;
+        }
         // Fits: at most `room` bytes.
         let _ = self.buf.extend_from_slice(taken);
         run
+    }
+
+    /// Whether [`LineBuffer::take_plain`] may take anything now (a few comparisons, for a caller
+    /// to skip the rest when it cannot: in a stream frame, in an escape sequence, in a spoiled
+    /// line or one that began with a digit).
+    #[inline]
+    pub fn may_take_plain(&self) -> bool {
+        self.frame.is_empty()
+            && self.kind != Kind::Frame
+            && self.spoiled.is_none()
+            && self.escape == Escape::None
     }
 
     /// Whether an `X` now ends the line as a text frame: unless the line is a command line
@@ -585,6 +594,28 @@ impl LineBuffer {
             Feed::Line
         }
     }
+}
+
+/// Whether `byte` may be a plain character of a command line ([`LineBuffer::take_plain`]):
+/// printable ASCII other than `X`. (A byte that is not can never be taken: a caller holding
+/// bytes may look at the first before handing them over.)
+#[inline]
+pub fn is_plain_char(byte: u8) -> bool {
+    byte.wrapping_sub(0x20) <= 0x7E - 0x20 && byte != stream::TEXT_FRAME_END
+}
+
+/// How many bytes at the start of `bytes` are plain characters ([`is_plain_char`]), and how
+/// many of those are commas. A loop of its own, so that it runs in registers.
+#[inline(never)]
+fn plain_run(bytes: &[u8]) -> (usize, usize) {
+    let mut commas = 0;
+    for (at, &byte) in bytes.iter().enumerate() {
+        if !is_plain_char(byte) {
+            return (at, commas);
+        }
+        commas += usize::from(byte == b',');
+    }
+    (bytes.len(), commas)
 }
 
 #[cfg(test)]
@@ -1203,7 +1234,6 @@ mod tests {
                 let taken = at_once.take_plain(&bytes[at..end]);
                 proptest::prop_assert!(taken <= end - at);
                 for &b in &bytes[at..at + taken] {
-                    proptest::prop_assert!(each.is_plain(b), "byte {:#04x} taken", b);
                     proptest::prop_assert_eq!(each.feed(b), Feed::Added(b));
                 }
                 at += taken;
@@ -1226,28 +1256,29 @@ mod tests {
         }
     }
 
-    /// A command line's characters after its first are taken as one run, up to what is not
-    /// plain (so the property above is not a test of nothing).
+    /// A command line's characters, its first included, are taken as one run, up to what is
+    /// not plain (so the property above is not a test of nothing).
     #[test]
     fn a_command_lines_characters_are_taken_as_one_run() {
         let mut lb = LineBuffer::new();
         assert_eq!(
-            lb.take_plain(b"pose 1 2"),
+            lb.take_plain(b"1,2,3"),
             0,
-            "a line's first byte says what it is"
+            "a digit first may begin a text frame"
         );
-        assert_eq!(lb.feed(b'p'), Feed::Added(b'p'));
+        assert_eq!(lb.take_plain(b"X=1"), 0);
+        assert_eq!(lb.take_plain(b"\n"), 0);
+        assert_eq!(lb.take_plain(b"p"), 1, "a command line's first character");
         assert_eq!(lb.take_plain(b"ose 1,2 x=3\n"), 11);
         assert_eq!(lb.line(), "pose 1,2 x=3");
         assert_eq!(lb.take_plain(b"X=1"), 0, "an X goes the whole way");
         assert_eq!(lb.feed(b'\n'), Feed::Line);
         assert_eq!(lb.line(), "pose 1,2 x=3");
         lb.clear();
-        lb.feed(b'm');
         let long = [b'a'; 200];
         assert_eq!(
             lb.take_plain(&long),
-            MAX_LINE - 1,
+            MAX_LINE,
             "no more than the line holds"
         );
         assert_eq!(lb.take_plain(&long), 0);

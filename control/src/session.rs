@@ -120,6 +120,12 @@ impl Session {
         taken
     }
 
+    /// Whether [`Session::take_plain`] may take anything now ([`LineBuffer::may_take_plain`]).
+    #[inline]
+    pub fn may_take_plain(&self) -> bool {
+        self.line.may_take_plain()
+    }
+
     /// True (once) if a binary frame was dropped because its bytes stopped coming.
     pub(crate) fn take_abandoned_frame(&mut self) -> bool {
         self.line.take_abandoned()

@@ -42,12 +42,14 @@ pub trait Port: fmt::Write {
     /// The next received byte, or where bytes were lost.
     fn receive(&mut self) -> Option<Received>;
     /// Takes the plain characters of a command line at the front of the bytes received into
-    /// `session`'s line at once ([`Session::take_plain`], echoed to this port), at most `most`;
-    /// returns how many. A port may take none (they then come one by one from
-    /// [`Port::receive`]).
+    /// `session`'s line at once ([`Session::take_plain`], echoed to this port, if it has room
+    /// for a step's output), at most `most`; returns how many. A port may take none (they then
+    /// come one by one from [`Port::receive`]): one whose `TAKES_PLAIN` is false never does.
     fn take_plain(&mut self, _session: &mut Session, _most: usize) -> usize {
         0
     }
+    /// Whether [`Port::take_plain`] may take anything (the loop skips it where not).
+    const TAKES_PLAIN: bool = false;
     /// Something waits to be received.
     fn rx_pending(&self) -> bool;
     /// Notices may be written now. (A port that says no, closed, gets them later: the
@@ -89,6 +91,7 @@ impl Port for Serial {
     fn take_plain(&mut self, session: &mut Session, most: usize) -> usize {
         Serial::take_plain(self, session, most)
     }
+    const TAKES_PLAIN: bool = true;
     fn rx_pending(&self) -> bool {
         Serial::rx_pending(self)
     }
@@ -260,9 +263,11 @@ impl<P: Port> Link<P> {
             // A command line's characters, as many as have come, go into its line at once
             // (for the controller they do nothing, see `Session::take_plain`); what ends the
             // run (the line end, a byte that is not plain) goes the whole way below.
-            *budget -= port.take_plain(session, *budget);
-            if *budget == 0 {
-                break;
+            if P::TAKES_PLAIN {
+                *budget -= port.take_plain(session, *budget);
+                if *budget == 0 {
+                    break;
+                }
             }
             match port.receive() {
                 Some(Received::Byte(byte)) => {
@@ -280,6 +285,16 @@ impl<P: Port> Link<P> {
             }
         }
         false
+    }
+
+    /// Between passes: the plain characters of a command line waiting, into its line (echoed,
+    /// when echo is on), if the port has room for output; then output goes to the hardware.
+    /// Returns whether it took any.
+    #[inline(always)]
+    fn take_plain_input(&mut self) -> bool {
+        let taken = P::TAKES_PLAIN && self.port.take_plain(&mut self.session, usize::MAX) > 0;
+        self.port.send_some();
+        taken
     }
 
     /// The port follows the baud rate, then a prompt held back for a baud change goes out if
@@ -364,6 +379,10 @@ pub trait Links {
     /// [`Link::send`] on every link.
     fn send(&mut self, baud: u32);
 
+    /// [`Link::take_plain_input`] on every link (between passes, no command running); whether
+    /// any took input.
+    fn take_plain_input(&mut self) -> bool;
+
     /// A link has input waiting and room for a step's output.
     fn input_waiting(&self) -> bool;
 
@@ -400,6 +419,9 @@ impl Links for () {
         false
     }
     fn send(&mut self, _: u32) {}
+    fn take_plain_input(&mut self) -> bool {
+        false
+    }
     fn input_waiting(&self) -> bool {
         false
     }
@@ -508,6 +530,12 @@ impl<P: Port, Rest: Links> Links for (Link<P>, Rest) {
     fn send(&mut self, baud: u32) {
         self.0.send(baud);
         self.1.send(baud);
+    }
+
+    #[inline(always)]
+    fn take_plain_input(&mut self) -> bool {
+        let taken = self.0.take_plain_input();
+        self.1.take_plain_input() || taken
     }
 
     #[inline(always)]

@@ -121,7 +121,7 @@ fn main() -> ! {
         pulses::follow_frame_rate(&controller, &mut servos);
         links.send(controller.baud());
         hold_up.before_sleep(&links, &controller);
-        sleep_unless_due(&controller, &links, &servos);
+        sleep_unless_due(&controller, &mut links, &servos);
     }
 }
 
@@ -317,18 +317,34 @@ fn next_frame(controller: &mut Controller, servos: &mut ServoPwm, links: &mut Bo
 /// for room is no reason to stay awake: the UART's TX interrupt, or the USB interrupt when the
 /// host takes a packet, wakes the loop. (Decided after the baud switch, so the UART going idle
 /// between the two cannot put the loop to sleep with the switch still to do.)
-fn sleep_unless_due(controller: &Controller, links: &BoardLinks, servos: &ServoPwm) {
-    let port_wants_pass = links.wants_pass(controller.baud());
-    // Interrupts stay masked from the check to the WFI: one arriving in between stays pending,
-    // so WFI returns at once instead of sleeping through it; its handler runs right after.
-    cortex_m::interrupt::free(|_| {
-        let input_or_work = if controller.is_busy() {
-            links.work_has_room()
-        } else {
-            links.input_waiting()
-        };
-        if !(input_or_work || servos.frame_pending() || port_wants_pass) {
-            cortex_m::asm::wfi();
+///
+/// Woken, it returns for a pass only if one has something to do: received bytes that only add
+/// characters to a command line (most of a line's bytes: they come 8 at a time at the faster
+/// rates) are taken into their line here ([`Links::take_plain_input`], echoed and sent when
+/// echo is on) and the core sleeps again, unless something else is due when the check runs
+/// again (a line end or any other byte after them, a frame, a USB event, a loss). A wake that
+/// brought no such characters (a line end alone, a control byte, room for output...) gets a
+/// pass at once, as does every wake while a command's work runs (the hold-up watch).
+fn sleep_unless_due(controller: &Controller, links: &mut BoardLinks, servos: &ServoPwm) {
+    loop {
+        let port_wants_pass = links.wants_pass(controller.baud());
+        // Interrupts stay masked from the check to the WFI: one arriving in between stays
+        // pending, so WFI returns at once instead of sleeping through it; its handler runs
+        // right after.
+        let slept = cortex_m::interrupt::free(|_| {
+            let input_or_work = if controller.is_busy() {
+                links.work_has_room()
+            } else {
+                links.input_waiting()
+            };
+            let due = input_or_work || servos.frame_pending() || port_wants_pass;
+            if !due {
+                cortex_m::asm::wfi();
+            }
+            !due
+        });
+        if !slept || controller.is_busy() || !links.take_plain_input() {
+            return;
         }
-    });
+    }
 }

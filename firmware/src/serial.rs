@@ -39,7 +39,7 @@ use core::{
     sync::atomic::{AtomicBool, AtomicU32, Ordering},
 };
 
-use control::protocol::Lost;
+use control::protocol::{self, Lost};
 use control::Session;
 use critical_section::Mutex;
 use heapless::Deque;
@@ -239,22 +239,31 @@ impl Serial {
     /// Takes the plain characters of a command line at the front of the bytes received
     /// ([`Session::take_plain`]: into `session`'s line, echoed to this port's output), at most
     /// `most` of them; returns how many. None if bytes were lost and the main loop has not
-    /// reached the gap yet: up to the gap, and past it, bytes go one by one ([`Serial::read`]).
+    /// reached the gap yet (up to the gap, and past it, bytes go one by one, [`Serial::read`]),
+    /// nor without room for a step's output ([`Serial::has_room_for_step`]: the echo).
     #[inline(always)]
     pub fn take_plain(&mut self, session: &mut Session, most: usize) -> usize {
+        // The bytes waiting are looked at before the loss flag: a loss recorded after the look
+        // is at a later position than any of them. The first decides at once for a line end,
+        // a control byte or a stream frame's first byte (their latency).
+        let run = self.rx_queue.waiting();
+        if !run
+            .first()
+            .is_some_and(|&byte| protocol::is_plain_char(byte))
+            || RX_LOSS_PENDING.load(Ordering::Acquire)
+            || self.rx_skip_until.is_some()
+            || !session.may_take_plain()
+            || !self.has_room_for_step()
+        {
+            return 0;
+        }
         let Serial {
             rx_queue,
             rx_dequeued,
-            rx_skip_until,
             tx_buffer,
             ..
         } = self;
-        // The bytes waiting are looked at before the flag: a loss recorded after the look is
-        // at a later position than any of them.
         let run = rx_queue.waiting();
-        if RX_LOSS_PENDING.load(Ordering::Acquire) || rx_skip_until.is_some() {
-            return 0;
-        }
         let run = &run[..run.len().min(most)];
         let taken = session.take_plain(run, &mut TxWriter(tx_buffer));
         rx_queue.consume(taken);
@@ -334,8 +343,11 @@ impl Serial {
     /// Moves as much buffered output into the TX FIFO as fits; never waits. If output is left
     /// (the FIFO is full), the TX interrupt is armed to wake the main loop when the FIFO has
     /// drained to half.
+    #[inline(always)]
     pub fn send_some(&mut self) {
-        send_some(&mut self.tx_buffer);
+        if !self.tx_buffer.is_empty() {
+            send_some(&mut self.tx_buffer);
+        }
     }
 
     pub fn baud(&self) -> u32 {

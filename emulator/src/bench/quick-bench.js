@@ -21,6 +21,12 @@
 //                    inclusive for a few functions: with what they call)
 //   jump             BENCHMARKS.md's 5 mm jumps (`pose` lines whose path is checked every 0.5 mm:
 //                    10 IKs): from the line end to the PWM at 115,200 baud, PL011 receive rules
+//   latency          BENCHMARKS.md's "Command to output" steps (40 `pose` lines, one IK each) at
+//                    115,200 and 921,600 baud, and "Stream frames"' 40 binary frames at 921,600
+//                    and 115,200: from the last byte to the PWM
+//   sustained        BENCHMARKS.md's "Sustained pose lines per second", back to back only
+//                    (`--poses` lines, 2000 in the bench; every line must be `ok`), and a host
+//                    that waits for each `ok` (500 lines)
 //
 // Expects `cargo fw` to have built the firmware and the benchmark firmware. The same
 // measurements, in the same harness, as `./dev bench` (emulator/src/bench/ik-bench.js).
@@ -28,11 +34,17 @@
 import { parseArgs } from 'node:util';
 
 import { DEFAULT_ELF, EmulatedBoard } from '../chip/board.js';
-import { measureLatency, streamingBoard } from './firmware-bench.js';
+import {
+  measureFrameLatency,
+  measureLatency,
+  measureLockStep,
+  measureStream,
+  streamingBoard,
+} from './firmware-bench.js';
 import { measureStreamCpu } from './stream-bench.js';
 import { symbolRanges } from '../chip/elf.js';
 import { BENCH_ELF, benchPoses, runIkBench, runStreamBench } from './ik-bench.js';
-import { pathPoses } from './headline.js';
+import { frameCounts, pathPoses } from './headline.js';
 
 const { values: args, positionals } = parseArgs({
   allowPositionals: true,
@@ -51,7 +63,9 @@ const INCLUSIVE =
   /^(control::tracker::Tracker::step|kinematics_core::ik::Solver::solve|kinematics_core::statics::servo_holding_torques|kinematics_core::linalg::Lu6::|control::payload::)/;
 
 const which = positionals[0];
-const poses = which === 'pose-profile' ? [] : benchPoses(Number(args.poses), Number(args.seed));
+const poses = ['pose-profile', 'latency', 'sustained'].includes(which)
+  ? []
+  : benchPoses(Number(args.poses), Number(args.seed));
 if (which === 'ik') {
   for (const v of runIkBench(poses).variants) {
     console.log(row(`IK (${v.name})`, v));
@@ -76,6 +90,29 @@ if (which === 'ik') {
   const us = measureLatency(['5 0 0 0 0 0', '0 0 0 0 0 0', '0 0 5 0 0 0']);
   console.log(
     `5 mm jumps to PWM at 115,200 baud: ${us.map((u) => `${u.toFixed(1)} us`).join(', ')}`,
+  );
+} else if (which === 'latency') {
+  const steps = pathPoses(41);
+  const stat = (list) =>
+    `mean ${(list.reduce((a, b) => a + b, 0) / list.length).toFixed(1)}, min ${Math.min(...list).toFixed(1)}, max ${Math.max(...list).toFixed(1)} us`;
+  for (const baud of [115200, 921600]) {
+    const us = measureLatency(steps.slice(1), { baud, from: steps[0] });
+    console.log(`pose line (one IK) to PWM at ${baud} baud: ${stat(us)}`);
+  }
+  const frames = Array.from({ length: 40 }, (_, i) => frameCounts(i));
+  for (const baud of [921600, 115200]) {
+    console.log(`stream frame to PWM at ${baud} baud: ${stat(measureFrameLatency(frames, { baud }))}`);
+  }
+} else if (which === 'sustained') {
+  const count = args.poses === '40' ? 2000 : Number(args.poses);
+  const lines = pathPoses(count).map((pose) => `pose ${pose}`);
+  const result = measureStream(lines, { baud: 921600 });
+  console.log(
+    `back to back at 921,600 baud: ${result.ok}/${result.lines} ok, ${fmt(result.linesPerSecond)} lines/s`,
+  );
+  const lockStep = measureLockStep(lines.slice(0, 500), { baud: 921600 });
+  console.log(
+    `waiting for each ok: ${lockStep.ok}/${lockStep.lines} ok, ${fmt(lockStep.linesPerSecond)} lines/s, ${fmt(lockStep.cyclesPerLine)} cycles a line`,
   );
 } else if (which === 'tracker-profile') {
   profileTracker(poses.slice(0, 40), 3);
