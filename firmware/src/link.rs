@@ -263,7 +263,8 @@ impl<P: Port> Link<P> {
             // A command line's characters, as many as have come, go into its line at once
             // (for the controller they do nothing, see `Session::take_plain`); what ends the
             // run (the line end, a byte that is not plain) goes the whole way below.
-            if P::TAKES_PLAIN {
+            // (In a stream frame the line says so at once: its bytes go the whole way.)
+            if P::TAKES_PLAIN && session.may_take_plain() {
                 *budget -= port.take_plain(session, *budget);
                 if *budget == 0 {
                     break;
@@ -287,14 +288,19 @@ impl<P: Port> Link<P> {
         false
     }
 
-    /// Between passes: the plain characters of a command line waiting, into its line (echoed,
-    /// when echo is on), if the port has room for output; then output goes to the hardware.
-    /// Returns whether it took any.
+    /// Between passes: the plain characters of a command line waiting, into its line (echo is
+    /// off: see [`Link::may_take_plain`]). Returns whether it took any.
     #[inline(always)]
     fn take_plain_input(&mut self) -> bool {
-        let taken = P::TAKES_PLAIN && self.port.take_plain(&mut self.session, usize::MAX) > 0;
-        self.port.send_some();
-        taken
+        P::TAKES_PLAIN && self.port.take_plain(&mut self.session, usize::MAX) > 0
+    }
+
+    /// Whether [`Link::take_plain_input`] may take anything now: the port takes plain
+    /// characters, the line is one that may take them, and echo is off (with echo on, an
+    /// interactive user's every byte gets its pass, echoed at once).
+    #[inline(always)]
+    fn may_take_plain(&self) -> bool {
+        P::TAKES_PLAIN && !self.session.echo() && self.session.may_take_plain()
     }
 
     /// The port follows the baud rate, then a prompt held back for a baud change goes out if
@@ -383,6 +389,9 @@ pub trait Links {
     /// any took input.
     fn take_plain_input(&mut self) -> bool;
 
+    /// Whether [`Links::take_plain_input`] may take anything on some link now.
+    fn may_take_plain(&self) -> bool;
+
     /// A link has input waiting and room for a step's output.
     fn input_waiting(&self) -> bool;
 
@@ -420,6 +429,9 @@ impl Links for () {
     }
     fn send(&mut self, _: u32) {}
     fn take_plain_input(&mut self) -> bool {
+        false
+    }
+    fn may_take_plain(&self) -> bool {
         false
     }
     fn input_waiting(&self) -> bool {
@@ -536,6 +548,11 @@ impl<P: Port, Rest: Links> Links for (Link<P>, Rest) {
     fn take_plain_input(&mut self) -> bool {
         let taken = self.0.take_plain_input();
         self.1.take_plain_input() || taken
+    }
+
+    #[inline(always)]
+    fn may_take_plain(&self) -> bool {
+        self.0.may_take_plain() || self.1.may_take_plain()
     }
 
     #[inline(always)]

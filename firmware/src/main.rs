@@ -320,12 +320,16 @@ fn next_frame(controller: &mut Controller, servos: &mut ServoPwm, links: &mut Bo
 ///
 /// Woken, it returns for a pass only if one has something to do: received bytes that only add
 /// characters to a command line (most of a line's bytes: they come 8 at a time at the faster
-/// rates) are taken into their line here ([`Links::take_plain_input`], echoed and sent when
-/// echo is on) and the core sleeps again, unless something else is due when the check runs
-/// again (a line end or any other byte after them, a frame, a USB event, a loss). A wake that
-/// brought no such characters (a line end alone, a control byte, room for output...) gets a
-/// pass at once, as does every wake while a command's work runs (the hold-up watch).
+/// rates) are taken into their line here ([`Links::take_plain_input`]) and the core sleeps
+/// again, unless something else is due when the check runs again (a line end or any other
+/// byte after them, a frame, a USB event, a loss). A wake that brought no such characters (a
+/// line end alone, a control byte, room for output...) gets a pass at once, as does every
+/// wake while a command's work runs (the hold-up watch), in a stream frame, or with echo on
+/// (an interactive user sees every byte echoed at once).
 fn sleep_unless_due(controller: &Controller, links: &mut BoardLinks, servos: &ServoPwm) {
+    // Whether characters could be taken between passes at all (see above): if not, a wake goes
+    // straight to its pass.
+    let quiet = !controller.is_busy() && links.may_take_plain();
     loop {
         let port_wants_pass = links.wants_pass(controller.baud());
         // Interrupts stay masked from the check to the WFI: one arriving in between stays
@@ -343,7 +347,7 @@ fn sleep_unless_due(controller: &Controller, links: &mut BoardLinks, servos: &Se
             }
             !due
         });
-        if !slept || controller.is_busy() || !links.take_plain_input() {
+        if !(slept && quiet && links.take_plain_input()) {
             return;
         }
     }

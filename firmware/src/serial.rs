@@ -243,27 +243,27 @@ impl Serial {
     /// nor without room for a step's output ([`Serial::has_room_for_step`]: the echo).
     #[inline(always)]
     pub fn take_plain(&mut self, session: &mut Session, most: usize) -> usize {
-        // The bytes waiting are looked at before the loss flag: a loss recorded after the look
-        // is at a later position than any of them. The first decides at once for a line end,
-        // a control byte or a stream frame's first byte (their latency).
-        let run = self.rx_queue.waiting();
-        if !run
-            .first()
-            .is_some_and(|&byte| protocol::is_plain_char(byte))
-            || RX_LOSS_PENDING.load(Ordering::Acquire)
-            || self.rx_skip_until.is_some()
-            || !session.may_take_plain()
-            || !self.has_room_for_step()
-        {
-            return 0;
-        }
         let Serial {
             rx_queue,
             rx_dequeued,
+            rx_skip_until,
             tx_buffer,
             ..
         } = self;
+        // One look at the bytes waiting, before the loss flag: a loss recorded after the look
+        // is at a later position than any of them. The first byte decides at once for a line
+        // end or a control byte (their latency).
         let run = rx_queue.waiting();
+        if !run
+            .first()
+            .is_some_and(|&byte| protocol::is_plain_char(byte))
+            || !session.may_take_plain()
+            || !room_for_step(tx_buffer)
+            || RX_LOSS_PENDING.load(Ordering::Acquire)
+            || rx_skip_until.is_some()
+        {
+            return 0;
+        }
         let run = &run[..run.len().min(most)];
         let taken = session.take_plain(run, &mut TxWriter(tx_buffer));
         rx_queue.consume(taken);
@@ -320,7 +320,7 @@ impl Serial {
 
     /// True if the transmit buffer can take [`LONGEST_STEP_BYTES`] without waiting.
     pub fn has_room_for_step(&self) -> bool {
-        self.tx_buffer.capacity() - self.tx_buffer.len() >= LONGEST_STEP_BYTES
+        room_for_step(&self.tx_buffer)
     }
 
     /// True once everything written has left the UART (FIFO empty, last stop bit sent).
@@ -409,6 +409,12 @@ impl fmt::Write for TxWriter<'_> {
         }
         Ok(())
     }
+}
+
+/// [`Serial::has_room_for_step`], on the transmit buffer.
+#[inline(always)]
+fn room_for_step(tx_buffer: &Deque<u8, TX_BUFFER_BYTES>) -> bool {
+    tx_buffer.capacity() - tx_buffer.len() >= LONGEST_STEP_BYTES
 }
 
 /// [`Serial::send_some`], on the transmit buffer.
