@@ -101,7 +101,9 @@ if (which === 'ik') {
   }
   const frames = Array.from({ length: 40 }, (_, i) => frameCounts(i));
   for (const baud of [921600, 115200]) {
-    console.log(`stream frame to PWM at ${baud} baud: ${stat(measureFrameLatency(frames, { baud }))}`);
+    console.log(
+      `stream frame to PWM at ${baud} baud: ${stat(measureFrameLatency(frames, { baud }))}`,
+    );
   }
 } else if (which === 'sustained') {
   const count = args.poses === '40' ? 2000 : Number(args.poses);
