@@ -46,6 +46,7 @@ const ROUTINES = [
   '__aeabi_memset4',
   '__aeabi_memclr',
   '__aeabi_memclr4',
+  '__aeabi_lmul',
 ];
 
 const f32 = new Float32Array(1);
@@ -449,4 +450,41 @@ test("the memory routines (the ROM's) copy, fill and clear exactly the bytes ask
       }
     }
   }
+});
+
+test('64-bit multiplication: the low 64 bits of the product', () => {
+  const next = random(17);
+  const word = () => BigInt(next());
+  const wrong = [];
+  const edges = [0n, 1n, 0xffffn, 0x10000n, 0xffffffffn, 0x100000000n, (1n << 64n) - 1n, 1n << 63n];
+  const operands = [...edges];
+  for (let i = 0; i < 5000; i++) {
+    operands.push((word() << 32n) | word(), word(), BigInt.asUintN(64, -word()));
+  }
+  for (let i = 0; i < operands.length; i++) {
+    const a = operands[i];
+    const b = operands[(i * 7 + 3) % operands.length];
+    const lo = (x) => Number(x & 0xffffffffn);
+    const hi = (x) => Number(x >> 32n);
+    const { r0, r1 } = callFunction(board, address.__aeabi_lmul, [lo(a), hi(a), lo(b), hi(b)]);
+    const expected = BigInt.asUintN(64, a * b);
+    if (r0 !== lo(expected) || r1 !== hi(expected)) {
+      wrong.push(`${a} * ${b}`);
+    }
+  }
+  for (const a of edges) {
+    for (const b of edges) {
+      const { r0, r1 } = callFunction(board, address.__aeabi_lmul, [
+        Number(a & 0xffffffffn),
+        Number(a >> 32n),
+        Number(b & 0xffffffffn),
+        Number(b >> 32n),
+      ]);
+      const expected = BigInt.asUintN(64, a * b);
+      if ((BigInt(r1) << 32n) + BigInt(r0) !== expected) {
+        wrong.push(`${a} * ${b}`);
+      }
+    }
+  }
+  assert.deepEqual(wrong.slice(0, 10), [], `${wrong.length} differ`);
 });

@@ -1,6 +1,6 @@
 //! The run-time routines the compiler calls for what the Cortex-M0+ has no instruction for:
-//! `f32` arithmetic, comparisons and conversions, and 32-bit integer division (ARM EABI names,
-//! `__aeabi_*`). rp2040-hal's versions are switched off (its `disable-intrinsics` feature);
+//! `f32` arithmetic, comparisons and conversions, copying and filling memory, 64-bit
+//! multiplication and 32-bit integer division (ARM EABI names, `__aeabi_*`). rp2040-hal's versions are switched off (its `disable-intrinsics` feature);
 //! what is not here (f64, 64-bit integers, `memcpy` ...) comes from the compiler's own
 //! library, `compiler_builtins`.
 //!
@@ -26,6 +26,8 @@
 //! - `__aeabi_memcpy`, `__aeabi_memset`, `__aeabi_memclr` (and their word-aligned forms): the
 //!   ROM's routines, through their addresses kept in RAM (`compiler_builtins`' are several
 //!   times slower for the controller's word-aligned copies).
+//! - 64-bit multiplication (`__aeabi_lmul`): a few single-cycle 32-bit multiplications, half
+//!   the cycles of `compiler_builtins`'.
 //! - Integer division (`__aeabi_uidiv`, `__aeabi_idiv` and their `mod` forms): the SIO
 //!   hardware divider, 8 cycles, with the same save and restore when dirty. Division by zero
 //!   never reaches it (Rust checks first).
@@ -360,6 +362,45 @@ global_asm!(
     "    pop {{r4-r7, pc}}",
     ".ltorg",
     ".size __aeabi_idivmod, . - __aeabi_idivmod",
+);
+
+// The low 64 bits of a 64-bit product (`__aeabi_lmul`: a in r1:r0, b in r3:r2, high words
+// first). The RP2040's multiplier takes one cycle for 32 x 32 -> 32 bits, so: the high word
+// gets a_hi * b_lo + a_lo * b_hi; a_lo * b_lo in full from four 16-bit products, the middle
+// two summed with their carry (bit 32) kept.
+global_asm!(
+    ".section .text.__aeabi_lmul,\"ax\",%progbits",
+    ".global __aeabi_lmul",
+    ".type __aeabi_lmul,%function",
+    ".thumb_func",
+    "__aeabi_lmul:",
+    "    push {{r4, r5}}",
+    "    muls r1, r2",
+    "    muls r3, r0",
+    "    adds r1, r1, r3",
+    "    lsrs r3, r0, #16",
+    "    uxth r0, r0",
+    "    lsrs r4, r2, #16",
+    "    uxth r2, r2",
+    "    movs r5, r0",
+    "    muls r5, r4",
+    "    muls r4, r3",
+    "    muls r3, r2",
+    "    muls r0, r2",
+    // r5: the middle sum's low 32 bits, its carry to bit 48 of a_lo * b_lo.
+    "    adds r5, r5, r3",
+    "    movs r2, #0",
+    "    adcs r2, r2",
+    "    lsls r2, r2, #16",
+    "    adds r4, r4, r2",
+    "    lsls r2, r5, #16",
+    "    lsrs r3, r5, #16",
+    "    adds r0, r0, r2",
+    "    adcs r4, r3",
+    "    adds r1, r1, r4",
+    "    pop {{r4, r5}}",
+    "    bx lr",
+    ".size __aeabi_lmul, . - __aeabi_lmul",
 );
 
 const SIGN: u32 = 1 << 31;
