@@ -3,7 +3,7 @@
 //! The M0+ has no FPU. `libm`'s `sinf`/`cosf` compute in f64 and cost thousands of cycles per
 //! call; the ROM routines are accurate to about 1e-7 and several times faster. rp2040-hal's
 //! `__aeabi_f*` routines the compiler calls for `+ - * /` ([`crate::intrinsics`]) check their
-//! operands before each ROM call (about 15 cycles on top of a 55-70 cycle `fadd` or `fmul`)
+//! operands before each ROM call (about 20 cycles on top of a 55-70 cycle `fadd` or `fmul`)
 //! to give IEEE's results where the ROM does not (denormals, infinities, NaN). The kinematics
 //! call the ROM through [`Math`] instead, as the Pico SDK does: the soft-float table's address
 //! is looked up once and kept in RAM, and so are the addresses of `fadd` and `fmul` (the most
