@@ -269,7 +269,8 @@ global_asm!(
     "    bls 6b",
     "1:  ldr r2, =__divsf3",
     "    bx r2",
-    "2:  push {{r4-r7, lr}}",
+    // r3 too: six words keep the stack eight-byte aligned for the call (AAPCS).
+    "2:  push {{r3-r7, lr}}",
     "    ldr r4, [r2, #0x60]",
     "    ldr r5, [r2, #0x64]",
     "    ldr r6, [r2, #0x74]",
@@ -282,7 +283,7 @@ global_asm!(
     "    str r5, [r2, #0x64]",
     "    str r6, [r2, #0x74]",
     "    str r7, [r2, #0x70]",
-    "    pop {{r4-r7, pc}}",
+    "    pop {{r3-r7, pc}}",
     ".ltorg",
     ".size __aeabi_fdiv, . - __aeabi_fdiv",
     fdiv = sym ROM_FDIV,
