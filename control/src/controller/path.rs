@@ -15,7 +15,7 @@ use kinematics_core::{Math, Pose, LEGS};
 
 use super::pose_check::{PoseCheck, Torques};
 use crate::error::Error;
-use crate::motion::{Plan, PlanCheckpoints, Segment, SpeedLimits};
+use crate::motion::{Fraction, Plan, PlanCheckpoints, Segment, SpeedLimits};
 use crate::payload::TorqueError;
 use crate::servo_speed::{PathTime, ServoSpeeds, PLAN_MARGIN};
 use crate::settings::Settings;
@@ -314,7 +314,7 @@ impl PathCheck {
     fn check_slice<M: Math>(&mut self, check: PoseCheck<'_>) -> Option<Result<(), Error>> {
         let torque = check.settings.payload.checked();
         let per_slice = check.per_slice();
-        let target = self.plan.target().to_array().map(f32::to_bits);
+        let target = *self.plan.target();
         let mut solved = 0;
         if let Some(turns) = &mut self.frame_turns {
             if turns.last.is_none() {
@@ -334,7 +334,7 @@ impl PathCheck {
             }
         }
         while solved < per_slice {
-            let Some((pose, fraction)) = self.checkpoints.next() else {
+            let Some((pose, fraction)) = self.checkpoints.next_checkpoint() else {
                 return if self.planned_again() || self.tightened() {
                     None // the new plan's poses are checked next
                 } else {
@@ -343,7 +343,7 @@ impl PathCheck {
             };
             // Compared bit for bit (float comparisons are library calls on the RP2040): a pose
             // equal but for the sign of a zero is solved again, never one less.
-            if pose.to_array().map(f32::to_bits) == target {
+            if same_bits(&pose, &target) {
                 // Checked when the command came and in the first slice.
                 let arm_rad = self.solution.arm_rad;
                 self.measure(&check.settings.servo_speed, &pose, fraction, &arm_rad);
@@ -358,7 +358,7 @@ impl PathCheck {
                 }
                 Err(cause) => {
                     return Some(Err(Error::PathBlocked {
-                        percent: fraction * 100.0,
+                        percent: fraction.get() * 100.0,
                         cause,
                     }))
                 }
@@ -369,12 +369,18 @@ impl PathCheck {
 
     /// With servo speed ratings, on the first pass: the path time measured at one more pose of
     /// the path (in order), from its IK solution's arm angles.
-    fn measure(&mut self, speeds: &ServoSpeeds, pose: &Pose, fraction: f32, arm_rad: &[f32; LEGS]) {
+    fn measure(
+        &mut self,
+        speeds: &ServoSpeeds,
+        pose: &Pose,
+        fraction: Fraction,
+        arm_rad: &[f32; LEGS],
+    ) {
         if let Some(time) = &mut self.servo_time {
             time.measured.visit(speeds, pose, arm_rad);
         }
         if let Some(turns) = &mut self.frame_turns {
-            turns.visit(speeds, &self.plan, fraction, arm_rad);
+            turns.visit(speeds, &self.plan, fraction.get(), arm_rad);
         }
     }
 
@@ -417,4 +423,15 @@ impl PathCheck {
         self.checkpoints = self.plan.checkpoints();
         true
     }
+}
+
+/// Whether two poses are the same bit for bit (a float comparison is a library call on the
+/// RP2040; this stops at the first coordinate that differs, usually the first).
+fn same_bits(a: &Pose, b: &Pose) -> bool {
+    a.x_mm.to_bits() == b.x_mm.to_bits()
+        && a.y_mm.to_bits() == b.y_mm.to_bits()
+        && a.z_mm.to_bits() == b.z_mm.to_bits()
+        && a.roll_rad.to_bits() == b.roll_rad.to_bits()
+        && a.pitch_rad.to_bits() == b.pitch_rad.to_bits()
+        && a.yaw_rad.to_bits() == b.yaw_rad.to_bits()
 }
