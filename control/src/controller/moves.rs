@@ -38,7 +38,7 @@
 
 use kinematics_core::{Math, Pose};
 
-use super::path::{FrameTurns, HandOver, PathCheck, Purpose};
+use super::path::{Checked, FrameTurns, HandOver, PathCheck, Purpose};
 use super::{Begun, Controller, Done, Job};
 use crate::error::Error;
 use crate::motion::{Motion, Plan, Segment, SpeedLimits};
@@ -267,7 +267,7 @@ impl<M: Math> Controller<M> {
     /// Whether a blend whose check has just ended can no longer take over as planned (its
     /// hand-over frame has passed, or the motion changed meanwhile): then it is planned and
     /// checked again from the motion as it is now.
-    pub(super) fn missed_hand_over(&self, path: &PathCheck) -> bool {
+    pub(super) fn missed_hand_over(&self, path: &Checked) -> bool {
         match path.hand_over {
             Some(h) => {
                 let wait = h.at.wrapping_sub(self.frame_ticks) as i32;
@@ -279,7 +279,7 @@ impl<M: Math> Controller<M> {
 
     /// Learns how many path checks fit in a frame, from the check that has just ended; after a
     /// missed hand-over, half as many.
-    pub(super) fn learn_check_rate(&mut self, path: &PathCheck, missed: bool) {
+    pub(super) fn learn_check_rate(&mut self, path: &Checked, missed: bool) {
         let Some(h) = path.hand_over else {
             return;
         };
@@ -296,13 +296,13 @@ impl<M: Math> Controller<M> {
     }
 
     /// What a checked path leads to.
-    pub(super) fn finish_path(&mut self, path: PathCheck, result: Result<(), Error>) -> Done {
-        let torque_kgcm = path.torque();
-        let PathCheck {
+    pub(super) fn finish_path(&mut self, path: Checked, result: Result<(), Error>) -> Done {
+        let Checked {
             purpose,
             solution,
             plan,
             hand_over,
+            torque: torque_kgcm,
             ..
         } = path;
         if self.estop.stops_motion()

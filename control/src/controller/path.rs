@@ -86,6 +86,24 @@ pub(super) struct PathCheck {
     pub frame_turns: Option<FrameTurns>,
 }
 
+/// What an ended path check leaves for what follows it (`controller/moves.rs`): copied out of
+/// the job, which is more than twice its size (its checkpoints, its measures).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Checked {
+    pub purpose: Purpose,
+    /// The target's solution.
+    pub solution: Solution,
+    /// The move checked.
+    pub plan: Plan,
+    /// For a blend: when it takes over.
+    pub hand_over: Option<HandOver>,
+    /// IK solutions of the path.
+    pub solved: u32,
+    /// The target's holding torques for `check` to report (`None` when there are none to
+    /// report, or they were not reached).
+    pub torque: Option<Torques>,
+}
+
 /// The most passes a rated move taken over while moving is planned and checked (the last
 /// plan brakes to rest at its corner, then goes on from rest, and is taken as measured).
 pub(super) const MAX_RATED_PASSES: u32 = 4;
@@ -263,10 +281,16 @@ impl PathCheck {
         }
     }
 
-    /// The target's holding torques for `check` to report (`None` when there are none to
-    /// report, or they were not reached).
-    pub fn torque(&self) -> Option<Torques> {
-        self.torque.flatten()
+    /// What the check leaves, once it has ended.
+    pub fn checked(&self) -> Checked {
+        Checked {
+            purpose: self.purpose,
+            solution: self.solution,
+            plan: self.plan,
+            hand_over: self.hand_over,
+            solved: self.solved,
+            torque: self.torque.flatten(),
+        }
     }
 
     /// One slice: the target's holding torques, or [`PoseCheck::per_slice`] more poses of the
