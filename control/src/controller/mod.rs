@@ -615,7 +615,7 @@ impl<M: Math> Controller<M> {
                     return None;
                 }
                 self.job = None;
-                Some(self.finish_path(checked, result))
+                Some(self.finish_path(&checked, result))
             }
             Job::Clamp(clamp) => {
                 let (pose, solution) = clamp.step::<M>(check, &mut self.stream_counts)?;
