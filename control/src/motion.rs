@@ -204,6 +204,21 @@ pub struct Segment {
     samples: u32,
 }
 
+/// Whether every position moves by less than 0.25 mm and every angle by less than 2^-9 rad
+/// (0.11 degree): then the path check's spacing needs one sample, as [`spacing_samples`] would
+/// find: the linear distance is below `sqrt(3) / 4` = 0.433 mm (within f32 rounding, far
+/// from 0.5), the angular one below `sqrt(3) 2^-9` rad = 0.194 degree (far from 0.25). Six
+/// differences, each compared on its bits (stopping at the first that is not small), instead
+/// of two sums of squares and their square roots: what a host streaming `pose` lines sends.
+fn small_step(start: &Pose, target: &Pose) -> bool {
+    const QUARTER: u32 = 0x3e80_0000; // 0.25
+    const TWO_TO_MINUS_9: u32 = 0x3b00_0000;
+    let (a, b) = (start.to_array(), target.to_array());
+    // |d| < bound on the magnitude's bits (NaN's are above every bound).
+    let small = |i: usize, bound: u32| (b[i] - a[i]).to_bits() & 0x7fff_ffff < bound;
+    (0..3).all(|i| small(i, QUARTER)) && (3..6).all(|i| small(i, TWO_TO_MINUS_9))
+}
+
 /// `x > 0.0` on the bits (a float comparison is a library call on the RP2040): positive and
 /// not NaN.
 fn positive(x: f32) -> bool {
@@ -217,17 +232,22 @@ const MIN_RAMP: f32 = 1e-6;
 impl Segment {
     /// Plans a move at the given limits for a frame rate (Hz, > 0).
     pub fn plan(start: Pose, target: Pose, limits: SpeedLimits, frame_hz: f32) -> Segment {
-        // Both distances once: the speeds' fractions below and the path check's spacing
-        // ([`Segment::checkpoints`]) need them (square roots in software on the chip).
-        let linear_mm = linear_distance_mm(&start, &target);
-        let angular_deg = angular_distance_deg(&start, &target);
-        let samples = spacing_samples(linear_mm, angular_deg);
         if !(positive(limits.mm_per_s)
             || positive(limits.deg_per_s)
             || positive(limits.mm_per_s2)
             || positive(limits.deg_per_s2))
         {
-            // No limit: a jump (as below: infinite speed and acceleration, zero duration).
+            // No limit: a jump (as below: infinite speed and acceleration, zero duration); its
+            // distances matter only for the path check's spacing, and not at all for a small
+            // step (one sample, see `small_step`).
+            let samples = if small_step(&start, &target) {
+                1
+            } else {
+                spacing_samples(
+                    linear_distance_mm(&start, &target),
+                    angular_distance_deg(&start, &target),
+                )
+            };
             return Segment {
                 start,
                 target,
@@ -236,6 +256,11 @@ impl Segment {
                 samples,
             };
         }
+        // Both distances once: the speeds' fractions below and the path check's spacing
+        // ([`Segment::checkpoints`]) need them (square roots in software on the chip).
+        let linear_mm = linear_distance_mm(&start, &target);
+        let angular_deg = angular_distance_deg(&start, &target);
+        let samples = spacing_samples(linear_mm, angular_deg);
         // In path fraction u (0..=1) per second: the tighter group's speed and acceleration
         // (infinite where no limit applies).
         let fraction_per = |limit: f32, distance: f32| {
@@ -1285,6 +1310,43 @@ mod tests {
             let (mm, deg) = (pair[0], pair[1]);
             assert_eq!(spacing_samples(mm, deg), formula(mm, deg), "{mm:e} {deg:e}");
         }
+    }
+
+    #[test]
+    fn a_small_step_needs_one_sample_as_the_distances_say() {
+        // Random jumps around the small step's bounds (each coordinate's move up to twice its
+        // bound, from random poses): the shortcut never disagrees with the distances.
+        let mut seed = 0x0bad_5eed_u32;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 17;
+            seed ^= seed << 5;
+            f64::from(seed) / f64::from(u32::MAX)
+        };
+        let mut small = 0;
+        for _ in 0..200_000 {
+            let a: [f32; 6] = core::array::from_fn(|i| {
+                let range = if i < 3 { 100.0 } else { 0.6 };
+                ((next() * 2.0 - 1.0) * range) as f32
+            });
+            let b: [f32; 6] = core::array::from_fn(|i| {
+                let bound = if i < 3 { 0.25 } else { 1.0 / 512.0 };
+                a[i] + ((next() * 2.0 - 1.0) * 2.0 * bound) as f32
+            });
+            let (a, b) = (Pose::from_array(a), Pose::from_array(b));
+            let samples = spacing_samples(linear_distance_mm(&a, &b), angular_distance_deg(&a, &b));
+            if small_step(&a, &b) {
+                small += 1;
+                assert_eq!(samples, 1, "{a:?} {b:?}");
+            }
+            assert_eq!(Segment::plan(a, b, OFF, 50.0).samples, samples);
+        }
+        // Both sides were visited.
+        assert!(small > 1_000 && small < 199_000, "{small}");
+        // The largest small step of each group, every coordinate at once, is one sample.
+        let edge = Pose::from_array([0.2499, -0.2499, 0.2499, 0.00195, -0.00195, 0.00195]);
+        assert!(small_step(&Pose::HOME, &edge));
+        assert_eq!(Segment::plan(Pose::HOME, edge, OFF, 50.0).samples, 1);
     }
 
     #[test]
