@@ -4,7 +4,9 @@
 //! `TOP + 1` counts lasts `(TOP + 1) * 320 ns`; `TOP = 3_125_000 / frame_hz - 1` (62,499 at
 //! 50 Hz). A pin is high from the start of the frame for `CC` counts. `CC` and `TOP` are
 //! double-buffered by the hardware (latched at the wrap), so a new pulse width takes effect at
-//! the next frame and never cuts a pulse short.
+//! the next frame and never cuts a pulse short. The six widths are written as one `CC` word per
+//! slice, never across a wrap ([`clear_of_wrap`]), so every frame shows all six old widths or
+//! all six new ones (emulator/test/pwm-wrap.test.js places a jump at the wrap).
 //!
 //! Every frame start (slice 1 wrapping) raises `PWM_IRQ_WRAP`; the handler only counts frames,
 //! so the main loop can run the motion controller once per frame and knows if it missed any.
@@ -12,7 +14,6 @@
 use core::sync::atomic::{compiler_fence, AtomicU32, Ordering};
 
 use control::settings::{FRAME_HZ_MAX, FRAME_HZ_MIN};
-use embedded_hal::pwm::SetDutyCycle;
 use rp2040_hal::{
     gpio::{bank0, DefaultTypeState, Pin},
     pac::{self, interrupt},
@@ -54,10 +55,17 @@ pub struct PulseWindowUs {
 pub struct FrameRateOutOfRange;
 
 pub struct ServoPwm {
-    slice1: Slice<Pwm1, FreeRunning>,
-    slice2: Slice<Pwm2, FreeRunning>,
-    slice3: Slice<Pwm3, FreeRunning>,
+    /// Slices 1-3, configured: held so that nothing else can take them. Their compare and
+    /// `TOP` registers are written directly ([`write_compares`]): a whole `CC` word per slice.
+    _slices: (
+        Slice<Pwm1, FreeRunning>,
+        Slice<Pwm2, FreeRunning>,
+        Slice<Pwm3, FreeRunning>,
+    ),
     frame_hz: u16,
+    /// `TOP` as last written, and as written before it: the counters wrap at one of the two
+    /// (the hardware latches a new `TOP` at the next wrap), so writes keep clear of both.
+    tops: [u16; 2],
     /// Compare value (pulse width in counts) per servo, as last written.
     counts: [u16; SERVO_COUNT],
     frames_seen: u32,
@@ -91,17 +99,17 @@ impl ServoPwm {
         for ((count, &width_us), &window) in counts.iter_mut().zip(first_widths_us).zip(windows) {
             *count = pulse_counts(width_us, window, top).unwrap_or(0);
         }
-        write_counts(&mut slices.pwm1, &mut slices.pwm2, &mut slices.pwm3, counts);
+        // The counters are stopped at 0: no wrap can come.
+        write_compares(&[top, top], counts);
         slices.pwm1.clear_interrupt();
         slices.pwm1.enable_interrupt();
         // Start the three counters in the same cycle so the six pulses share one frame.
         slices.enable_simultaneous(0b1110);
 
         let servos = ServoPwm {
-            slice1: slices.pwm1,
-            slice2: slices.pwm2,
-            slice3: slices.pwm3,
+            _slices: (slices.pwm1, slices.pwm2, slices.pwm3),
             frame_hz,
+            tops: [top, top],
             counts,
             frames_seen: 0,
         };
@@ -119,8 +127,19 @@ impl ServoPwm {
     pub fn set_frame_rate_hz(&mut self, frame_hz: u16) -> Result<(), FrameRateOutOfRange> {
         let top = top_for(frame_hz)?;
         self.frame_hz = frame_hz;
-        self.set_top(top);
-        self.write_counts(self.counts.map(|count| count.min(top)));
+        self.tops = [top, self.tops[0]];
+        self.counts = self.counts.map(|count| count.min(top));
+        let compares = compare_words(self.counts);
+        clear_of_wrap(&self.tops, || {
+            // SAFETY: plain register writes to the three slices this driver owns.
+            let pwm = unsafe { &*pac::PWM::ptr() };
+            for (slice, compare) in SLICES.into_iter().zip(compares) {
+                pwm.ch(slice)
+                    .top()
+                    .write(|w| unsafe { w.bits(u32::from(top)) });
+                pwm.ch(slice).cc().write(|w| unsafe { w.bits(compare) });
+            }
+        });
         Ok(())
     }
 
@@ -151,7 +170,7 @@ impl ServoPwm {
         widths_us: &[f32; SERVO_COUNT],
         windows: &[PulseWindowUs; SERVO_COUNT],
     ) {
-        let top = self.slice1.get_top();
+        let top = self.tops[0];
         let mut counts = self.counts;
         for ((count, &width_us), &window) in counts.iter_mut().zip(widths_us).zip(windows) {
             if let Some(new) = pulse_counts(width_us, window, top) {
@@ -177,32 +196,59 @@ impl ServoPwm {
         FRAMES_STARTED.load(Ordering::Relaxed) != self.frames_seen
     }
 
-    fn set_top(&mut self, top: u16) {
-        self.slice1.set_top(top);
-        self.slice2.set_top(top);
-        self.slice3.set_top(top);
-    }
-
     fn write_counts(&mut self, counts: [u16; SERVO_COUNT]) {
-        write_counts(&mut self.slice1, &mut self.slice2, &mut self.slice3, counts);
+        write_compares(&self.tops, counts);
         self.counts = counts;
     }
 }
 
-/// Servo 1..6 = slice 1 A, 1 B, 2 A, 2 B, 3 A, 3 B. The compare registers latch at the wrap.
-fn write_counts(
-    slice1: &mut Slice<Pwm1, FreeRunning>,
-    slice2: &mut Slice<Pwm2, FreeRunning>,
-    slice3: &mut Slice<Pwm3, FreeRunning>,
-    counts: [u16; SERVO_COUNT],
-) {
-    // `set_duty_cycle` is infallible on this HAL.
-    let _ = slice1.channel_a.set_duty_cycle(counts[0]);
-    let _ = slice1.channel_b.set_duty_cycle(counts[1]);
-    let _ = slice2.channel_a.set_duty_cycle(counts[2]);
-    let _ = slice2.channel_b.set_duty_cycle(counts[3]);
-    let _ = slice3.channel_a.set_duty_cycle(counts[4]);
-    let _ = slice3.channel_b.set_duty_cycle(counts[5]);
+/// The servo slices: servo 1..6 = slice 1 A, 1 B, 2 A, 2 B, 3 A, 3 B.
+const SLICES: [usize; 3] = [1, 2, 3];
+
+/// Counts before a wrap in which no compare or `TOP` register is written: the writes (three
+/// stores from RAM, interrupts masked: a few dozen cycles) take less than one count (40
+/// cycles), so four leave a wide margin.
+const WRAP_GUARD_COUNTS: u16 = 4;
+
+/// Each slice's `CC` word: channel A's count in bits 0-15, B's in 16-31 (datasheet 4.5.3).
+fn compare_words(counts: [u16; SERVO_COUNT]) -> [u32; 3] {
+    let word = |a: u16, b: u16| u32::from(a) | u32::from(b) << 16;
+    [
+        word(counts[0], counts[1]),
+        word(counts[2], counts[3]),
+        word(counts[4], counts[5]),
+    ]
+}
+
+/// The six compare values, one 32-bit write per slice, all in one frame (see [`clear_of_wrap`]).
+fn write_compares(tops: &[u16; 2], counts: [u16; SERVO_COUNT]) {
+    let compares = compare_words(counts);
+    clear_of_wrap(tops, || {
+        // SAFETY: plain register writes to the three slices this driver owns.
+        let pwm = unsafe { &*pac::PWM::ptr() };
+        for (slice, compare) in SLICES.into_iter().zip(compares) {
+            pwm.ch(slice).cc().write(|w| unsafe { w.bits(compare) });
+        }
+    });
+}
+
+/// Runs `write` (a few register stores) where no wrap can fall inside it. The compare and `TOP`
+/// registers latch at the wrap, so a wrap between two stores would show the servos a mix of
+/// old and new widths for a frame (a pose nothing checked) or, for `TOP`, put the slices out of
+/// phase. With interrupts masked, and if slice 1's counter (the three run in phase) is within
+/// [`WRAP_GUARD_COUNTS`] of either `TOP` it may wrap at, after that count passes: a wait of at
+/// most five counts (1.6 us) with interrupts masked.
+fn clear_of_wrap(tops: &[u16; 2], write: impl FnOnce()) {
+    cortex_m::interrupt::free(|_| {
+        // SAFETY: a read of slice 1's counter, which has no side effect.
+        let counter = || unsafe { (*pac::PWM::ptr()).ch(1).ctr().read().bits() } as u16;
+        let near_wrap = |count: u16| {
+            tops.iter()
+                .any(|&top| count <= top && count >= top.saturating_sub(WRAP_GUARD_COUNTS))
+        };
+        while near_wrap(counter()) {}
+        write();
+    });
 }
 
 /// Divider 40, edge-aligned, pins not inverted, counter at 0, no pulse yet.
