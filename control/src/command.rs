@@ -117,12 +117,14 @@ impl Verb {
         }
     }
 
-    /// The command a (lowercase) word names; `?` is `status`.
+    /// The command a word names, in any case; `?` is `status`.
     pub fn parse(word: &str) -> Option<Verb> {
         if word == "?" {
             return Some(Verb::Status);
         }
-        Verb::ALL.into_iter().find(|v| v.name() == word)
+        Verb::ALL
+            .into_iter()
+            .find(|v| v.name().as_bytes().eq_ignore_ascii_case(word.as_bytes()))
     }
 }
 
@@ -301,14 +303,18 @@ impl<'a> Iterator for Words<'a> {
     type Item = &'a str;
     fn next(&mut self) -> Option<&'a str> {
         let bytes = self.rest.as_bytes();
-        let Some(start) = bytes.iter().position(|&b| !separator(b)) else {
+        let mut start = 0;
+        while bytes.get(start).is_some_and(|&b| separator(b)) {
+            start += 1;
+        }
+        if start == bytes.len() {
             self.rest = "";
             return None;
-        };
-        let end = bytes[start..]
-            .iter()
-            .position(|&b| separator(b))
-            .map_or(bytes.len(), |len| start + len);
+        }
+        let mut end = start + 1;
+        while bytes.get(end).is_some_and(|&b| !separator(b)) {
+            end += 1;
+        }
         let (word, rest) = (self.rest.get(start..end)?, self.rest.get(end..)?);
         self.rest = rest;
         Some(word)
@@ -318,7 +324,7 @@ impl<'a> Iterator for Words<'a> {
 /// Parses one number for `field`.
 fn number(field: Field, text: &str) -> Result<f32, ParseError> {
     parse_f32(text).map_err(|e| {
-        let word = word(text);
+        let word = lower(text);
         match e {
             NumberError::NotFinite => ParseError::NotFinite { field, word },
             NumberError::TooLarge => ParseError::NumberTooLarge { field, word },
@@ -333,7 +339,7 @@ fn servo_pulse(words: &mut Words<'_>, verb: Verb) -> Result<Command, ParseError>
     let n = words.next().ok_or(missing(Missing::ServoNumber))?;
     let servo = match n.as_bytes() {
         [d @ b'1'..=b'6'] => d - b'0',
-        _ => return Err(ParseError::BadServo { word: word(n) }),
+        _ => return Err(ParseError::BadServo { word: lower(n) }),
     };
     let pulse_us = number(
         Field::PulseUs,
@@ -346,7 +352,7 @@ fn servo_pulse(words: &mut Words<'_>, verb: Verb) -> Result<Command, ParseError>
 fn no_more(words: &mut Words<'_>, verb: Verb) -> Result<(), ParseError> {
     match words.next() {
         Some(extra) => Err(ParseError::ExtraField {
-            word: word(extra),
+            word: lower(extra),
             verb,
         }),
         None => Ok(()),
@@ -374,11 +380,11 @@ fn axis_values(words: &mut Words<'_>, verb: Verb) -> Result<AxisValues, ParseErr
     for w in words {
         let (name, value) = w
             .split_once('=')
-            .ok_or(ParseError::BadAssignment { word: word(w) })?;
+            .ok_or_else(|| ParseError::BadAssignment { word: lower(w) })?;
         let axis = Axis::ALL
             .into_iter()
-            .find(|a| a.name() == name)
-            .ok_or(ParseError::UnknownAxis { word: word(name) })?;
+            .find(|a| a.name().eq_ignore_ascii_case(name))
+            .ok_or_else(|| ParseError::UnknownAxis { word: lower(name) })?;
         let slot = &mut values.0[axis as usize];
         if slot.is_some() {
             return Err(ParseError::DuplicateAxis { axis });
@@ -402,28 +408,36 @@ fn axis_values(words: &mut Words<'_>, verb: Verb) -> Result<AxisValues, ParseErr
     }
 }
 
+/// A word the user typed, lowercased, for an error that quotes it (lines are
+/// case-insensitive, and their words are quoted as if typed in lowercase).
+fn lower(text: &str) -> Word {
+    let mut w = word(text);
+    w.make_ascii_lowercase();
+    w
+}
+
 /// Parses one line (any case; at most [`MAX_LINE`] characters of printable ASCII). The line
 /// must not be blank.
+///
+/// The words are read where they lie, in any case (command words, axis names and numbers
+/// are matched so); a word an error quotes is lowercased then. `set`'s name and value are
+/// read from a lowercased copy of the line ([`crate::settings`] takes lowercase words).
 pub fn parse(line: &str) -> Result<Command, ParseError> {
     if line.len() > MAX_LINE {
         return Err(ParseError::Spoiled(Spoiled::TooLong));
     }
-    // Checked and lowered in one pass (the first byte that is not printable ASCII or a tab
-    // refuses the line).
-    let mut lower = [0u8; MAX_LINE];
-    let lower = &mut lower[..line.len()];
-    for (slot, &byte) in lower.iter_mut().zip(line.as_bytes()) {
-        if !(0x20..=0x7E).contains(&byte) && byte != b'\t' {
-            return Err(ParseError::Spoiled(Spoiled::BadByte(byte)));
-        }
-        *slot = byte.to_ascii_lowercase();
+    // The first byte that is not printable ASCII or a tab refuses the line.
+    if let Some(&byte) = line
+        .as_bytes()
+        .iter()
+        .find(|&&b| !(0x20..=0x7E).contains(&b) && b != b'\t')
+    {
+        return Err(ParseError::Spoiled(Spoiled::BadByte(byte)));
     }
-    // Printable ASCII throughout, checked above.
-    let line = core::str::from_utf8(lower).map_err(|_| ParseError::Spoiled(Spoiled::BadByte(0)))?;
 
     let mut words = Words::new(line);
     let name = words.next().ok_or(ParseError::NoCommand)?;
-    let verb = Verb::parse(name).ok_or(ParseError::UnknownCommand { word: word(name) })?;
+    let verb = Verb::parse(name).ok_or_else(|| ParseError::UnknownCommand { word: lower(name) })?;
     let simple = |cmd: Command, words: &mut Words<'_>| no_more(words, verb).map(|()| cmd);
     match verb {
         Verb::Pose => full_pose(&mut words, verb).map(Command::Pose),
@@ -443,6 +457,16 @@ pub fn parse(line: &str) -> Result<Command, ParseError> {
         Verb::Defaults => simple(Command::Defaults, &mut words),
         Verb::Save => simple(Command::Save, &mut words),
         Verb::Set => {
+            // Lowered (printable ASCII throughout, checked above).
+            let mut lowered = [0u8; MAX_LINE];
+            let lowered = &mut lowered[..line.len()];
+            for (slot, &byte) in lowered.iter_mut().zip(line.as_bytes()) {
+                *slot = byte.to_ascii_lowercase();
+            }
+            let line = core::str::from_utf8(lowered)
+                .map_err(|_| ParseError::Spoiled(Spoiled::BadByte(0)))?;
+            let mut words = Words::new(line);
+            words.next(); // `set`
             let name = words.next().ok_or(ParseError::MissingField {
                 what: Missing::SettingName,
                 verb,

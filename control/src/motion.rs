@@ -26,7 +26,14 @@
 //! - if the move has at most [`MAX_PATH_CHECKS`] frames: every pose the move will command,
 //!   exactly as it will command it, and, when the frames are further apart than the sample
 //!   spacing, evenly spaced poses between them (as many as fit in the budget), because the
-//!   servos sweep through those on the way;
+//!   servos sweep through those on the way. Those between two frames are stepped: one step is
+//!   `(current - previous) / sub` per coordinate, and each pose is the one before plus a step
+//!   (six additions instead of a fresh interpolation: this is most of a jump's path check
+//!   after its IK solutions). The additions round, so a stepped pose may be off the evenly
+//!   spaced one by up to half a unit in the last place of its coordinate per step: with at
+//!   most [`MAX_PATH_CHECKS`] steps, positions below 256 mm and angles below 4 rad, under
+//!   0.008 mm and 0.007 degree (a sixtieth and a thirtieth of the spacing); the frame poses
+//!   themselves are exact;
 //! - otherwise (slow moves, frames closer than the spacing): `min(S, MAX_PATH_CHECKS)` evenly
 //!   spaced poses. A pose between two checks that still fails is caught by the controller
 //!   when its frame comes (it holds the last good pose and stops).
@@ -85,7 +92,7 @@ impl SpeedLimits {
 /// Euclidean distance between the positions of two poses, mm.
 pub fn linear_distance_mm(a: &Pose, b: &Pose) -> f32 {
     let (dx, dy, dz) = (b.x_mm - a.x_mm, b.y_mm - a.y_mm, b.z_mm - a.z_mm);
-    libm::sqrtf(dx * dx + dy * dy + dz * dz)
+    sqrt(dx * dx + dy * dy + dz * dz)
 }
 
 /// Euclidean distance between the Euler angles of two poses, degrees.
@@ -95,22 +102,75 @@ pub fn angular_distance_deg(a: &Pose, b: &Pose) -> f32 {
         b.pitch_rad - a.pitch_rad,
         b.yaw_rad - a.yaw_rad,
     );
-    libm::sqrtf(dr * dr + dp * dp + dy * dy).to_degrees()
+    sqrt(dr * dr + dp * dp + dy * dy).to_degrees()
+}
+
+/// `sqrt(x)` correctly rounded (IEEE 754's square root, as `libm::sqrtf` gives it), in
+/// integers for a positive normal `x`: its 24-bit mantissa, shifted so the exponent is even,
+/// into `M` in `[2^46, 2^48)`, whose integer root `q` (from the IK's fixed-point root, within 1,
+/// made exact with two squares) has the result's 24 bits; it rounds up when `M - q^2 > q`
+/// (then `sqrt(M) > q + 1/2`, as `(q + 1/2)^2 = q^2 + q + 1/4`; never a tie). About a
+/// third of `libm`'s cost on the M0+ (its 64-bit products are library calls). Zero,
+/// subnormal, negative and non-finite `x` go to `libm`.
+fn sqrt(x: f32) -> f32 {
+    let bits = x.to_bits();
+    let biased = bits >> 23; // sign and exponent
+    if biased == 0 || biased >= 0xff {
+        return libm::sqrtf(x);
+    }
+    let mantissa = u64::from((bits & 0x7f_ffff) | 0x80_0000);
+    // x = mantissa 2^(biased - 150); M = mantissa 2^shift with biased - 150 - shift even.
+    let shift: i32 = if biased % 2 == 0 { 24 } else { 23 };
+    let m = mantissa << shift;
+    // The root of M (below 2^24), exact: within 1 of the fixed-point root.
+    let mut q = kinematics_core::fixed::sqrt::sqrt(m);
+    if square(q) > m {
+        q -= 1;
+    } else if square(q + 1) <= m {
+        q += 1;
+    }
+    let up = m - square(q) > u64::from(q);
+    // sqrt(x) = q 2^((biased - 150 - shift) / 2); q + up in [2^23, 2^24] (2^24 carries into
+    // the exponent, as it should).
+    let exponent = (biased as i32 - 150 - shift) / 2 + 150; // (an even count halved)
+    f32::from_bits(((exponent as u32) << 23) + (q + u32::from(up)) - 0x80_0000)
+}
+
+/// `q^2` for `q < 2^25` from 32-bit products (a 64-bit product is a library call on the M0+).
+fn square(q: u32) -> u64 {
+    let (high, low) = (q >> 16, q & 0xffff);
+    (u64::from(high * high) << 32) + (u64::from(2 * high * low) << 16) + u64::from(low * low)
 }
 
 /// How many evenly spaced samples keep checks within [`PATH_STEP_MM`] and [`PATH_STEP_DEG`]
-/// along a path of these distances (mm, degrees).
+/// along a path of these distances (mm, degrees): `ceil(max(mm / 0.5, deg / 0.25))`, at
+/// least 1 and at most [`MAX_FRAMES`] (a NaN distance is ignored, as `f32::max` does; both:
+/// 1). In integers, each distance on its own (`ceil` and the bounds keep the order, so the
+/// larger count is the larger distance's); the divisions by 0.5 and 0.25 are exact.
 fn spacing_samples(linear_mm: f32, angular_deg: f32) -> u32 {
-    let by_mm = linear_mm / PATH_STEP_MM;
-    let by_deg = angular_deg / PATH_STEP_DEG;
-    let n = libm::ceilf(by_mm.max(by_deg));
-    if n >= MAX_FRAMES as f32 {
-        MAX_FRAMES
-    } else if n >= 1.0 {
-        n as u32
-    } else {
-        1
+    const _: () = assert!(PATH_STEP_MM == 0.5 && PATH_STEP_DEG == 0.25);
+    samples_of(linear_mm, 1).max(samples_of(angular_deg, 2))
+}
+
+/// `ceil(x 2^k)` within `1..=MAX_FRAMES` (1 for NaN, zero and negative `x`), on the bits.
+fn samples_of(x: f32, k: u32) -> u32 {
+    let bits = x.to_bits();
+    if bits & 0x8000_0000 != 0 || bits > 0x7f80_0000 {
+        return 1; // negative or NaN
     }
+    // x 2^k = mantissa 2^(exponent - 23), exponent unbiased; zero and subnormals are below 1.
+    let exponent = (bits >> 23) as i32 - 127 + k as i32;
+    if exponent < 0 || bits >> 23 == 0 {
+        return 1; // below 1 (ceil: 1 unless zero, which is 1 too)
+    }
+    if exponent >= 24 {
+        return MAX_FRAMES; // at least 2^24 (or infinite)
+    }
+    let mantissa = (bits & 0x7f_ffff) | 0x80_0000;
+    let cut = 23 - exponent as u32;
+    let whole = mantissa >> cut;
+    let ceiling = whole + u32::from(mantissa & ((1 << cut) - 1) != 0);
+    ceiling.min(MAX_FRAMES)
 }
 
 /// The pose a fraction `t` of the way from `a` to `b` (all six coordinates linearly).
@@ -144,16 +204,63 @@ pub struct Segment {
     samples: u32,
 }
 
+/// Whether every position moves by less than 0.25 mm and every angle by less than 2^-9 rad
+/// (0.11 degree): then the path check's spacing needs one sample, as [`spacing_samples`] would
+/// find: the linear distance is below `sqrt(3) / 4` = 0.433 mm (within f32 rounding, far
+/// from 0.5), the angular one below `sqrt(3) 2^-9` rad = 0.194 degree (far from 0.25). Six
+/// differences, each compared on its bits (stopping at the first that is not small), instead
+/// of two sums of squares and their square roots: what a host streaming `pose` lines sends.
+fn small_step(start: &Pose, target: &Pose) -> bool {
+    const QUARTER: u32 = 0x3e80_0000; // 0.25
+    const TWO_TO_MINUS_9: u32 = 0x3b00_0000;
+    let (a, b) = (start.to_array(), target.to_array());
+    // |d| < bound on the magnitude's bits (NaN's are above every bound).
+    let small = |i: usize, bound: u32| (b[i] - a[i]).to_bits() & 0x7fff_ffff < bound;
+    (0..3).all(|i| small(i, QUARTER)) && (3..6).all(|i| small(i, TWO_TO_MINUS_9))
+}
+
+/// `x > 0.0` on the bits (a float comparison is a library call on the RP2040): positive and
+/// not NaN.
+fn positive(x: f32) -> bool {
+    let bits = x.to_bits() as i32;
+    bits > 0 && bits <= 0x7f80_0000
+}
+
 /// The smallest ramp fraction treated as one (below, the profile is constant speed).
 const MIN_RAMP: f32 = 1e-6;
 
 impl Segment {
     /// Plans a move at the given limits for a frame rate (Hz, > 0).
     pub fn plan(start: Pose, target: Pose, limits: SpeedLimits, frame_hz: f32) -> Segment {
+        if !(positive(limits.mm_per_s)
+            || positive(limits.deg_per_s)
+            || positive(limits.mm_per_s2)
+            || positive(limits.deg_per_s2))
+        {
+            // No limit: a jump (as below: infinite speed and acceleration, zero duration); its
+            // distances matter only for the path check's spacing, and not at all for a small
+            // step (one sample, see `small_step`).
+            let samples = if small_step(&start, &target) {
+                1
+            } else {
+                spacing_samples(
+                    linear_distance_mm(&start, &target),
+                    angular_distance_deg(&start, &target),
+                )
+            };
+            return Segment {
+                start,
+                target,
+                frames: 1,
+                ramp: 0.0,
+                samples,
+            };
+        }
         // Both distances once: the speeds' fractions below and the path check's spacing
         // ([`Segment::checkpoints`]) need them (square roots in software on the chip).
         let linear_mm = linear_distance_mm(&start, &target);
         let angular_deg = angular_distance_deg(&start, &target);
+        let samples = spacing_samples(linear_mm, angular_deg);
         // In path fraction u (0..=1) per second: the tighter group's speed and acceleration
         // (infinite where no limit applies).
         let fraction_per = |limit: f32, distance: f32| {
@@ -199,7 +306,7 @@ impl Segment {
             target,
             frames,
             ramp: if ramp < MIN_RAMP { 0.0 } else { ramp },
-            samples: spacing_samples(linear_mm, angular_deg),
+            samples,
         }
     }
 
@@ -277,6 +384,7 @@ impl Segment {
                 i: 1,
                 previous: self.start,
                 current: self.pose_at(1),
+                step: [0.0; 6],
             }
         } else {
             Walk::Evenly {
@@ -332,13 +440,16 @@ pub struct Checkpoints {
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Walk {
-    /// Every commanded pose `k` of `n`, with `sub - 1` poses before it inside its frame step.
+    /// Every commanded pose `k` of `n`, with `sub - 1` poses before it inside its frame step,
+    /// stepped from the frame before (`previous`: that frame's pose, then the last pose
+    /// stepped to) by `step`.
     EveryFrame {
         sub: u32,
         k: u32,
         i: u32,
         previous: Pose,
         current: Pose,
+        step: [f32; 6],
     },
     /// `m` evenly spaced poses, the last the target.
     Evenly { m: u32, j: u32 },
@@ -354,10 +465,10 @@ impl Checkpoints {
     }
 }
 
-impl Iterator for Checkpoints {
-    type Item = (Pose, f32);
-
-    fn next(&mut self) -> Option<(Pose, f32)> {
+impl Checkpoints {
+    /// The next checkpoint and where along the path it lies ([`Fraction`], computed only if
+    /// asked: a path check needs it only where it fails, or with servo speed ratings).
+    pub fn next_checkpoint(&mut self) -> Option<(Pose, Fraction)> {
         let n = self.segment.frames;
         match &mut self.walk {
             Walk::EveryFrame {
@@ -366,15 +477,31 @@ impl Iterator for Checkpoints {
                 i,
                 previous,
                 current,
+                step,
             } => {
                 if *k > n {
                     return None;
                 }
                 let item = if *i < *sub {
-                    let t = *i as f32 / *sub as f32;
-                    (lerp(previous, current, t), ((*k - 1) as f32 + t) / n as f32)
+                    // From the frame before, then from the last pose stepped to.
+                    let from = previous.to_array();
+                    if *i == 1 {
+                        let (to, parts) = (current.to_array(), *sub as f32);
+                        *step = core::array::from_fn(|c| (to[c] - from[c]) / parts);
+                    }
+                    let pose = Pose::from_array(core::array::from_fn(|c| from[c] + step[c]));
+                    *previous = pose;
+                    (
+                        pose,
+                        Fraction::Within {
+                            k: *k,
+                            i: *i,
+                            sub: *sub,
+                            n,
+                        },
+                    )
                 } else {
-                    (*current, *k as f32 / n as f32)
+                    (*current, Fraction::Of { j: *k, m: n })
                 };
                 *i += 1;
                 if *i > *sub {
@@ -391,15 +518,64 @@ impl Iterator for Checkpoints {
                 if *j > *m {
                     return None;
                 }
-                let fraction = *j as f32 / *m as f32;
+                let fraction = Fraction::Of { j: *j, m: *m };
                 let pose = if *j == *m {
                     self.segment.target
                 } else {
-                    lerp(&self.segment.start, &self.segment.target, fraction)
+                    lerp(&self.segment.start, &self.segment.target, fraction.get())
                 };
                 *j += 1;
                 Some((pose, fraction))
             }
+        }
+    }
+}
+
+impl Iterator for Checkpoints {
+    type Item = (Pose, f32);
+
+    fn next(&mut self) -> Option<(Pose, f32)> {
+        self.next_checkpoint().map(|(pose, f)| (pose, f.get()))
+    }
+}
+
+/// Where along its path a checkpoint lies (0..=1), as [`Checkpoints::next_checkpoint`] gives
+/// it: the numbers it is computed from, so that only a check that needs it pays for the
+/// division (float divisions are library calls on the RP2040).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Fraction {
+    /// The `i`-th of the `sub - 1` poses inside frame step `k` of `n`: `((k - 1) + i / sub) / n`.
+    Within {
+        /// The frame step (1-based).
+        k: u32,
+        /// The pose inside it (1-based).
+        i: u32,
+        /// Its parts.
+        sub: u32,
+        /// The frames.
+        n: u32,
+    },
+    /// `j / m` (frame `j` of `m`, or the `j`-th of `m` evenly spaced poses).
+    Of {
+        /// Which (1-based).
+        j: u32,
+        /// Of how many.
+        m: u32,
+    },
+    /// Computed already (a blend's).
+    Value(f32),
+}
+
+impl Fraction {
+    /// The fraction, in `f32`.
+    pub fn get(self) -> f32 {
+        match self {
+            Fraction::Within { k, i, sub, n } => {
+                let t = i as f32 / sub as f32;
+                ((k - 1) as f32 + t) / n as f32
+            }
+            Fraction::Of { j, m } => j as f32 / m as f32,
+            Fraction::Value(v) => v,
         }
     }
 }
@@ -575,6 +751,17 @@ impl PlanCheckpoints {
         match self {
             PlanCheckpoints::Straight(c) => c.total(),
             PlanCheckpoints::Blend(c) => c.total(),
+        }
+    }
+}
+
+impl PlanCheckpoints {
+    /// The next checkpoint and where along the path it lies (see
+    /// [`Checkpoints::next_checkpoint`]).
+    pub fn next_checkpoint(&mut self) -> Option<(Pose, Fraction)> {
+        match self {
+            PlanCheckpoints::Straight(c) => c.next_checkpoint(),
+            PlanCheckpoints::Blend(c) => c.next().map(|(pose, f)| (pose, Fraction::Value(f))),
         }
     }
 }
@@ -981,12 +1168,16 @@ mod tests {
             let mut previous = *s.start();
             for k in 1..=n {
                 let current = s.pose_at(k);
+                // Stepped: each pose the one before plus (current - previous) / sub.
+                let (a, b) = (previous.to_array(), current.to_array());
+                let step: [f32; 6] = core::array::from_fn(|c| (b[c] - a[c]) / sub as f32);
+                let mut at = a;
                 for i in 1..sub {
                     let t = i as f32 / sub as f32;
-                    out.push((
-                        lerp(&previous, &current, t),
-                        ((k - 1) as f32 + t) / n as f32,
-                    ));
+                    for c in 0..6 {
+                        at[c] += step[c];
+                    }
+                    out.push((Pose::from_array(at), ((k - 1) as f32 + t) / n as f32));
                 }
                 out.push((current, k as f32 / n as f32));
                 previous = current;
@@ -1035,6 +1226,166 @@ mod tests {
             let got: std::vec::Vec<(Pose, f32)> = s.checkpoints().collect();
             assert_eq!(got, documented_checkpoints(&s), "{b:?} {l:?}");
             assert!(got.len() <= MAX_PATH_CHECKS as usize);
+        }
+    }
+
+    #[test]
+    fn square_roots_are_libms_bit_for_bit() {
+        // libm's sqrtf is correctly rounded: the same bits for every input class, random
+        // normal numbers over the whole range, and around squares and midpoints.
+        let mut seed = 0x9e37_79b9_u32;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 17;
+            seed ^= seed << 5;
+            seed
+        };
+        let mut inputs = std::vec![
+            0.0,
+            -0.0,
+            1.0,
+            2.0,
+            4.0,
+            0.25,
+            f32::MIN_POSITIVE,
+            f32::MAX,
+            f32::INFINITY,
+            f32::NAN,
+            -1.0,
+            1e-40,
+        ];
+        for _ in 0..1_000_000 {
+            inputs.push(f32::from_bits(next() & 0x7fff_ffff));
+        }
+        for q in (1u32..20_000).chain((0x7f_0000..0x80_0000).step_by(997)) {
+            let square = (q as f32) * (q as f32);
+            for d in -2i32..=2 {
+                inputs.push(f32::from_bits(square.to_bits().wrapping_add_signed(d)));
+            }
+        }
+        for x in inputs {
+            let (got, expected) = (sqrt(x), libm::sqrtf(x));
+            assert!(
+                got.to_bits() == expected.to_bits() || (got.is_nan() && expected.is_nan()),
+                "sqrt({x:e}) = {got:e}, libm {expected:e}"
+            );
+        }
+    }
+
+    #[test]
+    fn spacing_samples_are_the_documented_ceiling() {
+        // Against the float formula, over random distances of every size.
+        let mut seed = 0x2545_f491_u32;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 17;
+            seed ^= seed << 5;
+            seed
+        };
+        let formula = |mm: f32, deg: f32| {
+            let n = libm::ceilf((mm / PATH_STEP_MM).max(deg / PATH_STEP_DEG));
+            if n >= MAX_FRAMES as f32 {
+                MAX_FRAMES
+            } else if n >= 1.0 {
+                n as u32
+            } else {
+                1
+            }
+        };
+        let special = [
+            0.0, -0.0, 0.5, 0.25, 1.0, 1e-30, 8388608.0, 4194304.0, 4194303.5,
+        ];
+        let mut values: std::vec::Vec<f32> = special.into();
+        values.extend([f32::NAN, f32::INFINITY, -3.0, 1e-40, 16777215.0, 16777216.0]);
+        for _ in 0..200_000 {
+            // Mostly 0..2^25, some anywhere.
+            let bits = next();
+            values.push(if bits & 1 == 0 {
+                (bits >> 7) as f32 / (1 << (bits % 24)) as f32
+            } else {
+                f32::from_bits(bits)
+            });
+        }
+        for pair in values.windows(2) {
+            let (mm, deg) = (pair[0], pair[1]);
+            assert_eq!(spacing_samples(mm, deg), formula(mm, deg), "{mm:e} {deg:e}");
+        }
+    }
+
+    #[test]
+    fn a_small_step_needs_one_sample_as_the_distances_say() {
+        // Random jumps around the small step's bounds (each coordinate's move up to twice its
+        // bound, from random poses): the shortcut never disagrees with the distances.
+        let mut seed = 0x0bad_5eed_u32;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 17;
+            seed ^= seed << 5;
+            f64::from(seed) / f64::from(u32::MAX)
+        };
+        let mut small = 0;
+        for _ in 0..200_000 {
+            let a: [f32; 6] = core::array::from_fn(|i| {
+                let range = if i < 3 { 100.0 } else { 0.6 };
+                ((next() * 2.0 - 1.0) * range) as f32
+            });
+            let b: [f32; 6] = core::array::from_fn(|i| {
+                let bound = if i < 3 { 0.25 } else { 1.0 / 512.0 };
+                a[i] + ((next() * 2.0 - 1.0) * 2.0 * bound) as f32
+            });
+            let (a, b) = (Pose::from_array(a), Pose::from_array(b));
+            let samples = spacing_samples(linear_distance_mm(&a, &b), angular_distance_deg(&a, &b));
+            if small_step(&a, &b) {
+                small += 1;
+                assert_eq!(samples, 1, "{a:?} {b:?}");
+            }
+            assert_eq!(Segment::plan(a, b, OFF, 50.0).samples, samples);
+        }
+        // Both sides were visited.
+        assert!(small > 1_000 && small < 199_000, "{small}");
+        // The largest small step of each group, every coordinate at once, is one sample.
+        let edge = Pose::from_array([0.2499, -0.2499, 0.2499, 0.00195, -0.00195, 0.00195]);
+        assert!(small_step(&Pose::HOME, &edge));
+        assert_eq!(Segment::plan(Pose::HOME, edge, OFF, 50.0).samples, 1);
+    }
+
+    #[test]
+    fn stepped_checkpoints_stay_on_the_straight_line_within_the_documented_rounding() {
+        // A long jump: hundreds of stepped poses in one frame step, every coordinate moving.
+        let a = Pose {
+            x_mm: -100.0,
+            y_mm: 80.0,
+            z_mm: -30.0,
+            roll_rad: 0.3,
+            pitch_rad: -0.2,
+            yaw_rad: 0.4,
+        };
+        let b = Pose {
+            x_mm: 120.0,
+            y_mm: -90.0,
+            z_mm: 40.0,
+            roll_rad: -0.3,
+            pitch_rad: 0.25,
+            yaw_rad: -0.5,
+        };
+        let s = Segment::plan(a, b, OFF, 50.0);
+        let seen: std::vec::Vec<(Pose, f32)> = s.checkpoints().collect();
+        assert!(seen.len() > 500, "{}", seen.len());
+        assert_eq!(seen.last().unwrap().0, b);
+        let (va, vb) = (a.to_array(), b.to_array());
+        let n = seen.len() as f64;
+        for (j, (p, fraction)) in seen.iter().enumerate() {
+            // The exact point, in f64.
+            let t = (j + 1) as f64 / n;
+            assert!((f64::from(*fraction) - t).abs() < 1e-6, "{j}");
+            for (c, &v) in p.to_array().iter().enumerate() {
+                let exact = f64::from(va[c]) + (f64::from(vb[c]) - f64::from(va[c])) * t;
+                let allowed = if c < 3 { 0.008 } else { 0.007f64.to_radians() };
+                assert!(
+                    (f64::from(v) - exact).abs() <= allowed,
+                    "checkpoint {j} coordinate {c}: {v} vs {exact}"
+                );
+            }
         }
     }
 

@@ -23,17 +23,49 @@ pub enum NumberError {
 }
 
 /// Parses a strict decimal (see the module docs). The text must already be trimmed.
+///
+/// One pass over the bytes reads the sign and the mantissa's digits as a whole number (in
+/// wrapping arithmetic: exact up to 9 digits) and how many follow the point; a short decimal
+/// (at most 9 digits, a whole number of at most 2^24) is then converted at once
+/// ([`short_decimal`]), anything else (an exponent, more digits) by core's parser: both give
+/// the correctly rounded value, so which one does is a matter of speed only.
 pub fn parse_f32(text: &str) -> Result<f32, NumberError> {
-    let unsigned = text
-        .strip_prefix('-')
-        .or_else(|| text.strip_prefix('+'))
-        .unwrap_or(text);
-    if !is_decimal(unsigned.as_bytes()) {
+    let bytes = text.as_bytes();
+    let (negative, unsigned) = match bytes {
+        [b'-', rest @ ..] => (true, rest),
+        [b'+', rest @ ..] => (false, rest),
+        _ => (false, bytes),
+    };
+    let digit = |i: usize| {
+        unsigned
+            .get(i)
+            .map(|b| b.wrapping_sub(b'0'))
+            .filter(|&d| d < 10)
+    };
+    let mut whole: u32 = 0;
+    let mut i = 0;
+    while let Some(d) = digit(i) {
+        whole = whole.wrapping_mul(10).wrapping_add(u32::from(d));
+        i += 1;
+    }
+    let (mut after_point, point) = (0, unsigned.get(i) == Some(&b'.'));
+    if point {
+        i += 1;
+        let from = i;
+        while let Some(d) = digit(i) {
+            whole = whole.wrapping_mul(10).wrapping_add(u32::from(d));
+            i += 1;
+        }
+        after_point = i - from;
+    }
+    let digits = i - usize::from(point);
+    let decimal = digits > 0 && (i == unsigned.len() || is_exponent(&unsigned[i..]));
+    if !decimal {
         // (None of these words is a decimal: asked only of what is not one.)
         return Err(
             if ["nan", "inf", "infinity"]
                 .iter()
-                .any(|word| unsigned.eq_ignore_ascii_case(word))
+                .any(|word| unsigned.eq_ignore_ascii_case(word.as_bytes()))
             {
                 NumberError::NotFinite
             } else {
@@ -41,8 +73,10 @@ pub fn parse_f32(text: &str) -> Result<f32, NumberError> {
             },
         );
     }
-    if let Some(value) = short_decimal(unsigned.as_bytes()) {
-        return Ok(if text.starts_with('-') { -value } else { value });
+    if digits <= 9 && whole <= 1 << 24 && i == unsigned.len() {
+        if let Some(value) = short_decimal(whole, after_point) {
+            return Ok(if negative { -value } else { value });
+        }
     }
     // The grammar above is a subset of what core's correctly rounded parser accepts.
     let value: f32 = text.parse().map_err(|_| NumberError::Syntax)?;
@@ -76,62 +110,38 @@ pub fn parse_u32(text: &str) -> Result<u32, NumberError> {
 /// `10^k` for `k` in `0..=10`, each exact in an `f32` (`10^k = 2^k 5^k`, `5^10 < 2^24`).
 const POWERS_OF_TEN: [f32; 11] = [1.0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10];
 
-/// The value of an unsigned decimal of the grammar ([`is_decimal`]) without an exponent whose
-/// digits make a whole number `m` of at most 2^24 with at most 10 of them after the point (what
-/// people type, e.g. `12.345`): `m / 10^k`, one `f32` division of two exact operands, which
-/// IEEE 754 rounds correctly, so it is exactly what core's parser gives (the "fast path" of
-/// W. D. Clinger, "How to read floating point numbers accurately", 1990) at a fraction of its
-/// cost on a chip without an FPU. `None` for any other decimal.
-fn short_decimal(bytes: &[u8]) -> Option<f32> {
-    let mut whole: u32 = 0;
-    let mut after_point = false;
-    let mut fraction_digits = 0;
-    for &b in bytes {
-        match b {
-            b'0'..=b'9' => {
-                // At most 2^24 before, so no overflow.
-                whole = whole * 10 + u32::from(b - b'0');
-                if whole > 1 << 24 {
-                    return None;
-                }
-                fraction_digits += usize::from(after_point);
-            }
-            b'.' => after_point = true,
-            _ => return None, // an exponent
-        }
-    }
-    let power = POWERS_OF_TEN.get(fraction_digits)?;
-    // (`whole` is exact in an f32.)
-    Some(whole as f32 / power)
+/// The value of an unsigned decimal of the grammar without an exponent whose digits make a
+/// whole number `m` of at most 2^24 with `k` (at most 10) of them after the point (what people
+/// type, e.g. `12.345`): `m / 10^k`, one `f32` division of two exact operands, which IEEE 754
+/// rounds correctly, so it is exactly what core's parser gives (the "fast path" of W. D.
+/// Clinger, "How to read floating point numbers accurately", 1990) at a fraction of its cost on
+/// a chip without an FPU; no division at all without a fraction (`m / 1 = m`). `None` for more
+/// than 10 digits after the point.
+fn short_decimal(m: u32, k: usize) -> Option<f32> {
+    let power = POWERS_OF_TEN.get(k)?;
+    let m = exact_f32(m);
+    Some(if k == 0 { m } else { m / power })
 }
 
-/// `digits [ "." digits ] [ exponent ]` or `"." digits [ exponent ]`, at least one mantissa
-/// digit, exponent `("e" | "E") [sign] digits`.
-fn is_decimal(bytes: &[u8]) -> bool {
-    let digits = |s: &[u8]| s.iter().take_while(|b| b.is_ascii_digit()).count();
-    let int_len = digits(bytes);
-    let mut i = int_len;
-    let mut frac_len = 0;
-    if bytes.get(i) == Some(&b'.') {
-        i += 1;
-        frac_len = digits(&bytes[i..]);
-        i += frac_len;
+/// `m` (at most 2^24) as an `f32`, exactly, on the bits (the conversion's library call rounds,
+/// which a number this small never needs).
+fn exact_f32(m: u32) -> f32 {
+    if m == 0 {
+        return 0.0;
     }
-    if int_len + frac_len == 0 {
-        return false;
-    }
-    if matches!(bytes.get(i), Some(b'e' | b'E')) {
-        i += 1;
-        if matches!(bytes.get(i), Some(b'+' | b'-')) {
-            i += 1;
-        }
-        let exp_len = digits(&bytes[i..]);
-        if exp_len == 0 {
-            return false;
-        }
-        i += exp_len;
-    }
-    i == bytes.len()
+    // The top bit's place, 0..=24; the mantissa's 24 bits with that bit at place 23.
+    let top = 31 - m.leading_zeros();
+    let mantissa = if top <= 23 { m << (23 - top) } else { m >> 1 };
+    f32::from_bits(((top + 127) << 23) + mantissa - 0x80_0000)
+}
+
+/// `("e" | "E") [sign] digits`, the whole of `bytes`.
+fn is_exponent(bytes: &[u8]) -> bool {
+    let rest = match bytes {
+        [b'e' | b'E', b'+' | b'-', rest @ ..] | [b'e' | b'E', rest @ ..] => rest,
+        _ => return false,
+    };
+    !rest.is_empty() && rest.iter().all(u8::is_ascii_digit)
 }
 
 #[cfg(test)]
@@ -248,6 +258,65 @@ mod tests {
                 Ok(expected.to_bits()),
                 "{text}"
             );
+        }
+    }
+
+    /// The documented result, from the grammar (checked here by a pattern of its own) and
+    /// core's correctly rounded parser.
+    fn documented(text: &str) -> Result<f32, NumberError> {
+        let unsigned = text.strip_prefix(['+', '-']).unwrap_or(text);
+        if ["nan", "inf", "infinity"]
+            .iter()
+            .any(|w| unsigned.eq_ignore_ascii_case(w))
+        {
+            return Err(NumberError::NotFinite);
+        }
+        let (mantissa, exponent) = match unsigned.find(['e', 'E']) {
+            Some(at) => (&unsigned[..at], Some(&unsigned[at + 1..])),
+            None => (unsigned, None),
+        };
+        let (int, frac) = mantissa.split_once('.').unwrap_or((mantissa, ""));
+        let all_digits = |s: &str| s.bytes().all(|b| b.is_ascii_digit());
+        let exponent_ok = exponent.is_none_or(|e| {
+            let e = e.strip_prefix(['+', '-']).unwrap_or(e);
+            !e.is_empty() && all_digits(e)
+        });
+        if int.len() + frac.len() == 0 || !all_digits(int) || !all_digits(frac) || !exponent_ok {
+            return Err(NumberError::Syntax);
+        }
+        let v: f32 = text.parse().unwrap();
+        if v.is_finite() {
+            Ok(v)
+        } else {
+            Err(NumberError::TooLarge)
+        }
+    }
+
+    #[test]
+    fn random_texts_parse_as_documented() {
+        // Short texts over the grammar's bytes and a few others: most are numbers, many not.
+        let mut seed = 0x1234_5678_u32;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 17;
+            seed ^= seed << 5;
+            seed
+        };
+        let alphabet = b"0123456789012345678901234567890123456789..eE+-+-nafiINtyx ";
+        for _ in 0..500_000 {
+            let len = next() % 14;
+            let text: std::string::String = (0..len)
+                .map(|_| char::from(alphabet[(next() as usize) % alphabet.len()]))
+                .collect();
+            let (got, want) = (parse_f32(&text), documented(&text));
+            assert_eq!(got.map(f32::to_bits), want.map(f32::to_bits), "{text:?}");
+        }
+    }
+
+    #[test]
+    fn small_whole_numbers_convert_exactly() {
+        for m in 0..=1u32 << 24 {
+            assert_eq!(exact_f32(m).to_bits(), (m as f32).to_bits(), "{m}");
         }
     }
 

@@ -1,5 +1,6 @@
-//! What the firmware's binaries share: the board's bring-up ([`board`]: boot2, clocks, GPIOs)
-//! and the board's [`kinematics_core::Math`] ([`rom_math`]).
+//! What the firmware's binaries share: the board's bring-up ([`board`]: boot2, clocks, GPIOs),
+//! the board's [`kinematics_core::Math`] ([`rom_math`]) and the compiler's run-time routines
+//! for `f32`, memory and integer division (`intrinsics`).
 //!
 //! `src/main.rs` is the firmware; `src/bin/bench.rs` is the IK benchmark, which must run the
 //! very same maths on the very same clocks (`./dev bench`).
@@ -7,6 +8,7 @@
 #![no_std]
 
 pub mod board;
+mod intrinsics;
 mod ram_code;
 pub mod rom_math;
 

@@ -2,12 +2,13 @@
 //!
 //! The M0+ has no FPU. `libm`'s `sinf`/`cosf` compute in f64 and cost thousands of cycles per
 //! call; the ROM routines are accurate to about 1e-7 and several times faster. rp2040-hal's
-//! wrappers (and the `__aeabi_f*` intrinsics the compiler calls for `+ - *`) add a table look-up
-//! and finiteness checks around every ROM call, about 40 cycles on top of a 55-70 cycle `fadd`
-//! or `fmul`. The kinematics call the ROM through [`Math`] instead, as the Pico SDK does:
-//! the soft-float table's address is looked up once and kept in RAM ([`table`]), and the
-//! addresses of `fadd` and `fmul` (the most called) are kept in RAM themselves ([`ADD`],
-//! [`MUL`]), so each call is two loads and a `blx`.
+//! `__aeabi_f*` routines the compiler calls for `+ - * /` ([`crate::intrinsics`]) check their
+//! operands before each ROM call (about 20 cycles on top of a 55-70 cycle `fadd` or `fmul`)
+//! to give IEEE's results where the ROM does not (denormals, infinities, NaN). The kinematics
+//! call the ROM through [`Math`] instead, as the Pico SDK does: the soft-float table's address
+//! is looked up once and kept in RAM, and so are the addresses of `fadd` and `fmul` (the most
+//! called; the same slots as the intrinsics', [`intrinsics::ROM_FADD`]), so each call is two
+//! loads and a `blx`.
 //!
 //! The IK's hot loop calls none of them: it runs in fixed point, with the core's integer sine,
 //! square root and arc tangent (`kinematics_core::fixed`, [`Math`]'s default fixed-point
@@ -28,20 +29,22 @@
 //! - `fatan2` (offset 0x58) exists from ROM version 2 (every RP2040 sold, B1 and later; B0 was
 //!   never on a Pico); on an older ROM `libm`'s `atan2f` is used instead;
 //! - `fsqrt` returns -inf for negative input; the trait wants NaN, so negatives are caught here;
-//! - `fadd`, `fmul` are correctly rounded for finite values (denormal results flush to
-//!   zero, far below anything the kinematics computes). Non-finite operands and overflow are
-//!   not handled as IEEE says (rp2040-hal's wrappers exist for that), which the trait allows:
-//!   the IK checks the pose and bounds its magnitudes before they could overflow.
+//! - `fadd`, `fmul` are correctly rounded for normal and zero operands, overflow included, but
+//!   read denormal operands as zero and flush denormal results to zero (far below anything
+//!   the kinematics computes), and give an infinity for a NaN operand, `inf - inf` or
+//!   `0 * inf` (measured: `emulator/test/intrinsics.test.js`), which the trait allows: the IK
+//!   checks the pose and bounds its magnitudes before they could overflow.
 
 use core::arch::asm;
-use core::sync::atomic::{AtomicPtr, AtomicUsize, Ordering};
+use core::sync::atomic::{AtomicUsize, Ordering};
 
 use kinematics_core::Math;
 use rp2040_hal::rom_data;
 
-/// Byte offsets in the soft-float table (datasheet table 180).
-const FADD: usize = 0x00;
-const FMUL: usize = 0x08;
+use crate::intrinsics::{self, rom_float_entry as entry, FADD, FMUL, ROM_FADD, ROM_FMUL};
+
+/// Byte offsets in the soft-float table (datasheet table 180; `fadd`'s and `fmul`'s are
+/// [`intrinsics`]').
 const FSQRT: usize = 0x18;
 const FSIN: usize = 0x40;
 const FATAN2: usize = 0x58;
@@ -56,80 +59,15 @@ pub const IK_ROUTINES: [(&str, usize); 5] = [
     ("fatan2", FATAN2),
 ];
 
-/// The soft-float table's address (0 until first looked up).
-static TABLE: AtomicUsize = AtomicUsize::new(0);
 /// `fatan2`, or `libm`'s on a ROM without it (0 until first looked up).
 static ATAN2: AtomicUsize = AtomicUsize::new(0);
 
 type BinaryFn = extern "C" fn(f32, f32) -> f32;
-
-/// `fadd`, `fmul`: until the first call, a stand-in ([`first_add`] ...) that stores the
-/// ROM routines' addresses here and then calls the ROM. Always an `extern "C" fn(f32, f32) ->
-/// f32`.
-static ADD: AtomicPtr<()> = AtomicPtr::new(first_add as BinaryFn as *mut ());
-/// See [`ADD`].
-static MUL: AtomicPtr<()> = AtomicPtr::new(first_mul as BinaryFn as *mut ());
-
-/// Stores the ROM's `fadd` and `fmul` in [`ADD`] and [`MUL`] (the same addresses
-/// whoever does it, so a race could only repeat it).
-fn resolve_arithmetic() {
-    ADD.store(entry(FADD) as *mut (), Ordering::Relaxed);
-    MUL.store(entry(FMUL) as *mut (), Ordering::Relaxed);
-}
-
-extern "C" fn first_add(a: f32, b: f32) -> f32 {
-    resolve_arithmetic();
-    binary(FADD, a, b)
-}
-
-extern "C" fn first_mul(a: f32, b: f32) -> f32 {
-    resolve_arithmetic();
-    binary(FMUL, a, b)
-}
-
-/// Calls the routine in `slot` ([`ADD`] or [`MUL`]).
-#[inline]
-fn call(slot: &AtomicPtr<()>, a: f32, b: f32) -> f32 {
-    // SAFETY: the slots only ever hold `extern "C" fn(f32, f32) -> f32`s: a stand-in above or
-    // the ROM routine it stores (see module docs).
-    let f: BinaryFn =
-        unsafe { core::mem::transmute::<*mut (), BinaryFn>(slot.load(Ordering::Relaxed)) };
-    f(a, b)
-}
 type UnaryFn = extern "C" fn(f32) -> f32;
 
 /// The boot ROM's float library, called directly.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct RomMath;
-
-/// The soft-float table, looked up in the ROM the first time (the look-up always gives the
-/// same address, so a race could only repeat it).
-#[inline]
-fn table() -> *const usize {
-    match TABLE.load(Ordering::Relaxed) {
-        0 => {
-            let table = rom_data::soft_float_table();
-            TABLE.store(table as usize, Ordering::Relaxed);
-            table
-        }
-        table => table as *const usize,
-    }
-}
-
-/// The table entry at byte offset `offset`: a Thumb function address.
-#[inline]
-fn entry(offset: usize) -> usize {
-    // SAFETY: `offset` is one of the offsets above, all inside the table of every ROM version;
-    // the table lives in ROM, which is always readable.
-    unsafe { table().add(offset / 4).read() }
-}
-
-#[inline]
-fn binary(offset: usize, a: f32, b: f32) -> f32 {
-    // SAFETY: the entries used with this are `extern "C" fn(f32, f32) -> f32` (see module docs).
-    let f: BinaryFn = unsafe { core::mem::transmute::<usize, BinaryFn>(entry(offset)) };
-    f(a, b)
-}
 
 extern "C" fn libm_atan2(y: f32, x: f32) -> f32 {
     libm::atan2f(y, x)
@@ -197,17 +135,17 @@ impl Math for RomMath {
 
     #[inline]
     fn add(a: f32, b: f32) -> f32 {
-        call(&ADD, a, b)
+        intrinsics::call(&ROM_FADD, a, b)
     }
 
     #[inline]
     fn sub(a: f32, b: f32) -> f32 {
         // `a + (-b)`: see the module docs.
-        call(&ADD, a, -b)
+        intrinsics::call(&ROM_FADD, a, -b)
     }
 
     #[inline]
     fn mul(a: f32, b: f32) -> f32 {
-        call(&MUL, a, b)
+        intrinsics::call(&ROM_FMUL, a, b)
     }
 }

@@ -598,21 +598,24 @@ impl<M: Math> Controller<M> {
             }
             Job::Path(path) => {
                 let result = path.step::<M>(check)?;
-                // Copied out (not the whole job, which `take` would move), then ended.
-                let path = *path;
-                self.job = None;
+                // What follows needs only part of it, copied out (not the whole job, which
+                // `take` would move, nor the whole check).
+                let checked = path.checked();
                 // (`check` takes nothing over: what it checked is what it reports.)
                 let missed = result.is_ok()
-                    && path.purpose != Purpose::Check
+                    && checked.purpose != Purpose::Check
                     && !self.estop.stops_motion()
-                    && self.missed_hand_over(&path);
-                self.learn_check_rate(&path, missed);
+                    && self.missed_hand_over(&checked);
+                self.learn_check_rate(&checked, missed);
                 if missed {
                     // Too late to take over as planned: planned (next slice) and checked again.
-                    self.job = Some(Job::Path(path.to_replan()));
+                    if let Some(Job::Path(path)) = &mut self.job {
+                        *path = path.to_replan();
+                    }
                     return None;
                 }
-                Some(self.finish_path(path, result))
+                self.job = None;
+                Some(self.finish_path(&checked, result))
             }
             Job::Clamp(clamp) => {
                 let (pose, solution) = clamp.step::<M>(check, &mut self.stream_counts)?;

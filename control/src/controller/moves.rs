@@ -38,7 +38,7 @@
 
 use kinematics_core::{Math, Pose};
 
-use super::path::{FrameTurns, HandOver, PathCheck, Purpose};
+use super::path::{Checked, FrameTurns, HandOver, PathCheck, Purpose};
 use super::{Begun, Controller, Done, Job};
 use crate::error::Error;
 use crate::motion::{Motion, Plan, Segment, SpeedLimits};
@@ -126,7 +126,8 @@ impl<M: Math> Controller<M> {
         self.holding = purpose != Purpose::Check
             && !takes_over
             && (self.motion.is_moving() || self.is_streaming());
-        let path = PathCheck::new(
+        // Built where it is kept (a check is hundreds of bytes: no copy of it on the way).
+        self.job = Some(Job::Path(PathCheck::new(
             purpose,
             solution,
             plan,
@@ -134,8 +135,12 @@ impl<M: Math> Controller<M> {
             &self.settings,
             servo_time,
             frame_turns,
-        );
-        self.job = Some(Job::Path(if takes_over { path.to_replan() } else { path }));
+        )));
+        if takes_over {
+            if let Some(Job::Path(path)) = &mut self.job {
+                *path = path.to_replan();
+            }
+        }
         Ok(Begun::Pending)
     }
 
@@ -267,7 +272,7 @@ impl<M: Math> Controller<M> {
     /// Whether a blend whose check has just ended can no longer take over as planned (its
     /// hand-over frame has passed, or the motion changed meanwhile): then it is planned and
     /// checked again from the motion as it is now.
-    pub(super) fn missed_hand_over(&self, path: &PathCheck) -> bool {
+    pub(super) fn missed_hand_over(&self, path: &Checked) -> bool {
         match path.hand_over {
             Some(h) => {
                 let wait = h.at.wrapping_sub(self.frame_ticks) as i32;
@@ -279,7 +284,7 @@ impl<M: Math> Controller<M> {
 
     /// Learns how many path checks fit in a frame, from the check that has just ended; after a
     /// missed hand-over, half as many.
-    pub(super) fn learn_check_rate(&mut self, path: &PathCheck, missed: bool) {
+    pub(super) fn learn_check_rate(&mut self, path: &Checked, missed: bool) {
         let Some(h) = path.hand_over else {
             return;
         };
@@ -296,15 +301,16 @@ impl<M: Math> Controller<M> {
     }
 
     /// What a checked path leads to.
-    pub(super) fn finish_path(&mut self, path: PathCheck, result: Result<(), Error>) -> Done {
-        let torque_kgcm = path.torque();
-        let PathCheck {
+    pub(super) fn finish_path(&mut self, path: &Checked, result: Result<(), Error>) -> Done {
+        // (Borrowed: each outcome copies only what it keeps.)
+        let Checked {
             purpose,
-            solution,
-            plan,
+            ref solution,
+            ref plan,
             hand_over,
+            torque: torque_kgcm,
             ..
-        } = path;
+        } = *path;
         if self.estop.stops_motion()
             && matches!(purpose, Purpose::Move { .. } | Purpose::ReturnHome)
         {
@@ -321,7 +327,7 @@ impl<M: Math> Controller<M> {
                 // An accepted move ends the stream (and driving the servos one by one).
                 self.end_stream();
                 self.direct = None;
-                self.start_plan(plan, hand_over);
+                self.start_plan(*plan, hand_over);
                 self.servo_power = true;
                 Done::Ok
             }
@@ -330,7 +336,7 @@ impl<M: Math> Controller<M> {
                 self.end_stream();
                 self.direct = None;
                 self.motion = Motion::new(*plan.target());
-                self.solution = solution;
+                self.solution = *solution;
                 self.new_pulses = true;
                 self.returning_home = false;
                 self.fault = None;
@@ -340,7 +346,7 @@ impl<M: Math> Controller<M> {
             (Purpose::EstopHome, Ok(())) => {
                 self.end_stream();
                 self.direct = None;
-                self.start_plan(plan, None);
+                self.start_plan(*plan, None);
                 Done::Quiet
             }
             (Purpose::EstopHome, Err(e)) => {
@@ -364,7 +370,7 @@ impl<M: Math> Controller<M> {
             (Purpose::ReturnHome, Ok(())) => {
                 self.end_stream();
                 self.direct = None;
-                self.start_plan(plan, None);
+                self.start_plan(*plan, None);
                 self.returning_home = true;
                 self.notify(Notice::LinkLost {
                     timeout_s: self.settings.link_timeout_s,

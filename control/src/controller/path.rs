@@ -15,7 +15,7 @@ use kinematics_core::{Math, Pose, LEGS};
 
 use super::pose_check::{PoseCheck, Torques};
 use crate::error::Error;
-use crate::motion::{Plan, PlanCheckpoints, Segment, SpeedLimits};
+use crate::motion::{Fraction, Plan, PlanCheckpoints, Segment, SpeedLimits};
 use crate::payload::TorqueError;
 use crate::servo_speed::{PathTime, ServoSpeeds, PLAN_MARGIN};
 use crate::settings::Settings;
@@ -84,6 +84,24 @@ pub(super) struct PathCheck {
     /// With servo speed ratings, a move taken over while moving: its frames' arm turns being
     /// measured, on every pass.
     pub frame_turns: Option<FrameTurns>,
+}
+
+/// What an ended path check leaves for what follows it (`controller/moves.rs`): copied out of
+/// the job, which is more than twice its size (its checkpoints, its measures).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Checked {
+    pub purpose: Purpose,
+    /// The target's solution.
+    pub solution: Solution,
+    /// The move checked.
+    pub plan: Plan,
+    /// For a blend: when it takes over.
+    pub hand_over: Option<HandOver>,
+    /// IK solutions of the path.
+    pub solved: u32,
+    /// The target's holding torques for `check` to report (`None` when there are none to
+    /// report, or they were not reached).
+    pub torque: Option<Torques>,
 }
 
 /// The most passes a rated move taken over while moving is planned and checked (the last
@@ -263,10 +281,16 @@ impl PathCheck {
         }
     }
 
-    /// The target's holding torques for `check` to report (`None` when there are none to
-    /// report, or they were not reached).
-    pub fn torque(&self) -> Option<Torques> {
-        self.torque.flatten()
+    /// What the check leaves, once it has ended.
+    pub fn checked(&self) -> Checked {
+        Checked {
+            purpose: self.purpose,
+            solution: self.solution,
+            plan: self.plan,
+            hand_over: self.hand_over,
+            solved: self.solved,
+            torque: self.torque.flatten(),
+        }
     }
 
     /// One slice: the target's holding torques, or [`PoseCheck::per_slice`] more poses of the
@@ -314,7 +338,7 @@ impl PathCheck {
     fn check_slice<M: Math>(&mut self, check: PoseCheck<'_>) -> Option<Result<(), Error>> {
         let torque = check.settings.payload.checked();
         let per_slice = check.per_slice();
-        let target = self.plan.target().to_array().map(f32::to_bits);
+        let target = *self.plan.target();
         let mut solved = 0;
         if let Some(turns) = &mut self.frame_turns {
             if turns.last.is_none() {
@@ -334,7 +358,7 @@ impl PathCheck {
             }
         }
         while solved < per_slice {
-            let Some((pose, fraction)) = self.checkpoints.next() else {
+            let Some((pose, fraction)) = self.checkpoints.next_checkpoint() else {
                 return if self.planned_again() || self.tightened() {
                     None // the new plan's poses are checked next
                 } else {
@@ -343,7 +367,7 @@ impl PathCheck {
             };
             // Compared bit for bit (float comparisons are library calls on the RP2040): a pose
             // equal but for the sign of a zero is solved again, never one less.
-            if pose.to_array().map(f32::to_bits) == target {
+            if same_bits(&pose, &target) {
                 // Checked when the command came and in the first slice.
                 let arm_rad = self.solution.arm_rad;
                 self.measure(&check.settings.servo_speed, &pose, fraction, &arm_rad);
@@ -358,7 +382,7 @@ impl PathCheck {
                 }
                 Err(cause) => {
                     return Some(Err(Error::PathBlocked {
-                        percent: fraction * 100.0,
+                        percent: fraction.get() * 100.0,
                         cause,
                     }))
                 }
@@ -369,12 +393,18 @@ impl PathCheck {
 
     /// With servo speed ratings, on the first pass: the path time measured at one more pose of
     /// the path (in order), from its IK solution's arm angles.
-    fn measure(&mut self, speeds: &ServoSpeeds, pose: &Pose, fraction: f32, arm_rad: &[f32; LEGS]) {
+    fn measure(
+        &mut self,
+        speeds: &ServoSpeeds,
+        pose: &Pose,
+        fraction: Fraction,
+        arm_rad: &[f32; LEGS],
+    ) {
         if let Some(time) = &mut self.servo_time {
             time.measured.visit(speeds, pose, arm_rad);
         }
         if let Some(turns) = &mut self.frame_turns {
-            turns.visit(speeds, &self.plan, fraction, arm_rad);
+            turns.visit(speeds, &self.plan, fraction.get(), arm_rad);
         }
     }
 
@@ -417,4 +447,15 @@ impl PathCheck {
         self.checkpoints = self.plan.checkpoints();
         true
     }
+}
+
+/// Whether two poses are the same bit for bit (a float comparison is a library call on the
+/// RP2040; this stops at the first coordinate that differs, usually the first).
+fn same_bits(a: &Pose, b: &Pose) -> bool {
+    a.x_mm.to_bits() == b.x_mm.to_bits()
+        && a.y_mm.to_bits() == b.y_mm.to_bits()
+        && a.z_mm.to_bits() == b.z_mm.to_bits()
+        && a.roll_rad.to_bits() == b.roll_rad.to_bits()
+        && a.pitch_rad.to_bits() == b.pitch_rad.to_bits()
+        && a.yaw_rad.to_bits() == b.yaw_rad.to_bits()
 }
