@@ -128,6 +128,21 @@ impl core::error::Error for IkError {}
 
 /// Checks that a pose is made of usable numbers.
 pub fn check_pose(pose: &Pose) -> Result<(), IkError> {
+    // The usual case first, in six integer comparisons (the IK's hot path): a finite position
+    // (magnitude bits below the infinities') and angles of at most pi (non-negative floats
+    // order like their bits; a NaN's are above every finite bound). Anything else takes the
+    // checks below, which name the axis.
+    let magnitude = |v: f32| v.to_bits() & 0x7fff_ffff;
+    let (finite, pi) = (f32::INFINITY.to_bits(), MAX_ANGLE_RAD.to_bits());
+    if magnitude(pose.x_mm) < finite
+        && magnitude(pose.y_mm) < finite
+        && magnitude(pose.z_mm) < finite
+        && magnitude(pose.roll_rad) <= pi
+        && magnitude(pose.pitch_rad) <= pi
+        && magnitude(pose.yaw_rad) <= pi
+    {
+        return Ok(());
+    }
     if let Some(axis) = pose.first_non_finite() {
         return Err(IkError::NonFinite { axis });
     }
@@ -654,40 +669,46 @@ impl Solver {
             min_us: servo.min_us,
             max_us: servo.max_us,
         };
-        let mut arm_rad = [0.0f32; LEGS];
-        let mut pulse_us = [0.0f32; LEGS];
         if let Some((table, fixed)) = self.fixed_pose::<M>(pose) {
             let mut alpha = [0i32; LEGS];
             table
                 .arm_angles_into::<M>(&fixed, &mut alpha)
                 .map_err(unreachable)?;
-            // Every pulse and angle first, then the limits (the first servo beyond them is
-            // named, as before): the conversions run without an exit path's values held.
-            for (i, (servo, c)) in servos.0.iter().zip(&table.legs).enumerate() {
-                let offset = offset_fixed(alpha[i], c.alpha0_wrapped_q);
-                pulse_us[i] = servo.pulse_us_for_fixed_offset::<M>(offset);
-                arm_rad[i] = arm_rad_fixed(c.alpha0_q, offset);
+            // Each arm's offset from home, in place; then every pulse and angle, written
+            // straight into the solution (no zero-filled arrays to copy); then the limits (the
+            // first servo beyond them is named): the conversions run without an exit path's
+            // values held.
+            for (a, c) in alpha.iter_mut().zip(&table.legs) {
+                *a = offset_fixed(*a, c.alpha0_wrapped_q);
             }
+            let solution = Solution {
+                arm_rad: core::array::from_fn(|i| arm_rad_fixed(table.legs[i].alpha0_q, alpha[i])),
+                pulse_us: core::array::from_fn(|i| {
+                    servos.0[i].pulse_us_for_fixed_offset::<M>(alpha[i])
+                }),
+            };
             for (i, servo) in servos.0.iter().enumerate() {
-                if !servo.allows(pulse_us[i]) {
-                    return Err(limit(i, servo, pulse_us[i]));
+                if !servo.allows(solution.pulse_us[i]) {
+                    return Err(limit(i, servo, solution.pulse_us[i]));
                 }
             }
-        } else {
-            let alpha = self
-                .float
-                .arm_angles::<M>(&self.centre_mm, pose)
-                .map_err(unreachable)?;
-            for (i, servo) in servos.0.iter().enumerate() {
-                let alpha0 = Real::<M>::new(self.float.legs[i].alpha0_rad);
-                let offset = wrap_angle_rad::<M>((Real::new(alpha[i]) - alpha0).0);
-                let pulse = servo.pulse_us_for_offset::<M>(offset);
-                if !servo.allows(pulse) {
-                    return Err(limit(i, servo, pulse));
-                }
-                pulse_us[i] = pulse;
-                arm_rad[i] = (alpha0 + Real::new(offset)).0;
+            return Ok(solution);
+        }
+        let alpha = self
+            .float
+            .arm_angles::<M>(&self.centre_mm, pose)
+            .map_err(unreachable)?;
+        let mut arm_rad = [0.0f32; LEGS];
+        let mut pulse_us = [0.0f32; LEGS];
+        for (i, servo) in servos.0.iter().enumerate() {
+            let alpha0 = Real::<M>::new(self.float.legs[i].alpha0_rad);
+            let offset = wrap_angle_rad::<M>((Real::new(alpha[i]) - alpha0).0);
+            let pulse = servo.pulse_us_for_offset::<M>(offset);
+            if !servo.allows(pulse) {
+                return Err(limit(i, servo, pulse));
             }
+            pulse_us[i] = pulse;
+            arm_rad[i] = (alpha0 + Real::new(offset)).0;
         }
         Ok(Solution { arm_rad, pulse_us })
     }
@@ -1191,6 +1212,68 @@ mod tests {
                 assert!(wide > 100, "{wide} legs beyond the 32-bit bounds");
             } else {
                 assert_eq!(wide, 0, "a usual pose left the 32-bit path");
+            }
+        }
+    }
+
+    #[test]
+    fn check_pose_agrees_with_float_comparisons() {
+        // The integer fast path and the checks after it against the plain rule in float
+        // comparisons: the first non-finite coordinate in pose order, else the first angle
+        // beyond pi, over values at and around every bound, in every position.
+        let expected = |pose: &Pose| -> Result<(), IkError> {
+            let v = pose.to_array();
+            if let Some(k) = v.iter().position(|x| !x.is_finite()) {
+                return Err(IkError::NonFinite { axis: Axis::ALL[k] });
+            }
+            match (3..6).find(|&k| v[k].abs() > PI) {
+                Some(k) => Err(IkError::AngleTooLarge {
+                    axis: Axis::ALL[k],
+                    value_rad: v[k],
+                }),
+                None => Ok(()),
+            }
+        };
+        let above_pi = f32::from_bits(PI.to_bits() + 1);
+        let values = [
+            0.0,
+            -0.0,
+            1e-45,
+            1.0,
+            -2.5,
+            PI,
+            -PI,
+            above_pi,
+            -above_pi,
+            4.0,
+            f32::MAX,
+            -f32::MAX,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+            -f32::NAN,
+        ];
+        let mut seed = 0x0c0f_fee5_u32;
+        for _ in 0..20_000 {
+            let mut v = [0.0f32; 6];
+            for x in v.iter_mut() {
+                let r = crate::test_support::xorshift(&mut seed);
+                // Mostly ordinary values, one in four a bound or its neighbour.
+                *x = if r % 4 == 0 {
+                    values[(r >> 8) as usize % values.len()]
+                } else {
+                    (r >> 8) as f32 / (1u32 << 24) as f32 * 7.0 - 3.5
+                };
+            }
+            let pose = Pose::from_array(v);
+            assert_eq!(check_pose(&pose), expected(&pose), "{v:?}");
+        }
+        for &x in &values {
+            for k in 0..6 {
+                let mut v = [0.1f32; 6];
+                v[k] = x;
+                let pose = Pose::from_array(v);
+                assert_eq!(check_pose(&pose), expected(&pose), "{v:?}");
             }
         }
     }
