@@ -46,7 +46,7 @@ use crate::fixed::{
     from_fixed, from_fixed32, leading_zeros, mul_mm, mul_mm_narrow, rotate_mm_split, split13,
     split15, square, square_mm, square_mm_narrow, to_fixed, to_fixed_sq, wide_mul, ARM_FRAC,
     MAX_FIXED_MM, MAX_FIXED_ROD_TERM_MM2, MAX_FIXED_TWO_ARM_MM, MAX_NARROW_ROD_TERM_MM2,
-    MAX_NARROW_TWO_ARM_MM, MAX_ROTATION_ENTRY, MM_FRAC, NARROW_LEG_Q, NARROW_SQ_FRAC, ROT_FRAC,
+    MAX_NARROW_TWO_ARM_MM, MM_FRAC, NARROW_LEG_Q, NARROW_SQ_FRAC, ROT_FRAC,
 };
 use crate::geometry::{Geometry, GeometryError};
 use crate::math::{is_zero, Libm, Math, Real};
@@ -739,15 +739,9 @@ impl FixedTable {
             FixedCentre::Beyond => return None,
         };
         // The platform is planar: `R`'s third column only turns the centre's `z`.
+        // (Every entry within `fixed::MAX_ROTATION_ENTRY`, whatever the sines of the `Math`
+        // in use: the bounds of `fixed` hold.)
         let r = pose.rotation_fixed::<M>(centre.is_some_and(|c| c[2] != 0))?;
-        // (A check against the `Math` in use, whatever its sines: the bounds of `fixed` hold.)
-        let bounded = |row: &[i32; 3]| {
-            row.iter()
-                .all(|v| v.unsigned_abs() < MAX_ROTATION_ENTRY as u32)
-        };
-        if !(bounded(&r[0]) && bounded(&r[1]) && bounded(&r[2])) {
-            return None;
-        }
         // (Written out: `map` here is a call of its own on the chip.)
         let mut position = [
             to_fixed(position[0], MM_FRAC),
