@@ -430,21 +430,24 @@ fn half_angle<M: Math>([m, l_minus_n, l_plus_n]: [i32; 3]) -> Option<i32> {
     })
 }
 
-/// [`scale_terms`] for terms that fit an `i32` (the 32-bit path's, steps of 2^-15 mm^2): the
-/// largest magnitude moved into `[2^28, 2^29]` by one power of two (exactly when shifted up,
-/// rounded to nearest when shifted down, by at most 3 bits).
+/// The 32-bit path's terms (steps of 2^-15 mm^2, each within an `i32`) brought within 2^29 in
+/// magnitude, as [`half_angle`] needs: unchanged where they are (every usual leg), else halved
+/// or quartered, rounded to nearest. Never scaled up (unlike [`scale_terms`], whose terms are
+/// exact): each term is already within half a step of its exact value and `l`'s rounding moves
+/// `L` by tens of steps (`FixedTable::narrow_terms`), so the extra bits would be zeros, and the
+/// square root's error (within 1) is no larger than what the terms' own rounding puts into
+/// `sqrt(D)`. Two comparisons, no count of leading zeros.
 #[inline(always)]
 fn scale_terms32(terms: [i32; 3]) -> [i32; 3] {
-    // `t ^ (t >> 31)` is `|t|`, or `|t| - 1` for a negative one (see `scale_terms`).
+    // `t ^ (t >> 31)` is `|t|`, or `|t| - 1` for a negative one (see `scale_terms`): below
+    // 2^29 exactly when every `|t| <= 2^29`; below 2^31 always.
     let magnitude_bits = |t: i32| (t ^ (t >> 31)) as u32;
     let bits = magnitude_bits(terms[0]) | magnitude_bits(terms[1]) | magnitude_bits(terms[2]);
-    let width = 32 - leading_zeros(bits);
-    if width <= 29 {
-        // (All zero stay zero.)
-        let up = 29 - width;
-        return terms.map(|t| t << up);
+    if bits < 1 << 29 {
+        return terms;
     }
-    let shift = width - 29;
+    // |t| <= 2^30: halved; |t| <= 2^31: quartered; either within 2^29 after the rounding.
+    let shift = if bits < 1 << 30 { 1 } else { 2 };
     terms.map(|t| ((t >> (shift - 1)) + 1) >> 1)
 }
 
@@ -776,7 +779,8 @@ impl FixedTable {
     /// 2^-15 mm^2 (products rounded once: [`FixedTable::narrow_terms`], every usual leg), or
     /// beyond that path's bounds in 64-bit words, in steps of 2^-36 mm^2 (exact products cut
     /// once: [`FixedTable::wide_terms`]); then `M`, `L - N`, `L + N` scaled by one power of two
-    /// to about 29 bits (the root depends only on their ratios), the discriminant
+    /// (the root depends only on their ratios): the 64-bit path's to about 29 bits, the 32-bit
+    /// path's only where they pass 2^29 ([`scale_terms32`]), then the discriminant
     /// `D = M^2 - (L - N)(L + N) = M^2 + N^2 - L^2` exactly, and the half-angle root (module
     /// docs) from `M`'s fixed-point square root and arc tangent ([`Math::sqrt_fixed`],
     /// [`Math::atan2_fixed`]: by default the core's integer routines, so the host runs exactly
