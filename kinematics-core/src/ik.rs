@@ -1277,6 +1277,64 @@ mod tests {
     }
 
     #[test]
+    fn narrow_terms_are_brought_within_2_29() {
+        // Against the plain rule in 64 bits: unchanged when every term is in [-2^29, 2^29),
+        // else divided by 2 (every term in [-2^30, 2^30)) or 4, rounded to nearest (halves
+        // up); within 2^29 in magnitude either way, as `half_angle` needs.
+        let expected = |terms: [i32; 3]| {
+            let within = |k: u32| {
+                terms
+                    .iter()
+                    .all(|&t| (-(1i64 << k)..1 << k).contains(&t.into()))
+            };
+            let shift = if within(29) {
+                0
+            } else if within(30) {
+                1
+            } else {
+                2
+            };
+            terms.map(|t| {
+                let t = i64::from(t);
+                (if shift == 0 {
+                    t
+                } else {
+                    (t + (1 << (shift - 1))) >> shift
+                }) as i32
+            })
+        };
+        let mut seed = 0x5ca1_ab1e_u32;
+        let extremes = [
+            0,
+            1,
+            -1,
+            1 << 29,
+            -(1 << 29),
+            (1 << 29) - 1,
+            1 << 30,
+            -(1 << 30),
+        ];
+        let extremes = [extremes.as_slice(), &[i32::MAX, i32::MIN, i32::MIN + 1]].concat();
+        for i in 0..300_000 {
+            let mut next = || {
+                let r = crate::test_support::xorshift(&mut seed);
+                if i % 8 == 0 {
+                    extremes[r as usize % extremes.len()]
+                } else {
+                    (r as i32) >> (r % 31)
+                }
+            };
+            let terms = [next(), next(), next()];
+            let scaled = scale_terms32(terms);
+            assert_eq!(scaled, expected(terms), "{terms:?}");
+            assert!(
+                scaled.iter().all(|t| t.unsigned_abs() <= 1 << 29),
+                "{terms:?}"
+            );
+        }
+    }
+
+    #[test]
     fn wrap_angle_stays_in_range() {
         assert!((wrap_angle_rad::<Libm>(3.0 * PI / 2.0) + PI / 2.0).abs() < 1e-6);
         assert!((wrap_angle_rad::<Libm>(-3.0 * PI / 2.0) - PI / 2.0).abs() < 1e-6);
