@@ -677,25 +677,23 @@ impl Solver {
             table
                 .arm_angles_into::<M>(&fixed, &mut alpha)
                 .map_err(unreachable)?;
-            // Each arm's offset from home, in place; then every pulse and angle, written
-            // straight into the solution (no zero-filled arrays to copy); then the limits (the
-            // first servo beyond them is named): the conversions run without an exit path's
-            // values held.
+            // Each arm's offset from home, in place; then every pulse and the limits (the first
+            // servo beyond them is named); then the angles, written straight into the solution
+            // (no zero-filled arrays to copy).
             for (a, c) in alpha.iter_mut().zip(&table.legs) {
                 *a = offset_fixed(*a, c.alpha0_wrapped_q);
             }
-            let solution = Solution {
-                arm_rad: core::array::from_fn(|i| arm_rad_fixed(table.legs[i].alpha0_q, alpha[i])),
-                pulse_us: core::array::from_fn(|i| {
-                    servos.0[i].pulse_us_for_fixed_offset::<M>(alpha[i])
-                }),
-            };
+            let pulse_us: [f32; LEGS] =
+                core::array::from_fn(|i| servos.0[i].pulse_us_for_fixed_offset::<M>(alpha[i]));
             for (i, servo) in servos.0.iter().enumerate() {
-                if !servo.allows(solution.pulse_us[i]) {
-                    return Err(limit(i, servo, solution.pulse_us[i]));
+                if !servo.allows(pulse_us[i]) {
+                    return Err(limit(i, servo, pulse_us[i]));
                 }
             }
-            return Ok(solution);
+            return Ok(Solution {
+                arm_rad: core::array::from_fn(|i| arm_rad_fixed(table.legs[i].alpha0_q, alpha[i])),
+                pulse_us,
+            });
         }
         let alpha = self
             .float
