@@ -101,7 +101,9 @@ pub(crate) fn to_fixed(x: f32, frac: u32) -> i32 {
 }
 
 /// `x * 2^frac` rounded to the nearest integer (halves away from zero), in integer
-/// instructions, as [`to_fixed`] but wider: `|x| * 2^frac` must be below 2^62.
+/// instructions, as [`to_fixed`] but wider: `|x| * 2^frac` must be below 2^62. (The exact form
+/// `fixed::sin_cos`'s 32-bit conversion is tested against.)
+#[cfg(test)]
 pub(crate) fn to_fixed_wide(x: f32, frac: u32) -> i64 {
     let bits = x.to_bits();
     let exponent = ((bits >> 23) & 0xff) as i32;
