@@ -803,7 +803,7 @@ impl FixedTable {
             let l = leg_vector(c, fixed);
             let terms = match self.narrow_terms(c, l) {
                 Some(terms) => terms,
-                None => self.wide_terms(c, l),
+                None => self.wide_terms(c, l[0], l[1], l[2]),
             };
             alpha[i] = half_angle::<M>(terms).ok_or(i as u8 + 1)?;
         }
@@ -851,8 +851,7 @@ impl FixedTable {
     /// [`FixedTable::narrow_terms`] leaves out): `|l|^2`, `L`, `N`, `M` in steps of 2^-36 mm^2
     /// (exact products cut once), then scaled ([`scale_terms`]).
     #[inline(never)]
-    fn wide_terms(&self, c: &FixedLeg, l: [i32; 3]) -> [i32; 3] {
-        let [l_x, l_y, l_z] = l;
+    fn wide_terms(&self, c: &FixedLeg, l_x: i32, l_y: i32, l_z: i32) -> [i32; 3] {
         // L = |l|^2 - (s^2 - a^2), N = 2a (cos(beta) l_x + sin(beta) l_y), M = 2a l_z
         // (eq. 9): products of two 2^-20 mm numbers, cut to 2^-36 mm^2.
         let leg_sq = square_mm(l_x) + square_mm(l_y) + square_mm(l_z);
@@ -1164,7 +1163,7 @@ mod tests {
                 let fixed = table.pose::<Libm>(&pose).expect("within the bounds");
                 for (leg, c) in table.legs.iter().enumerate() {
                     let l = leg_vector(c, &fixed);
-                    let exact = half_angle::<Libm>(table.wide_terms(c, l));
+                    let exact = half_angle::<Libm>(table.wide_terms(c, l[0], l[1], l[2]));
                     match table.narrow_terms(c, l) {
                         Some(terms) => {
                             let a = half_angle::<Libm>(terms);
