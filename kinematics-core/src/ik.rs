@@ -43,9 +43,9 @@ use core::fmt;
 
 use crate::configuration::{check_centre, Anchors, ConfigurationError};
 use crate::fixed::{
-    from_fixed, from_fixed32, leading_zeros, mul_mm, mul_mm_narrow, rotate_mm_split, split13,
-    split15, square, square_mm, square_mm_narrow, to_fixed, to_fixed_sq, wide_mul, ARM_FRAC,
-    MAX_FIXED_MM, MAX_FIXED_ROD_TERM_MM2, MAX_FIXED_TWO_ARM_MM, MAX_NARROW_ROD_TERM_MM2,
+    from_fixed, from_fixed32, leading_zeros, leg_square_narrow, mul_mm, mul_mm_narrow,
+    rotate_mm_split, split13, split15, square, square_mm, to_fixed, to_fixed_sq, wide_mul,
+    ARM_FRAC, MAX_FIXED_MM, MAX_FIXED_ROD_TERM_MM2, MAX_FIXED_TWO_ARM_MM, MAX_NARROW_ROD_TERM_MM2,
     MAX_NARROW_TWO_ARM_MM, MM_FRAC, NARROW_LEG_Q, NARROW_SQ_FRAC, ROT_FRAC,
 };
 use crate::geometry::{Geometry, GeometryError};
@@ -816,12 +816,12 @@ impl FixedTable {
     /// `None` otherwise (the leg then takes [`FixedTable::wide_terms`]: far outside any usual
     /// pose, or a build with a long arm or rod).
     ///
-    /// Why each step stays in range: `|l|^2` is a sum of three squares (`fixed::square_mm_narrow`,
-    /// each below 2^31 + 2^17 steps of 2^-15 mm^2), taken in 64 bits and required below 2^31;
-    /// `s^2 - a^2` is in `[0, 2^31)` steps, so `L` fits; `|n_k| <= 2a < 128 mm` and
+    /// Why each step stays in range: `|l|^2` (`fixed::leg_square_narrow`: the sum of three
+    /// squares rounded once) is required below 2^31 steps of 2^-15 mm^2; `s^2 - a^2` is in `[0, 2^31)` steps, so `L` fits; `|n_k| <= 2a < 128 mm` and
     /// `|l_k| < 256 mm` keep each product of `N` and `M` below 2^30 steps (within 2^30 - 11
     /// rounded), so `N` fits; `L - N` and `L + N` are checked. The terms are then exact
-    /// products rounded to 2^-15 mm^2 (within 0.51 of a step each), against the 2^-36 mm^2 of
+    /// sums of products rounded to 2^-15 mm^2 (`|l|^2` within 0.51 of a step, each product of
+    /// `N` and `M` too), against the 2^-36 mm^2 of
     /// the 64-bit path: the rounding of `l` to 2^-21 mm already moves `L` by more.
     #[inline(always)]
     fn narrow_terms(&self, c: &FixedLeg, l: [i32; 3]) -> Option<[i32; 3]> {
@@ -830,12 +830,7 @@ impl FixedTable {
         if l_x.unsigned_abs() | l_y.unsigned_abs() | l_z.unsigned_abs() >= NARROW_LEG_Q {
             return None;
         }
-        let leg_sq = u64::from(square_mm_narrow(l_x))
-            + u64::from(square_mm_narrow(l_y))
-            + u64::from(square_mm_narrow(l_z));
-        if leg_sq >= 1 << 31 {
-            return None;
-        }
+        let leg_sq = leg_square_narrow(l)?;
         let big_l = leg_sq as i32 - rod_term;
         let big_n = mul_mm_narrow(c.n_split[0], l_x) + mul_mm_narrow(c.n_split[1], l_y);
         let big_m = mul_mm_narrow(self.two_arm_split, l_z);
