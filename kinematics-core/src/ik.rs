@@ -43,10 +43,10 @@ use core::fmt;
 
 use crate::configuration::{check_centre, Anchors, ConfigurationError};
 use crate::fixed::{
-    from_fixed, from_fixed32, leading_zeros, mul_mm, mul_mm_narrow, rotate_mm_split, split13,
-    split15, square, square_mm, square_mm_narrow, to_fixed, to_fixed_sq, wide_mul, ARM_FRAC,
-    MAX_FIXED_MM, MAX_FIXED_ROD_TERM_MM2, MAX_FIXED_TWO_ARM_MM, MAX_NARROW_ROD_TERM_MM2,
-    MAX_NARROW_TWO_ARM_MM, MAX_ROTATION_ENTRY, MM_FRAC, NARROW_LEG_Q, NARROW_SQ_FRAC, ROT_FRAC,
+    from_fixed, from_fixed32, leading_zeros, leg_square_narrow, mul_mm, mul_mm_narrow,
+    rotate_mm_split, split13, split15, square, square_mm, to_fixed, to_fixed_sq, wide_mul,
+    ARM_FRAC, MAX_FIXED_MM, MAX_FIXED_ROD_TERM_MM2, MAX_FIXED_TWO_ARM_MM, MAX_NARROW_ROD_TERM_MM2,
+    MAX_NARROW_TWO_ARM_MM, MM_FRAC, NARROW_LEG_Q, NARROW_SQ_FRAC, ROT_FRAC,
 };
 use crate::geometry::{Geometry, GeometryError};
 use crate::math::{is_zero, Libm, Math, Real};
@@ -128,6 +128,21 @@ impl core::error::Error for IkError {}
 
 /// Checks that a pose is made of usable numbers.
 pub fn check_pose(pose: &Pose) -> Result<(), IkError> {
+    // The usual case first, in six integer comparisons (the IK's hot path): a finite position
+    // (magnitude bits below the infinities') and angles of at most pi (non-negative floats
+    // order like their bits; a NaN's are above every finite bound). Anything else takes the
+    // checks below, which name the axis.
+    let magnitude = |v: f32| v.to_bits() & 0x7fff_ffff;
+    let (finite, pi) = (f32::INFINITY.to_bits(), MAX_ANGLE_RAD.to_bits());
+    if magnitude(pose.x_mm) < finite
+        && magnitude(pose.y_mm) < finite
+        && magnitude(pose.z_mm) < finite
+        && magnitude(pose.roll_rad) <= pi
+        && magnitude(pose.pitch_rad) <= pi
+        && magnitude(pose.yaw_rad) <= pi
+    {
+        return Ok(());
+    }
     if let Some(axis) = pose.first_non_finite() {
         return Err(IkError::NonFinite { axis });
     }
@@ -415,21 +430,24 @@ fn half_angle<M: Math>([m, l_minus_n, l_plus_n]: [i32; 3]) -> Option<i32> {
     })
 }
 
-/// [`scale_terms`] for terms that fit an `i32` (the 32-bit path's, steps of 2^-15 mm^2): the
-/// largest magnitude moved into `[2^28, 2^29]` by one power of two (exactly when shifted up,
-/// rounded to nearest when shifted down, by at most 3 bits).
+/// The 32-bit path's terms (steps of 2^-15 mm^2, each within an `i32`) brought within 2^29 in
+/// magnitude, as [`half_angle`] needs: unchanged where they are (every usual leg), else halved
+/// or quartered, rounded to nearest. Never scaled up (unlike [`scale_terms`], whose terms are
+/// exact): each term is already within half a step of its exact value and `l`'s rounding moves
+/// `L` by tens of steps (`FixedTable::narrow_terms`), so the extra bits would be zeros, and the
+/// square root's error (within 1) is no larger than what the terms' own rounding puts into
+/// `sqrt(D)`. Two comparisons, no count of leading zeros.
 #[inline(always)]
 fn scale_terms32(terms: [i32; 3]) -> [i32; 3] {
-    // `t ^ (t >> 31)` is `|t|`, or `|t| - 1` for a negative one (see `scale_terms`).
+    // `t ^ (t >> 31)` is `|t|`, or `|t| - 1` for a negative one (see `scale_terms`): below
+    // 2^29 exactly when every `|t| <= 2^29`; below 2^31 always.
     let magnitude_bits = |t: i32| (t ^ (t >> 31)) as u32;
     let bits = magnitude_bits(terms[0]) | magnitude_bits(terms[1]) | magnitude_bits(terms[2]);
-    let width = 32 - leading_zeros(bits);
-    if width <= 29 {
-        // (All zero stay zero.)
-        let up = 29 - width;
-        return terms.map(|t| t << up);
+    if bits < 1 << 29 {
+        return terms;
     }
-    let shift = width - 29;
+    // |t| <= 2^30: halved; |t| <= 2^31: quartered; either within 2^29 after the rounding.
+    let shift = if bits < 1 << 30 { 1 } else { 2 };
     terms.map(|t| ((t >> (shift - 1)) + 1) >> 1)
 }
 
@@ -654,40 +672,44 @@ impl Solver {
             min_us: servo.min_us,
             max_us: servo.max_us,
         };
-        let mut arm_rad = [0.0f32; LEGS];
-        let mut pulse_us = [0.0f32; LEGS];
         if let Some((table, fixed)) = self.fixed_pose::<M>(pose) {
             let mut alpha = [0i32; LEGS];
             table
                 .arm_angles_into::<M>(&fixed, &mut alpha)
                 .map_err(unreachable)?;
-            // Every pulse and angle first, then the limits (the first servo beyond them is
-            // named, as before): the conversions run without an exit path's values held.
-            for (i, (servo, c)) in servos.0.iter().zip(&table.legs).enumerate() {
-                let offset = offset_fixed(alpha[i], c.alpha0_wrapped_q);
-                pulse_us[i] = servo.pulse_us_for_fixed_offset::<M>(offset);
-                arm_rad[i] = arm_rad_fixed(c.alpha0_q, offset);
+            // Each arm's offset from home, in place; then every pulse and the limits (the first
+            // servo beyond them is named); then the angles, written straight into the solution
+            // (no zero-filled arrays to copy).
+            for (a, c) in alpha.iter_mut().zip(&table.legs) {
+                *a = offset_fixed(*a, c.alpha0_wrapped_q);
             }
+            let pulse_us: [f32; LEGS] =
+                core::array::from_fn(|i| servos.0[i].pulse_us_for_fixed_offset::<M>(alpha[i]));
             for (i, servo) in servos.0.iter().enumerate() {
                 if !servo.allows(pulse_us[i]) {
                     return Err(limit(i, servo, pulse_us[i]));
                 }
             }
-        } else {
-            let alpha = self
-                .float
-                .arm_angles::<M>(&self.centre_mm, pose)
-                .map_err(unreachable)?;
-            for (i, servo) in servos.0.iter().enumerate() {
-                let alpha0 = Real::<M>::new(self.float.legs[i].alpha0_rad);
-                let offset = wrap_angle_rad::<M>((Real::new(alpha[i]) - alpha0).0);
-                let pulse = servo.pulse_us_for_offset::<M>(offset);
-                if !servo.allows(pulse) {
-                    return Err(limit(i, servo, pulse));
-                }
-                pulse_us[i] = pulse;
-                arm_rad[i] = (alpha0 + Real::new(offset)).0;
+            return Ok(Solution {
+                arm_rad: core::array::from_fn(|i| arm_rad_fixed(table.legs[i].alpha0_q, alpha[i])),
+                pulse_us,
+            });
+        }
+        let alpha = self
+            .float
+            .arm_angles::<M>(&self.centre_mm, pose)
+            .map_err(unreachable)?;
+        let mut arm_rad = [0.0f32; LEGS];
+        let mut pulse_us = [0.0f32; LEGS];
+        for (i, servo) in servos.0.iter().enumerate() {
+            let alpha0 = Real::<M>::new(self.float.legs[i].alpha0_rad);
+            let offset = wrap_angle_rad::<M>((Real::new(alpha[i]) - alpha0).0);
+            let pulse = servo.pulse_us_for_offset::<M>(offset);
+            if !servo.allows(pulse) {
+                return Err(limit(i, servo, pulse));
             }
+            pulse_us[i] = pulse;
+            arm_rad[i] = (alpha0 + Real::new(offset)).0;
         }
         Ok(Solution { arm_rad, pulse_us })
     }
@@ -718,15 +740,9 @@ impl FixedTable {
             FixedCentre::Beyond => return None,
         };
         // The platform is planar: `R`'s third column only turns the centre's `z`.
+        // (Every entry within `fixed::MAX_ROTATION_ENTRY`, whatever the sines of the `Math`
+        // in use: the bounds of `fixed` hold.)
         let r = pose.rotation_fixed::<M>(centre.is_some_and(|c| c[2] != 0))?;
-        // (A check against the `Math` in use, whatever its sines: the bounds of `fixed` hold.)
-        let bounded = |row: &[i32; 3]| {
-            row.iter()
-                .all(|v| v.unsigned_abs() < MAX_ROTATION_ENTRY as u32)
-        };
-        if !(bounded(&r[0]) && bounded(&r[1]) && bounded(&r[2])) {
-            return None;
-        }
         // (Written out: `map` here is a call of its own on the chip.)
         let mut position = [
             to_fixed(position[0], MM_FRAC),
@@ -761,7 +777,8 @@ impl FixedTable {
     /// 2^-15 mm^2 (products rounded once: [`FixedTable::narrow_terms`], every usual leg), or
     /// beyond that path's bounds in 64-bit words, in steps of 2^-36 mm^2 (exact products cut
     /// once: [`FixedTable::wide_terms`]); then `M`, `L - N`, `L + N` scaled by one power of two
-    /// to about 29 bits (the root depends only on their ratios), the discriminant
+    /// (the root depends only on their ratios): the 64-bit path's to about 29 bits, the 32-bit
+    /// path's only where they pass 2^29 ([`scale_terms32`]), then the discriminant
     /// `D = M^2 - (L - N)(L + N) = M^2 + N^2 - L^2` exactly, and the half-angle root (module
     /// docs) from `M`'s fixed-point square root and arc tangent ([`Math::sqrt_fixed`],
     /// [`Math::atan2_fixed`]: by default the core's integer routines, so the host runs exactly
@@ -786,7 +803,7 @@ impl FixedTable {
             let l = leg_vector(c, fixed);
             let terms = match self.narrow_terms(c, l) {
                 Some(terms) => terms,
-                None => self.wide_terms(c, l),
+                None => self.wide_terms(c, l[0], l[1], l[2]),
             };
             alpha[i] = half_angle::<M>(terms).ok_or(i as u8 + 1)?;
         }
@@ -799,12 +816,12 @@ impl FixedTable {
     /// `None` otherwise (the leg then takes [`FixedTable::wide_terms`]: far outside any usual
     /// pose, or a build with a long arm or rod).
     ///
-    /// Why each step stays in range: `|l|^2` is a sum of three squares (`fixed::square_mm_narrow`,
-    /// each below 2^31 + 2^17 steps of 2^-15 mm^2), taken in 64 bits and required below 2^31;
-    /// `s^2 - a^2` is in `[0, 2^31)` steps, so `L` fits; `|n_k| <= 2a < 128 mm` and
+    /// Why each step stays in range: `|l|^2` (`fixed::leg_square_narrow`: the sum of three
+    /// squares rounded once) is required below 2^31 steps of 2^-15 mm^2; `s^2 - a^2` is in `[0, 2^31)` steps, so `L` fits; `|n_k| <= 2a < 128 mm` and
     /// `|l_k| < 256 mm` keep each product of `N` and `M` below 2^30 steps (within 2^30 - 11
     /// rounded), so `N` fits; `L - N` and `L + N` are checked. The terms are then exact
-    /// products rounded to 2^-15 mm^2 (within 0.51 of a step each), against the 2^-36 mm^2 of
+    /// sums of products rounded to 2^-15 mm^2 (`|l|^2` within 0.51 of a step, each product of
+    /// `N` and `M` too), against the 2^-36 mm^2 of
     /// the 64-bit path: the rounding of `l` to 2^-21 mm already moves `L` by more.
     #[inline(always)]
     fn narrow_terms(&self, c: &FixedLeg, l: [i32; 3]) -> Option<[i32; 3]> {
@@ -813,12 +830,7 @@ impl FixedTable {
         if l_x.unsigned_abs() | l_y.unsigned_abs() | l_z.unsigned_abs() >= NARROW_LEG_Q {
             return None;
         }
-        let leg_sq = u64::from(square_mm_narrow(l_x))
-            + u64::from(square_mm_narrow(l_y))
-            + u64::from(square_mm_narrow(l_z));
-        if leg_sq >= 1 << 31 {
-            return None;
-        }
+        let leg_sq = leg_square_narrow(l)?;
         let big_l = leg_sq as i32 - rod_term;
         let big_n = mul_mm_narrow(c.n_split[0], l_x) + mul_mm_narrow(c.n_split[1], l_y);
         let big_m = mul_mm_narrow(self.two_arm_split, l_z);
@@ -834,8 +846,7 @@ impl FixedTable {
     /// [`FixedTable::narrow_terms`] leaves out): `|l|^2`, `L`, `N`, `M` in steps of 2^-36 mm^2
     /// (exact products cut once), then scaled ([`scale_terms`]).
     #[inline(never)]
-    fn wide_terms(&self, c: &FixedLeg, l: [i32; 3]) -> [i32; 3] {
-        let [l_x, l_y, l_z] = l;
+    fn wide_terms(&self, c: &FixedLeg, l_x: i32, l_y: i32, l_z: i32) -> [i32; 3] {
         // L = |l|^2 - (s^2 - a^2), N = 2a (cos(beta) l_x + sin(beta) l_y), M = 2a l_z
         // (eq. 9): products of two 2^-20 mm numbers, cut to 2^-36 mm^2.
         let leg_sq = square_mm(l_x) + square_mm(l_y) + square_mm(l_z);
@@ -1147,7 +1158,7 @@ mod tests {
                 let fixed = table.pose::<Libm>(&pose).expect("within the bounds");
                 for (leg, c) in table.legs.iter().enumerate() {
                     let l = leg_vector(c, &fixed);
-                    let exact = half_angle::<Libm>(table.wide_terms(c, l));
+                    let exact = half_angle::<Libm>(table.wide_terms(c, l[0], l[1], l[2]));
                     match table.narrow_terms(c, l) {
                         Some(terms) => {
                             let a = half_angle::<Libm>(terms);
@@ -1192,6 +1203,126 @@ mod tests {
             } else {
                 assert_eq!(wide, 0, "a usual pose left the 32-bit path");
             }
+        }
+    }
+
+    #[test]
+    fn check_pose_agrees_with_float_comparisons() {
+        // The integer fast path and the checks after it against the plain rule in float
+        // comparisons: the first non-finite coordinate in pose order, else the first angle
+        // beyond pi, over values at and around every bound, in every position.
+        let expected = |pose: &Pose| -> Result<(), IkError> {
+            let v = pose.to_array();
+            if let Some(k) = v.iter().position(|x| !x.is_finite()) {
+                return Err(IkError::NonFinite { axis: Axis::ALL[k] });
+            }
+            match (3..6).find(|&k| v[k].abs() > PI) {
+                Some(k) => Err(IkError::AngleTooLarge {
+                    axis: Axis::ALL[k],
+                    value_rad: v[k],
+                }),
+                None => Ok(()),
+            }
+        };
+        let above_pi = f32::from_bits(PI.to_bits() + 1);
+        let values = [
+            0.0,
+            -0.0,
+            1e-45,
+            1.0,
+            -2.5,
+            PI,
+            -PI,
+            above_pi,
+            -above_pi,
+            4.0,
+            f32::MAX,
+            -f32::MAX,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+            -f32::NAN,
+        ];
+        let mut seed = 0x0c0f_fee5_u32;
+        for _ in 0..20_000 {
+            let mut v = [0.0f32; 6];
+            for x in v.iter_mut() {
+                let r = crate::test_support::xorshift(&mut seed);
+                // Mostly ordinary values, one in four a bound or its neighbour.
+                *x = if r % 4 == 0 {
+                    values[(r >> 8) as usize % values.len()]
+                } else {
+                    (r >> 8) as f32 / (1u32 << 24) as f32 * 7.0 - 3.5
+                };
+            }
+            let pose = Pose::from_array(v);
+            assert_eq!(check_pose(&pose), expected(&pose), "{v:?}");
+        }
+        for &x in &values {
+            for k in 0..6 {
+                let mut v = [0.1f32; 6];
+                v[k] = x;
+                let pose = Pose::from_array(v);
+                assert_eq!(check_pose(&pose), expected(&pose), "{v:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn narrow_terms_are_brought_within_2_29() {
+        // Against the plain rule in 64 bits: unchanged when every term is in [-2^29, 2^29),
+        // else divided by 2 (every term in [-2^30, 2^30)) or 4, rounded to nearest (halves
+        // up); within 2^29 in magnitude either way, as `half_angle` needs.
+        let expected = |terms: [i32; 3]| {
+            let within = |k: u32| {
+                terms
+                    .iter()
+                    .all(|&t| (-(1i64 << k)..1 << k).contains(&t.into()))
+            };
+            let shift = if within(29) {
+                0
+            } else if within(30) {
+                1
+            } else {
+                2
+            };
+            terms.map(|t| {
+                let t = i64::from(t);
+                (if shift == 0 {
+                    t
+                } else {
+                    (t + (1 << (shift - 1))) >> shift
+                }) as i32
+            })
+        };
+        let mut seed = 0x5ca1_ab1e_u32;
+        let extremes = [
+            0,
+            1,
+            -1,
+            1 << 29,
+            -(1 << 29),
+            (1 << 29) - 1,
+            1 << 30,
+            -(1 << 30),
+        ];
+        let extremes = [extremes.as_slice(), &[i32::MAX, i32::MIN, i32::MIN + 1]].concat();
+        for i in 0..300_000 {
+            let mut next = || {
+                let r = crate::test_support::xorshift(&mut seed);
+                if i % 8 == 0 {
+                    extremes[r as usize % extremes.len()]
+                } else {
+                    (r as i32) >> (r % 31)
+                }
+            };
+            let terms = [next(), next(), next()];
+            let scaled = scale_terms32(terms);
+            assert_eq!(scaled, expected(terms), "{terms:?}");
+            assert!(
+                scaled.iter().all(|t| t.unsigned_abs() <= 1 << 29),
+                "{terms:?}"
+            );
         }
     }
 

@@ -218,6 +218,16 @@ pub fn lt(a: f32, b: f32) -> bool {
 #[inline]
 pub fn within(x: f32, lo: f32, hi: f32) -> bool {
     let (x, lo, hi) = (x.to_bits(), lo.to_bits(), hi.to_bits());
+    // The usual case first (the IK's pulses): `x` positive and finite, its bits in
+    // `(0, +inf)`. Then `lo <= x` exactly when `lo`'s bits are at most `x`'s (a non-negative
+    // `lo`; a NaN's are above) or `lo` is negative and not NaN (bits in `[2^31, -inf]`), and
+    // `x <= hi` exactly when `hi`'s bits are in `[x, +inf]` (a negative `hi`'s pass 2^31, a
+    // NaN's pass +inf's): three comparisons in all.
+    const INFINITY: u32 = 0x7f80_0000;
+    if x.wrapping_sub(1) < INFINITY - 1 {
+        return (lo <= x || lo.wrapping_sub(0x8000_0000) <= INFINITY)
+            && hi.wrapping_sub(x) <= INFINITY - x;
+    }
     let not_nan = |v: u32| v & 0x7fff_ffff <= 0x7f80_0000;
     let key = |v: u32| (v ^ ((v as i32 >> 31) as u32 >> 1)) as i32;
     let key_x = key(x);
@@ -346,6 +356,24 @@ mod tests {
                     assert_eq!(within(x, a, b), a <= x && x <= b, "{a} <= {x} <= {b}");
                 }
             }
+        }
+        // Random bit patterns (every sign, NaN payloads, subnormals), with one of the values
+        // above, or a neighbour of one of the others, in one place in four.
+        let mut seed = 0x00c0_ffee_u32;
+        let mut next = || crate::test_support::xorshift(&mut seed);
+        for _ in 0..300_000 {
+            let mut pick = |near: u32| {
+                let r = next();
+                match r % 8 {
+                    0 => values[(r >> 8) as usize % values.len()].to_bits(),
+                    1 => near.wrapping_add((r >> 8) % 3).wrapping_sub(1),
+                    _ => r,
+                }
+            };
+            let x = pick(0x44bb_8000);
+            let (a, b) = (pick(x), pick(x));
+            let (x, a, b) = (f32::from_bits(x), f32::from_bits(a), f32::from_bits(b));
+            assert_eq!(within(x, a, b), a <= x && x <= b, "{a:e} <= {x:e} <= {b:e}");
         }
     }
 }

@@ -187,12 +187,16 @@ impl Pose {
     }
 
     /// [`Pose::rotation`] in fixed point, entries in steps of 2^-30 (eq. 1, the same symbols),
-    /// from `M`'s fixed-point sines and cosines ([`Math::sin_cos_fixed`]), or `None` if one of
-    /// them is beyond `fixed::MAX_ROTATION_ENTRY` (no sine of any usable library is). Each
-    /// product is rounded to nearest (`fixed::mul_rot`, 32-bit products), so an entry is within
-    /// about one step of its sines' exact one; `c_psi s_theta` and `s_psi s_theta`, each shared
-    /// by two entries, are rounded first. (The sums wrap rather than panic: only sines whose
-    /// `sin^2 + cos^2` is far from 1 could pass 2^31, and the IK bounds every entry after.)
+    /// from `M`'s fixed-point sines and cosines ([`Math::sin_cos_fixed`]), every entry below
+    /// `fixed::MAX_ROTATION_ENTRY` (1 + 2^-4) in magnitude, or `None`: a sine or cosine at or
+    /// beyond [`MAX_SINE`] (1 + 2^-6: no sine of any usable library is), or, with sines whose
+    /// `sin^2 + cos^2` is far from 1, an entry beyond that bound. Each product is rounded to
+    /// nearest (`fixed::mul_rot`, 32-bit products), so an entry is within about one step of its
+    /// sines' exact one; `c_psi s_theta` and `s_psi s_theta`, each shared by two entries, are
+    /// rounded first. An entry that is one product (or a sine) is within the bound by the
+    /// sines' (`(1 + 2^-6)^2 < 1 + 2^-4`, the rounding included): only the entries that are
+    /// sums of two products are checked. (The sums wrap rather than panic: each product is
+    /// below 1.05 in magnitude, so a wrapped sum is far beyond the bound too.)
     /// With `third_column` false that column is left zero, as in [`Pose::rotation_columns`].
     /// The angles must be finite.
     #[inline(always)]
@@ -200,13 +204,14 @@ impl Pose {
         let (s_phi, c_phi) = M::sin_cos_fixed(self.roll_rad);
         let (s_theta, c_theta) = M::sin_cos_fixed(self.pitch_rad);
         let (s_psi, c_psi) = M::sin_cos_fixed(self.yaw_rad);
-        let bound = MAX_ROTATION_ENTRY as u32;
         let sines = [s_phi, c_phi, s_theta, c_theta, s_psi, c_psi];
-        if sines.iter().any(|v| v.unsigned_abs() >= bound) {
+        if !sines.iter().all(|&v| below_bound(v, MAX_SINE)) {
             return None;
         }
         let cs = mul_rot(c_psi, s_theta);
         let ss = mul_rot(s_psi, s_theta);
+        let r01 = mul_rot(cs, s_phi).wrapping_sub(mul_rot(s_psi, c_phi));
+        let r11 = mul_rot(c_psi, c_phi).wrapping_add(mul_rot(ss, s_phi));
         let (r02, r12, r22) = if third_column {
             (
                 mul_rot(s_psi, s_phi).wrapping_add(mul_rot(cs, c_phi)),
@@ -216,20 +221,28 @@ impl Pose {
         } else {
             (0, 0, 0)
         };
+        let bound = MAX_ROTATION_ENTRY as u32;
+        if ![r01, r11, r02, r12].iter().all(|&v| below_bound(v, bound)) {
+            return None;
+        }
         Some([
-            [
-                mul_rot(c_psi, c_theta),
-                mul_rot(cs, s_phi).wrapping_sub(mul_rot(s_psi, c_phi)),
-                r02,
-            ],
-            [
-                mul_rot(s_psi, c_theta),
-                mul_rot(c_psi, c_phi).wrapping_add(mul_rot(ss, s_phi)),
-                r12,
-            ],
+            [mul_rot(c_psi, c_theta), r01, r02],
+            [mul_rot(s_psi, c_theta), r11, r12],
             [-s_theta, mul_rot(c_theta, s_phi), r22],
         ])
     }
+}
+
+/// Bound (exclusive) on the magnitude of the fixed-point sines and cosines
+/// [`Pose::rotation_fixed`] takes, in steps of 2^-30: 1 + 2^-6. A product of two, rounded to
+/// nearest, is then within `(1 + 2^-6)^2 + 2^-31 < 1 + 2^-4` (`fixed::MAX_ROTATION_ENTRY`).
+pub(crate) const MAX_SINE: u32 = (1 << 30) + (1 << 24);
+
+/// `|v| < bound` (`0 < bound <= 2^31`) in one addition and one unsigned comparison:
+/// `-bound < v < bound` exactly when `v + bound - 1` is in `[0, 2 bound - 2]`.
+#[inline(always)]
+fn below_bound(v: i32, bound: u32) -> bool {
+    (v as u32).wrapping_add(bound - 1) <= 2 * (bound - 1)
 }
 
 #[cfg(test)]
@@ -275,6 +288,113 @@ mod tests {
             }
             assert_eq!(pose.rotation_fixed::<Libm>(false).map(|r| r[1][2]), Some(0));
         }
+    }
+
+    #[test]
+    fn rotation_entries_stay_within_the_bound() {
+        // Products of sines at the bound stay below `fixed::MAX_ROTATION_ENTRY` (the reason
+        // only the sums are checked), and `below_bound` is `|v| < bound` exactly.
+        let largest = (MAX_SINE - 1) as i32;
+        for a in [largest, -largest] {
+            for b in [largest, -largest] {
+                let p = mul_rot(a, b);
+                assert!(
+                    p.unsigned_abs() < MAX_ROTATION_ENTRY as u32,
+                    "{a} * {b}: {p}"
+                );
+                // A product of a product and a sine, as in the sums' terms: below 1.05.
+                let q = mul_rot(p, b);
+                assert!(
+                    f64::from(q.unsigned_abs()) < 1.05 * f64::from(1u32 << 30),
+                    "{q}"
+                );
+            }
+        }
+        for bound in [MAX_SINE, MAX_ROTATION_ENTRY as u32, 1, 1 << 31] {
+            for v in [
+                0,
+                1,
+                -1,
+                i32::MAX,
+                i32::MIN,
+                (bound - 1) as i32,
+                bound as i32,
+            ] {
+                for v in [v, v.wrapping_neg(), v.wrapping_add(1), v.wrapping_sub(1)] {
+                    assert_eq!(
+                        below_bound(v, bound),
+                        v.unsigned_abs() < bound,
+                        "{v} {bound}"
+                    );
+                }
+            }
+        }
+    }
+
+    /// A `Math` whose fixed-point sines are `libm`'s times a factor: sines that are no sines.
+    struct Scaled<const PERCENT: i32>;
+
+    impl<const PERCENT: i32> Math for Scaled<PERCENT> {
+        fn sin_cos(x: f32) -> (f32, f32) {
+            Libm::sin_cos(x)
+        }
+        fn sqrt(x: f32) -> f32 {
+            Libm::sqrt(x)
+        }
+        fn atan2(y: f32, x: f32) -> f32 {
+            Libm::atan2(y, x)
+        }
+        fn sin_cos_fixed(x_rad: f32) -> (i32, i32) {
+            let (s, c) = crate::fixed::sin_cos::sin_cos(x_rad);
+            let scale = |v: i32| (i64::from(v) * i64::from(PERCENT) / 100) as i32;
+            (scale(s), scale(c))
+        }
+    }
+
+    /// A `Math` whose fixed-point sine and cosine are both 1 at every angle: no sines at all,
+    /// within their bound.
+    struct Ones;
+
+    impl Math for Ones {
+        fn sin_cos(x: f32) -> (f32, f32) {
+            Libm::sin_cos(x)
+        }
+        fn sqrt(x: f32) -> f32 {
+            Libm::sqrt(x)
+        }
+        fn atan2(y: f32, x: f32) -> f32 {
+            Libm::atan2(y, x)
+        }
+        fn sin_cos_fixed(_: f32) -> (i32, i32) {
+            (1 << 30, 1 << 30)
+        }
+    }
+
+    #[test]
+    fn rotation_from_sines_that_are_no_sines_is_refused_or_bounded() {
+        // Sines 1 % too large (within 1 + 2^-6): every entry within the bound of `fixed`;
+        // 2 % too large: refused where one passes 1 + 2^-6, else within the bound; sines and
+        // cosines all 1: an entry of 2 (`r11`), refused.
+        let bounded = |r: [[i32; 3]; 3]| {
+            r.iter()
+                .flatten()
+                .all(|v| v.unsigned_abs() < MAX_ROTATION_ENTRY as u32)
+        };
+        let mut refused = 0;
+        for i in 0..400 {
+            let a = (i as f32 / 400.0 - 0.5) * 2.0 * core::f32::consts::PI;
+            for third_column in [false, true] {
+                let pose = Pose::from_array([0.0, 0.0, 0.0, a, 0.6 * a, -0.8 * a]);
+                let r = pose.rotation_fixed::<Scaled<101>>(third_column);
+                assert!(bounded(r.expect("within the bounds")));
+                match pose.rotation_fixed::<Scaled<102>>(third_column) {
+                    Some(r) => assert!(bounded(r)),
+                    None => refused += 1,
+                }
+                assert_eq!(pose.rotation_fixed::<Ones>(third_column), None);
+            }
+        }
+        assert!((100..800).contains(&refused), "{refused}");
     }
 
     #[test]

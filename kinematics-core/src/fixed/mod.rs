@@ -101,7 +101,9 @@ pub(crate) fn to_fixed(x: f32, frac: u32) -> i32 {
 }
 
 /// `x * 2^frac` rounded to the nearest integer (halves away from zero), in integer
-/// instructions, as [`to_fixed`] but wider: `|x| * 2^frac` must be below 2^62.
+/// instructions, as [`to_fixed`] but wider: `|x| * 2^frac` must be below 2^62. (The exact form
+/// `fixed::sin_cos`'s 32-bit conversion is tested against.)
+#[cfg(test)]
 pub(crate) fn to_fixed_wide(x: f32, frac: u32) -> i64 {
     let bits = x.to_bits();
     let exponent = ((bits >> 23) & 0xff) as i32;
@@ -242,16 +244,27 @@ pub(crate) fn mul_mm(a: i32, b: i32) -> i64 {
     wide_mul(a, b) >> (2 * MM_FRAC - SQ_FRAC)
 }
 
-/// The square of a length `a` in steps of 2^-[`MM_FRAC`] mm, `|a| < 2^28` (256 mm), in steps of
-/// 2^-[`NARROW_SQ_FRAC`] mm^2, rounded to nearest within 0.51 of a step, from three 32-bit
-/// products (the IK's 32-bit path). With `|a| = h 2^13 + r` (`h < 2^15`, `r < 2^13`):
-/// `a^2 / 2^25 = 2 h^2 + (h r + r^2 / 2^14) / 2^11`; `2 h^2 < 2^31`, `h r < 2^28`, and the
-/// result is below 2^31 + 2^17.
+/// `|l|^2 = l_x^2 + l_y^2 + l_z^2` of a leg vector `l` in steps of 2^-[`MM_FRAC`] mm, every
+/// `|l_k| < 2^28` (256 mm), in steps of 2^-[`NARROW_SQ_FRAC`] mm^2, rounded to nearest once
+/// (within 0.51 of a step), from nine 32-bit products (the IK's 32-bit path); `None` if it is
+/// 2^31 steps (2^16 mm^2) or more. With `|l_k| = h_k 2^13 + r_k` (`h_k < 2^15`, `r_k < 2^13`):
+/// `|l|^2 / 2^25 = 2 sum h_k^2 + (sum h_k r_k + (sum r_k^2) / 2^14) / 2^11`, where
+/// `sum h_k^2 < 2^31.6` (and only below 2^30 can the result be below 2^31), `sum h_k r_k` below
+/// 2^29.6 and `(sum r_k^2) / 2^14` below 2^13.6, cut (within 2^-11 of a step): one rounding for
+/// the sum, where three squares rounded on their own took three and a 64-bit sum.
 #[inline(always)]
-pub(crate) fn square_mm_narrow(a: i32) -> u32 {
-    let u = a.unsigned_abs();
-    let (hi, lo) = (u >> 13, u & 0x1fff);
-    2 * hi * hi + ((hi * lo + ((lo * lo) >> 14) + (1 << 10)) >> 11)
+pub(crate) fn leg_square_narrow(l: [i32; 3]) -> Option<u32> {
+    let [(h_x, r_x), (h_y, r_y), (h_z, r_z)] = l.map(|v| {
+        let u = v.unsigned_abs();
+        (u >> 13, u & 0x1fff)
+    });
+    let whole = h_x * h_x + h_y * h_y + h_z * h_z;
+    if whole >= 1 << 30 {
+        return None;
+    }
+    let fraction = h_x * r_x + h_y * r_y + h_z * r_z + ((r_x * r_x + r_y * r_y + r_z * r_z) >> 14);
+    let sum = 2 * whole + ((fraction + (1 << 10)) >> 11);
+    (sum < 1 << 31).then_some(sum)
 }
 
 /// The product of two lengths in steps of 2^-[`MM_FRAC`] mm, `|a| < 2^27` (128 mm) and
@@ -542,8 +555,13 @@ mod tests {
                     ((next() as i32) >> 3) >> shift,
                 )
             };
+            // The square of one length: `leg_square_narrow` of a vector along an axis (`None`
+            // only at 2^31 steps or more).
             let square = (i64::from(b) * i64::from(b)) as f64 / step;
-            worst_square = worst_square.max((f64::from(square_mm_narrow(b)) - square).abs());
+            match leg_square_narrow([0, b, 0]) {
+                Some(s) => worst_square = worst_square.max((f64::from(s) - square).abs()),
+                None => assert!(square > 2f64.powi(31) - 0.51, "{b}"),
+            }
             let product = (i64::from(a) * i64::from(b)) as f64 / step;
             worst_product =
                 worst_product.max((f64::from(mul_mm_narrow(split13(a), b)) - product).abs());
@@ -551,6 +569,39 @@ mod tests {
         assert!(worst_square <= 0.51, "square: {worst_square} steps");
         assert!(worst_product <= 0.51, "product: {worst_product} steps");
         assert!(worst_square > 0.4 && worst_product > 0.4, "rounding seen");
+    }
+
+    #[test]
+    fn leg_squares_round_to_nearest_or_are_refused() {
+        // Against the exact sum of squares (i64), over random vectors within the bound, short
+        // and long: within 0.51 of a step, or `None` exactly from 2^31 steps on (within the
+        // rounding).
+        let mut seed = 0x0a11_5eed_u32;
+        let mut next = || xorshift(&mut seed);
+        let step = f64::from(1u32 << (2 * MM_FRAC - NARROW_SQ_FRAC));
+        let (mut worst, mut refused) = (0.0f64, 0);
+        for i in 0..300_000u32 {
+            let shift = if i % 2 == 0 { 3 } else { 3 + next() % 12 };
+            let l = [0; 3].map(|_: i32| (next() as i32) >> shift);
+            let exact = l
+                .iter()
+                .map(|&v| (i64::from(v) * i64::from(v)) as f64)
+                .sum::<f64>()
+                / step;
+            match leg_square_narrow(l) {
+                Some(s) => {
+                    assert!(f64::from(s) < 2f64.powi(31), "{l:?}");
+                    worst = worst.max((f64::from(s) - exact).abs());
+                }
+                None => {
+                    refused += 1;
+                    assert!(exact > 2f64.powi(31) - 0.51, "{l:?}: {exact}");
+                }
+            }
+        }
+        assert!(worst <= 0.51, "{worst} steps");
+        assert!(worst > 0.4, "rounding seen");
+        assert!(refused > 1000, "{refused}");
     }
 
     #[test]

@@ -29,7 +29,7 @@
 
 use core::f64::consts::PI;
 
-use super::{table, to_fixed_wide};
+use super::table;
 
 /// `sin(k pi/128)` for `k` = 0..=64 (a quarter turn), in steps of 2^-30, rounded to nearest;
 /// the cosines are the same entries backwards.
@@ -60,15 +60,15 @@ pub fn sin_cos(x_rad: f32) -> (i32, i32) {
     if x_rad.to_bits() & 0x7fff_ffff >= 4.0f32.to_bits() {
         return outside_range(x_rad);
     }
-    // x in steps of 2^-36 rad: exact down to 2^-13 rad.
-    let x = to_fixed_wide(x_rad, 36);
+    // x in steps of 2^-36 rad (exact down to 2^-13 rad), below 2^38, in 32-bit words: its low
+    // word and `x >> 21` (floored; [`front_end`]).
+    let (x_low, x_q15) = front_end(x_rad);
     // k = round(x / (pi/128)): x in steps of 2^-15 times 128/pi in steps of 2^-8 (below 2^31;
     // a rough k only makes |d| a little larger, which the series allow for).
-    let k = (((x >> 21) as i32) * STEPS_PER_RAD_Q8 + (1 << 22)) >> 23;
-    // d = x - k pi/128 in steps of 2^-36 rad (|k| <= 163: two 16-bit products, exact):
-    // |d| < 0.0124 rad, below 2^30 steps.
-    let k_pi = (i64::from(k * (PI_Q29 >> 16)) << 16) + i64::from(k * (PI_Q29 & 0xffff));
-    let d = (x - k_pi) as i32;
+    let k = (x_q15 * STEPS_PER_RAD_Q8 + (1 << 22)) >> 23;
+    // d = x - k pi/128 in steps of 2^-36 rad: |d| < 0.0124 rad, below 2^30 steps, so the
+    // difference of the low words of x and of k pi/128 (`k PI_Q29`, |k| <= 163) is d exactly.
+    let d = x_low.wrapping_sub(k.wrapping_mul(PI_Q29));
     // From here on 32-bit products only, each operand cut to 15 or 16 bits where the term
     // allows (the M0+ multiplies 32 x 32 -> 32 bits in one cycle): every cut is stated with
     // its effect, below 2^-36 in all.
@@ -96,6 +96,36 @@ pub fn sin_cos(x_rad: f32) -> (i32, i32) {
         s + ((to_sin + (1 << 5)) >> 6),
         c - ((to_cos + (1 << 5)) >> 6),
     )
+}
+
+/// `x` (rad, `|x| < 4`, finite) in steps of 2^-36, rounded to nearest (halves away from zero),
+/// as two 32-bit words: its low 32 bits (two's complement) and `floor(x / 2^21)` (below 2^17 in
+/// magnitude), what [`sin_cos`] needs of the 39-bit value: with `x = m 2^(e - 150)` (`m` the
+/// 24-bit mantissa), `m 2^(e - 114)` is an integer for `e >= 114` (`|x| >= 2^-13`; its low word
+/// `m << (e - 114)`, `e - 114 <= 14`), else rounded; a negative `x`'s floor is one below its
+/// magnitude's (negated) where bits below 2^21 are cut. No 64-bit shift or sum.
+#[inline(always)]
+fn front_end(x_rad: f32) -> (i32, i32) {
+    let bits = x_rad.to_bits();
+    let exponent = ((bits >> 23) & 0xff) as i32;
+    let mantissa = (bits & 0x7f_ffff) | 0x80_0000;
+    let shift = exponent - 114;
+    let (low, high) = if exponent == 0 {
+        (0, 0) // zero or subnormal: far below 2^-36
+    } else if shift >= 0 {
+        (mantissa << shift, mantissa >> (21 - shift))
+    } else if shift > -26 {
+        let rounded = (mantissa >> -shift) + ((mantissa >> (-shift - 1)) & 1);
+        (rounded, rounded >> 21)
+    } else {
+        (0, 0)
+    };
+    if bits >> 31 != 0 {
+        let cut = u32::from(low & 0x1f_ffff != 0);
+        ((low as i32).wrapping_neg(), -((high + cut) as i32))
+    } else {
+        (low as i32, high as i32)
+    }
 }
 
 /// `t sin d` in steps of 2^-36 for a table value `t` (steps of 2^-30, `|t| <= 2^30`) and
@@ -160,6 +190,29 @@ mod tests {
         (f64::from(s) - es * scale)
             .abs()
             .max((f64::from(c) - ec * scale).abs())
+    }
+
+    #[test]
+    fn front_end_is_the_wide_conversion() {
+        // Against `to_fixed_wide` (steps of 2^-36, in 64 bits): its low word and its floor at
+        // 2^21, for every exponent below 4 with random mantissas, both signs, and a dense
+        // sweep.
+        let check = |x: f32| {
+            let wide = super::super::to_fixed_wide(x, 36);
+            assert_eq!(front_end(x), (wide as i32, (wide >> 21) as i32), "{x:e}");
+        };
+        let mut seed = 0x51de_cafe_u32;
+        for exponent in 0..=128u32 {
+            for _ in 0..2000 {
+                let m = crate::test_support::xorshift(&mut seed);
+                for sign in [0, 1u32 << 31] {
+                    check(f32::from_bits(sign | exponent << 23 | (m & 0x7f_ffff)));
+                }
+            }
+        }
+        for i in -100_000..=100_000 {
+            check(i as f32 * 3.999_999 / 100_000.0);
+        }
     }
 
     #[test]
