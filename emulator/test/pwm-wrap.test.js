@@ -120,3 +120,26 @@ test('a jump written as a frame starts: every frame shows all six old widths or 
     }
   }
 });
+
+test('a width becomes the nearest count, half up, from the exact value of its f32', () => {
+  // Widths just below a half count (as typed: their nearest f32s lie a hair below it), where
+  // the product w * 3.125 rounded to f32 before adding 0.5 lands on the half and rounds up:
+  // picked here by that very property, so the test tells the exact rule from the f32 one.
+  const f32 = Math.fround;
+  const widths = [];
+  for (let k = 4600; widths.length < 4; k += 1) {
+    const w = f32((k + 0.5) / 3.125);
+    const viaF32 = Math.floor(f32(f32(w * 3.125) + 0.5));
+    const exact = Math.floor(w * 3.125 + 0.5); // exact in f64: 24 bits times 25/8, plus 0.5
+    if (viaF32 !== exact) {
+      widths.push({ w, text: w.toPrecision(9), exact });
+    }
+  }
+  const board = bootQuiet(bootrom);
+  for (const { w, text, exact } of widths) {
+    assert.equal(f32(Number(text)), w, `${text} is the f32 meant`);
+    ok(board, `servo 1 ${text}`);
+    runFrames(board, 2);
+    assert.equal(board.servos()[0].widthCounts, exact, `servo 1 ${text} us`);
+  }
+});

@@ -26,8 +26,6 @@ pub const SERVO_COUNT: usize = 6;
 const CLOCK_DIVIDER: u8 = 40;
 /// PWM counts per second at 125 MHz / [`CLOCK_DIVIDER`].
 const COUNTS_PER_SECOND: u32 = 3_125_000;
-/// Counts per microsecond of pulse (1 count = 320 ns).
-const COUNTS_PER_US: f32 = 1.0 / 0.32;
 
 /// Frames started so far (slice 1 wraps). Written only by `PWM_IRQ_WRAP`.
 static FRAMES_STARTED: AtomicU32 = AtomicU32::new(0);
@@ -282,27 +280,28 @@ fn pulse_counts(width_us: f32, window: PulseWindowUs, top: u16) -> Option<u16> {
     if !is_nan(window.max_us) && order_key(clamped_us) > order_key(window.max_us) {
         clamped_us = window.max_us;
     }
-    let counts = clamped_us * COUNTS_PER_US + 0.5;
-    Some(saturating_u32(counts).min(u32::from(top)) as u16)
+    Some(counts_of_us(clamped_us).min(u32::from(top)) as u16)
 }
 
-/// `x as u32` for an `x` that is not NaN (towards zero, negative -> 0, too large -> `u32::MAX`),
-/// on the bits: the cast's range checks would be two soft-float comparisons.
-fn saturating_u32(x: f32) -> u32 {
-    let bits = x.to_bits();
+/// `width_us * 3.125` (counts of 320 ns) rounded half up, exactly, for a `width_us` that is not
+/// NaN (negative -> 0, too large -> `u32::MAX`), on the bits: the value is `m * 2^(e - 150)`
+/// (`m` the 24-bit significand, `e` the biased exponent), so times 25/8 it is
+/// `25 m * 2^(e - 153)`, and `25 m < 2^29` shifts without loss. (In `f32`, `w * 3.125 + 0.5`
+/// rounds the product first, which can carry a value just below a half up to it.)
+fn counts_of_us(width_us: f32) -> u32 {
+    let bits = width_us.to_bits();
     let exponent = (bits >> 23) & 0xFF;
-    if bits & 0x8000_0000 != 0 || exponent < 127 {
-        0 // negative, or below 1
-    } else if exponent >= 127 + 32 {
-        u32::MAX
-    } else {
-        let mantissa = (bits & 0x007F_FFFF) | 0x0080_0000;
-        let shift = exponent as i32 - 127 - 23;
-        if shift >= 0 {
-            mantissa << shift
-        } else {
-            mantissa >> -shift
-        }
+    if bits & 0x8000_0000 != 0 || exponent == 0 {
+        return 0; // negative, zero, or far below half a count
+    }
+    let scaled = ((bits & 0x007F_FFFF) | 0x0080_0000) * 25;
+    match 153 - exponent as i32 {
+        // Below a quarter of a count.
+        31.. => 0,
+        shift @ 1..=30 => (scaled + (1 << (shift - 1))) >> shift,
+        // Whole already: times 2, 4 or 8 stays below 2^32.
+        shift @ -3..=0 => scaled << -shift,
+        _ => u32::MAX,
     }
 }
 
