@@ -75,6 +75,37 @@ impl<const N: usize> RxProducer<N> {
             .store(written.wrapping_add(count), Ordering::Relaxed);
         count
     }
+
+    /// Room for how many more bytes: the ring's free bytes (the consumer only adds to them).
+    #[inline]
+    pub fn room(&self) -> usize {
+        let written = self.ring.written.load(Ordering::Relaxed);
+        let read = self.ring.read.load(Ordering::Relaxed);
+        (N - 1) - written.wrapping_sub(read)
+    }
+
+    /// Writes `byte` `offset` bytes after the last byte published, not published yet (the
+    /// consumer does not see it): straight from a FIFO into the ring, no buffer between. The
+    /// caller keeps `offset` below [`RxProducer::room`] and publishes what it staged with
+    /// [`RxProducer::publish`].
+    #[inline]
+    pub fn stage(&mut self, offset: usize, byte: u8) {
+        let written = self.ring.written.load(Ordering::Relaxed);
+        let base = self.ring.bytes.get() as *mut u8;
+        // SAFETY: `offset` is below the room (the caller's rule), so this index is not among
+        // the bytes waiting, which the consumer alone reads until `written` passes it.
+        unsafe { base.add(written.wrapping_add(offset) % N).write(byte) };
+    }
+
+    /// Hands the `count` bytes staged (offsets `0..count`) to the consumer, in order.
+    #[inline]
+    pub fn publish(&mut self, count: usize) {
+        let written = self.ring.written.load(Ordering::Relaxed);
+        compiler_fence(Ordering::Release);
+        self.ring
+            .written
+            .store(written.wrapping_add(count), Ordering::Relaxed);
+    }
 }
 
 /// The main loop's end.

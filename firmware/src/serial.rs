@@ -505,15 +505,15 @@ impl Shared {
         // section); the HAL's `UartPeripheral` is only used to transmit and configure.
         let uart = unsafe { &*pac::UART0::ptr() };
         let mut taken = 0;
-        // Good bytes, queued together when something else comes (an error, an empty FIFO) or
-        // there are a FIFO's worth.
-        let mut chunk = [0u8; 32];
+        // Good bytes go straight into the queue, staged (`held` of them) and handed over
+        // together when something else comes (an error, an empty FIFO) or the queue is full.
+        let mut room = self.rx.queue.room();
         let mut held = 0;
         // Bounded: a FIFO holds 32 bytes, so a few rounds empty it; should a (broken) UART keep
         // reporting errors, the interrupt returns and fires again instead of hanging here.
         for _ in 0..RX_READS_PER_INTERRUPT {
             if uart.uartfr().read().rxfe().bit_is_set() {
-                self.rx.enqueue(&chunk[..held]);
+                self.rx.publish(held);
                 held = 0;
                 // An overrun with the FIFO empty shows only in the status register: the next
                 // byte will carry its flag too (counted once, below). Cleared, or it sticks.
@@ -525,20 +525,25 @@ impl Shared {
                 taken += 1;
                 self.rx.uart_loss();
                 self.rx.overrun_counted = true;
+                room = self.rx.queue.room();
                 continue;
             }
             let read = uart.uartdr().read().bits();
             taken += 1;
             if read & (DR_OE | DR_BE | DR_PE | DR_FE) == 0 {
-                chunk[held] = read as u8;
-                held += 1;
-                if held == chunk.len() {
-                    self.rx.enqueue(&chunk);
+                if held < room {
+                    self.rx.queue.stage(held, read as u8);
+                    held += 1;
+                } else {
+                    // The queue is full: this byte is lost, after those staged.
+                    self.rx.publish(held);
                     held = 0;
+                    self.rx.enqueue(&[read as u8]);
+                    room = self.rx.queue.room();
                 }
                 continue;
             }
-            self.rx.enqueue(&chunk[..held]);
+            self.rx.publish(held);
             held = 0;
             // A break, parity or framing error loses the byte. An overrun flags a good byte:
             // the bytes the full FIFO could not take were lost just before it, how many the
@@ -546,14 +551,16 @@ impl Shared {
             // in at its place.
             if read & (DR_BE | DR_PE | DR_FE) != 0 {
                 self.rx.uart_loss();
+                room = self.rx.queue.room();
                 continue;
             }
             if !core::mem::take(&mut self.rx.overrun_counted) {
                 self.rx.uart_loss();
             }
             self.rx.enqueue(&[read as u8]);
+            room = self.rx.queue.room();
         }
-        self.rx.enqueue(&chunk[..held]);
+        self.rx.publish(held);
         taken
     }
 }
@@ -569,6 +576,14 @@ const DR_FE: u32 = 1 << 8;
 impl Receiver {
     /// Queues `bytes`; those the queue has no room for are lost, here.
     #[inline(always)]
+    /// Hands the `count` bytes staged in the queue to the main loop (see [`Shared::receive`]).
+    fn publish(&mut self, count: usize) {
+        if count > 0 {
+            self.queue.publish(count);
+            self.enqueued = self.enqueued.wrapping_add(count as u32);
+        }
+    }
+
     fn enqueue(&mut self, bytes: &[u8]) {
         if bytes.is_empty() {
             return;
