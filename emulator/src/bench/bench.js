@@ -439,9 +439,11 @@ firmware's \`i\`). ${
     : "The firmware's IK reads no flash at all (its code and tables run from RAM: `memory.x`), so the cache cannot slow it."
 }
 
-Targets with the cache modelled (issue 23): a \`pose\` line to PWM under 500 us at 115,200 baud,
-a stream frame to PWM under 200 us at 921,600 baud, a main-loop pass under 1 ms (125,000
-cycles). \`./dev test\` checks these figures (on fewer poses, \`GUARD_SIZES\`) against
+Targets with the cache modelled (issue 23): the IK at most 8,000 cycles, a tracker frame at most
+15,000, a \`pose\` line at most 30,000 CPU cycles, a 5 mm jump to the PWM under 1 ms ("Command to
+output" below), a \`pose\` line to PWM under 500 us at 115,200 baud, a stream frame to PWM under
+200 us at 921,600 baud, a main-loop pass under 1 ms (125,000 cycles), the stream pipeline's
+worst case under 30 % of the CPU at 333 Hz. \`./dev test\` checks these figures (on fewer poses, \`GUARD_SIZES\`) against
 \`emulator/bench-guard.json\`: any more than ${GUARD_TOLERANCE * 100} % above its committed value fails
 (\`test/bench-guard.test.js\`); \`./dev bench --update-guard\` rewrites the table when a change is
 meant.
@@ -498,7 +500,7 @@ runs; the harness reads the emulator's cycle counter at its edges and subtracts 
 (seed ${args.seed}, from \`cargo run -p host-tests --example bench_poses\`).
 
 The IK runs in fixed point (\`kinematics_core::fixed\`): the pose's sines and cosines (table and
-sum formulas), the leg terms of eq. 9 scaled to 29 bits, the discriminant exactly, its square
+sum formulas), the leg terms of eq. 9 within 2^29 steps, the discriminant exactly, its square
 root (Newton-Raphson) and the half-angle arc tangent (table, exact rotation, series), the pulses
 of eq. 13, 14: integer instructions only, no float routine at all. The other rows are the same
 IK with another library's routines in place of the three integer ones
@@ -518,7 +520,7 @@ ${ik.variants
   )
   .join('\n')}
 
-Speed-up: ${fmt(BEFORE_ROM.mean / firmware.mean, 2)}x over the ROM routines (commit ${BEFORE_ROM.commit}), ${fmt(BEFORE.mean / firmware.mean, 2)}x over the firmware before them. Target: at most 12,000 cycles, at no loss of accuracy (at most ${TARGET_US} us against the f64 reference; it was ${BEFORE_ROM.worstUs.toExponential(2)} us).
+Speed-up: ${fmt(BEFORE_ROM.mean / firmware.mean, 2)}x over the ROM routines (commit ${BEFORE_ROM.commit}), ${fmt(BEFORE.mean / firmware.mean, 2)}x over the firmware before them. Target: at most 8,000 cycles (issue 23; 12,000 before), at no loss of accuracy (at most ${TARGET_US} us against the f64 reference; it was ${BEFORE_ROM.worstUs.toExponential(2)} us).
 
 Where the firmware's cycles go (per IK, ${PROFILE_POSES} poses, instruction by instruction; the
 routines by their symbols' address ranges):
@@ -631,7 +633,7 @@ next PWM period start (at most one frame, 20 ms at 50 Hz, later; no pulse is cut
 | the same at 921,600 baud | ${fmt(smallFast.mean)} us | ${fmt(smallFast.min)} us | ${fmt(smallFast.max)} us |
 | 5 mm jumps (path checked every 0.5 mm: 10 IKs) | ${fmt(jump.mean)} us | ${fmt(jump.min)} us | ${fmt(jump.max)} us |
 
-Target: under 500 us. With a speed limit set, the first step of a move comes with the next
+Target: under 500 us (a 5 mm jump: under 1 ms). With a speed limit set, the first step of a move comes with the next
 servo frame instead (up to one frame later), so that no frame moves more than the limit.
 
 ## Stream frames
