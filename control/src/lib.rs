@@ -117,3 +117,17 @@ pub use session::Session;
 pub use settings::Settings;
 
 pub use kinematics_core::Pose;
+
+/// Helpers shared by the unit tests.
+#[cfg(test)]
+mod test_support {
+    /// A xorshift32 sequence from `seed` (seeded, reproducible test inputs): each call the next.
+    pub(crate) fn xorshift(mut seed: u32) -> impl FnMut() -> u32 {
+        move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 17;
+            seed ^= seed << 5;
+            seed
+        }
+    }
+}

@@ -1233,13 +1233,7 @@ mod tests {
     fn square_roots_are_libms_bit_for_bit() {
         // libm's sqrtf is correctly rounded: the same bits for every input class, random
         // normal numbers over the whole range, and around squares and midpoints.
-        let mut seed = 0x9e37_79b9_u32;
-        let mut next = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 17;
-            seed ^= seed << 5;
-            seed
-        };
+        let mut next = crate::test_support::xorshift(0x9e37_79b9_u32);
         let mut inputs = std::vec![
             0.0,
             -0.0,
@@ -1275,13 +1269,7 @@ mod tests {
     #[test]
     fn spacing_samples_are_the_documented_ceiling() {
         // Against the float formula, over random distances of every size.
-        let mut seed = 0x2545_f491_u32;
-        let mut next = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 17;
-            seed ^= seed << 5;
-            seed
-        };
+        let mut next = crate::test_support::xorshift(0x2545_f491_u32);
         let formula = |mm: f32, deg: f32| {
             let n = libm::ceilf((mm / PATH_STEP_MM).max(deg / PATH_STEP_DEG));
             if n >= MAX_FRAMES as f32 {
@@ -1316,13 +1304,8 @@ mod tests {
     fn a_small_step_needs_one_sample_as_the_distances_say() {
         // Random jumps around the small step's bounds (each coordinate's move up to twice its
         // bound, from random poses): the shortcut never disagrees with the distances.
-        let mut seed = 0x0bad_5eed_u32;
-        let mut next = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 17;
-            seed ^= seed << 5;
-            f64::from(seed) / f64::from(u32::MAX)
-        };
+        let mut xorshift = crate::test_support::xorshift(0x0bad_5eed);
+        let mut next = move || f64::from(xorshift()) / f64::from(u32::MAX);
         let mut small = 0;
         for _ in 0..200_000 {
             let a: [f32; 6] = core::array::from_fn(|i| {

@@ -206,13 +206,7 @@ mod tests {
     fn short_decimals_are_what_the_correctly_rounded_parser_gives() {
         // The fast path against core's parser, bit for bit: random digits up to 2^24 and
         // past it, 0 to 12 of them after the point, signs, leading and trailing zeros.
-        let mut seed = 0x2545_f491_u32;
-        let mut next = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 17;
-            seed ^= seed << 5;
-            seed
-        };
+        let mut next = crate::test_support::xorshift(0x2545_f491_u32);
         for _ in 0..300_000 {
             let digits = (next() % (1 << 25)).to_string();
             let zeros = "0".repeat((next() % 3) as usize);
@@ -284,13 +278,7 @@ mod tests {
     #[test]
     fn random_texts_parse_as_documented() {
         // Short texts over the grammar's bytes and a few others: most are numbers, many not.
-        let mut seed = 0x1234_5678_u32;
-        let mut next = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 17;
-            seed ^= seed << 5;
-            seed
-        };
+        let mut next = crate::test_support::xorshift(0x1234_5678_u32);
         let alphabet = b"0123456789012345678901234567890123456789..eE+-+-nafiINtyx ";
         for _ in 0..500_000 {
             let len = next() % 14;

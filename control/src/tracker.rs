@@ -582,13 +582,8 @@ mod tests {
             f32::NAN,
             -f32::NAN,
         ];
-        let mut seed = 0x2545_f491_u32;
-        let random = (0..100_000).map(|_| {
-            seed ^= seed << 13;
-            seed ^= seed >> 17;
-            seed ^= seed << 5;
-            f32::from_bits(seed)
-        });
+        let mut next = crate::test_support::xorshift(0x2545_f491);
+        let random = (0..100_000).map(|_| f32::from_bits(next()));
         for x in specials.into_iter().chain(random) {
             assert_eq!(finite(x), x.is_finite(), "{x:?}");
             assert_eq!(positive_finite(x), x > 0.0 && x.is_finite(), "{x:?}");
