@@ -55,28 +55,8 @@ pub struct RxProducer<const N: usize> {
 }
 
 impl<const N: usize> RxProducer<N> {
-    /// Queues as many of `bytes` as there is room for, in order, all at once; returns how many.
-    #[inline]
-    pub fn enqueue_all(&mut self, bytes: &[u8]) -> usize {
-        let written = self.ring.written.load(Ordering::Relaxed);
-        let read = self.ring.read.load(Ordering::Relaxed);
-        compiler_fence(Ordering::Acquire);
-        let room = (N - 1) - written.wrapping_sub(read);
-        let count = bytes.len().min(room);
-        let base = self.ring.bytes.get() as *mut u8;
-        for (offset, &byte) in bytes[..count].iter().enumerate() {
-            // SAFETY: within the room, none of these indices is among the bytes waiting, so
-            // the consumer does not read them until `written` is published below.
-            unsafe { base.add(written.wrapping_add(offset) % N).write(byte) };
-        }
-        compiler_fence(Ordering::Release);
-        self.ring
-            .written
-            .store(written.wrapping_add(count), Ordering::Relaxed);
-        count
-    }
-
-    /// Room for how many more bytes: the ring's free bytes (the consumer only adds to them).
+    /// Room for how many more bytes: the ring's free bytes (the consumer only adds to them, and
+    /// not while the producer runs: it is an interrupt handler on the same core).
     #[inline]
     pub fn room(&self) -> usize {
         let written = self.ring.written.load(Ordering::Relaxed);

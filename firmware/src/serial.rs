@@ -538,7 +538,7 @@ impl Shared {
                     // The queue is full: this byte is lost, after those staged.
                     self.rx.publish(held);
                     held = 0;
-                    self.rx.enqueue(&[read as u8]);
+                    self.rx.push(read as u8);
                     room = self.rx.queue.room();
                 }
                 continue;
@@ -557,7 +557,7 @@ impl Shared {
             if !core::mem::take(&mut self.rx.overrun_counted) {
                 self.rx.uart_loss();
             }
-            self.rx.enqueue(&[read as u8]);
+            self.rx.push(read as u8);
             room = self.rx.queue.room();
         }
         self.rx.publish(held);
@@ -574,9 +574,8 @@ const DR_PE: u32 = 1 << 9;
 const DR_FE: u32 = 1 << 8;
 
 impl Receiver {
-    /// Queues `bytes`; those the queue has no room for are lost, here.
-    #[inline(always)]
     /// Hands the `count` bytes staged in the queue to the main loop (see [`Shared::receive`]).
+    #[inline(always)]
     fn publish(&mut self, count: usize) {
         if count > 0 {
             self.queue.publish(count);
@@ -584,14 +583,13 @@ impl Receiver {
         }
     }
 
-    fn enqueue(&mut self, bytes: &[u8]) {
-        if bytes.is_empty() {
-            return;
-        }
-        let queued = self.queue.enqueue_all(bytes);
-        self.enqueued = self.enqueued.wrapping_add(queued as u32);
-        if queued < bytes.len() {
-            self.lose((bytes.len() - queued) as u32, false);
+    /// Queues `byte` after the bytes published; without room it is lost, here.
+    fn push(&mut self, byte: u8) {
+        if self.queue.room() > 0 {
+            self.queue.stage(0, byte);
+            self.publish(1);
+        } else {
+            self.lose(1, false);
         }
     }
 
