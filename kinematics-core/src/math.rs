@@ -77,6 +77,69 @@ pub trait Math {
     }
 }
 
+/// [`Math`] methods that hand their arguments to another `Math`, `$to`, for an impl that
+/// changes only some of them: `forward_math!(M => sqrt, atan2, add)` inside `impl Math for ..`.
+macro_rules! forward_math {
+    ($to:ty => $($method:ident),+ $(,)?) => {
+        $( $crate::math::forward_math!(@ $to, $method); )+
+    };
+    (@ $to:ty, sin_cos) => {
+        #[inline]
+        fn sin_cos(x: f32) -> (f32, f32) {
+            <$to as $crate::Math>::sin_cos(x)
+        }
+    };
+    (@ $to:ty, sqrt) => {
+        #[inline]
+        fn sqrt(x: f32) -> f32 {
+            <$to as $crate::Math>::sqrt(x)
+        }
+    };
+    (@ $to:ty, atan2) => {
+        #[inline]
+        fn atan2(y: f32, x: f32) -> f32 {
+            <$to as $crate::Math>::atan2(y, x)
+        }
+    };
+    (@ $to:ty, add) => {
+        #[inline]
+        fn add(a: f32, b: f32) -> f32 {
+            <$to as $crate::Math>::add(a, b)
+        }
+    };
+    (@ $to:ty, sub) => {
+        #[inline]
+        fn sub(a: f32, b: f32) -> f32 {
+            <$to as $crate::Math>::sub(a, b)
+        }
+    };
+    (@ $to:ty, mul) => {
+        #[inline]
+        fn mul(a: f32, b: f32) -> f32 {
+            <$to as $crate::Math>::mul(a, b)
+        }
+    };
+    (@ $to:ty, sin_cos_fixed) => {
+        #[inline]
+        fn sin_cos_fixed(x_rad: f32) -> (i32, i32) {
+            <$to as $crate::Math>::sin_cos_fixed(x_rad)
+        }
+    };
+    (@ $to:ty, sqrt_fixed) => {
+        #[inline]
+        fn sqrt_fixed(d: u64) -> u32 {
+            <$to as $crate::Math>::sqrt_fixed(d)
+        }
+    };
+    (@ $to:ty, atan2_fixed) => {
+        #[inline]
+        fn atan2_fixed(y: i32, x: i32) -> i32 {
+            <$to as $crate::Math>::atan2_fixed(y, x)
+        }
+    };
+}
+pub(crate) use forward_math;
+
 /// `M` with its own `f32` sine and cosine, square root and arc tangent in the IK's fixed-point
 /// path too, in place of the integer routines (the arguments converted to `f32` and the results
 /// back to fixed point): the same IK with `M`'s routines, to measure them (the benchmark's
@@ -85,35 +148,7 @@ pub trait Math {
 pub struct FloatRoutines<M>(PhantomData<M>);
 
 impl<M: Math> Math for FloatRoutines<M> {
-    #[inline]
-    fn sin_cos(x: f32) -> (f32, f32) {
-        M::sin_cos(x)
-    }
-
-    #[inline]
-    fn sqrt(x: f32) -> f32 {
-        M::sqrt(x)
-    }
-
-    #[inline]
-    fn atan2(y: f32, x: f32) -> f32 {
-        M::atan2(y, x)
-    }
-
-    #[inline]
-    fn add(a: f32, b: f32) -> f32 {
-        M::add(a, b)
-    }
-
-    #[inline]
-    fn sub(a: f32, b: f32) -> f32 {
-        M::sub(a, b)
-    }
-
-    #[inline]
-    fn mul(a: f32, b: f32) -> f32 {
-        M::mul(a, b)
-    }
+    forward_math!(M => sin_cos, sqrt, atan2, add, sub, mul);
 
     fn sin_cos_fixed(x_rad: f32) -> (i32, i32) {
         // |sin|, |cos| of any library stay far below 2, the bound of `to_fixed` here.

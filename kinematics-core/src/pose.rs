@@ -335,15 +335,7 @@ mod tests {
     struct Scaled<const PERCENT: i32>;
 
     impl<const PERCENT: i32> Math for Scaled<PERCENT> {
-        fn sin_cos(x: f32) -> (f32, f32) {
-            Libm::sin_cos(x)
-        }
-        fn sqrt(x: f32) -> f32 {
-            Libm::sqrt(x)
-        }
-        fn atan2(y: f32, x: f32) -> f32 {
-            Libm::atan2(y, x)
-        }
+        crate::math::forward_math!(Libm => sin_cos, sqrt, atan2);
         fn sin_cos_fixed(x_rad: f32) -> (i32, i32) {
             let (s, c) = crate::fixed::sin_cos::sin_cos(x_rad);
             let scale = |v: i32| (i64::from(v) * i64::from(PERCENT) / 100) as i32;
@@ -356,15 +348,7 @@ mod tests {
     struct Ones;
 
     impl Math for Ones {
-        fn sin_cos(x: f32) -> (f32, f32) {
-            Libm::sin_cos(x)
-        }
-        fn sqrt(x: f32) -> f32 {
-            Libm::sqrt(x)
-        }
-        fn atan2(y: f32, x: f32) -> f32 {
-            Libm::atan2(y, x)
-        }
+        crate::math::forward_math!(Libm => sin_cos, sqrt, atan2);
         fn sin_cos_fixed(_: f32) -> (i32, i32) {
             (1 << 30, 1 << 30)
         }

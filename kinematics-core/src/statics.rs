@@ -27,7 +27,7 @@ use crate::ik::Solver;
 use crate::jacobian::{Actuators, Jacobian, DEAD_CENTRE_TOLERANCE};
 use crate::legs::ArmState;
 use crate::linalg::{Lu6, Mat6, Vec6};
-use crate::math::{abs_bits, cross, dot, lt, mul_mat_vec, Math, Real};
+use crate::math::{abs_bits, cross, dot, forward_math, lt, mul_mat_vec, Math, Real};
 use crate::pose::Pose;
 use crate::types::{Mat3, Vec3, LEGS};
 
@@ -261,45 +261,7 @@ impl<M: Math> Math for FixedSines<M> {
         }
     }
 
-    #[inline]
-    fn sqrt(x: f32) -> f32 {
-        M::sqrt(x)
-    }
-
-    #[inline]
-    fn atan2(y: f32, x: f32) -> f32 {
-        M::atan2(y, x)
-    }
-
-    #[inline]
-    fn add(a: f32, b: f32) -> f32 {
-        M::add(a, b)
-    }
-
-    #[inline]
-    fn sub(a: f32, b: f32) -> f32 {
-        M::sub(a, b)
-    }
-
-    #[inline]
-    fn mul(a: f32, b: f32) -> f32 {
-        M::mul(a, b)
-    }
-
-    #[inline]
-    fn sin_cos_fixed(x_rad: f32) -> (i32, i32) {
-        M::sin_cos_fixed(x_rad)
-    }
-
-    #[inline]
-    fn sqrt_fixed(d: u64) -> u32 {
-        M::sqrt_fixed(d)
-    }
-
-    #[inline]
-    fn atan2_fixed(y: i32, x: i32) -> i32 {
-        M::atan2_fixed(y, x)
-    }
+    forward_math!(M => sqrt, atan2, add, sub, mul, sin_cos_fixed, sqrt_fixed, atan2_fixed);
 }
 
 /// The platform's stiffness `K = J^T diag(k) J` for joint stiffnesses `k` (N/mm for struts,
